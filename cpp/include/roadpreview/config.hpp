@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Pipeline configuration: one aggregate per stage with unit-bearing names, nested in Config.
+// Field names, defaults and meanings are those of python/roadpreview/config.py and docs/method.md.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace roadpreview {
+
+/// Pose of the sensor in the base frame (x forward, y left, z up); R = Rz(yaw)·Ry(pitch)·Rx(roll).
+struct Extrinsics {
+    double x_m = 0.0;
+    double y_m = 0.0;
+    double z_m = 0.0;
+    double roll_rad = 0.0;
+    double pitch_rad = 0.0;
+    double yaw_rad = 0.0;
+};
+
+enum class GroundMethod { Pca, Ransac };
+
+struct GroundConfig {
+    GroundMethod method = GroundMethod::Pca;
+    double roi_x_min_m = 1.0;       ///< front region of interest, base frame
+    double roi_x_max_m = 40.0;
+    double roi_y_abs_max_m = 10.0;
+    int pca_iterations = 3;         ///< plane fits; each drops points too far above the last plane
+    double pca_threshold_m = 0.20;  ///< points more than this above the plane are not ground
+    double ransac_distance_m = 0.20;
+    double ransac_max_tilt_deg = 15.0;  ///< largest angle between plane normal and the up axis
+    int ransac_max_iterations = 200;
+    std::uint32_t ransac_seed = 1;  ///< fixed so results are reproducible
+};
+
+struct PathConfig {
+    double straight_radius_m = 1000.0;  ///< |V/ω| above this is driven as a straight line
+    double stopped_speed_mps = 0.0;     ///< |V| at or below this: stopped, no path
+};
+
+struct ProfileConfig {
+    double preview_length_m = 40.0;
+    double ds_m = 0.1;       ///< resampling step along the wheel path
+    double max_gap_m = 1.0;  ///< interior gaps up to this length are linearly interpolated
+    bool level = true;       ///< remove the fitted ground plane's tilt before reading heights
+};
+
+struct RoughnessConfig {
+    double band_min_cpm = 0.1;  ///< analysis band, cycles/m
+    double band_max_cpm = 4.0;
+    double min_length_m = 5.0;  ///< shortest valid stretch that is analysed
+    double min_cycles = 2.0;    ///< the band starts no lower than min_cycles / stretch length
+    int min_band_points = 5;    ///< fewest PSD ordinates in the band for a class
+};
+
+struct Config {
+    std::optional<double> sensor_height;   ///< m; shortcut for extrinsics (0, 0, h, 0, 0, 0)
+    std::optional<Extrinsics> extrinsics;  ///< neither set: points are already in the base frame
+    double track_width = 1.6;              ///< m, between the wheel centre lines
+    double tire_width = 0.3;               ///< m, width of the corridor read per wheel
+    GroundConfig ground;
+    PathConfig path;
+    ProfileConfig profile;
+    RoughnessConfig roughness;
+};
+
+/// Throws std::invalid_argument naming the first offending field.
+void validate(const Config& cfg);
+
+/// The extrinsics in force: sensor_height, extrinsics, or identity.
+Extrinsics effective_extrinsics(const Config& cfg);
+
+/// JSON (the field names above; missing fields keep their defaults). `source` names the input in errors.
+Config config_from_json(const std::string& text, const std::string& source = "config");
+std::string config_to_json(const Config& cfg);
+
+const char* to_string(GroundMethod method);
+
+}  // namespace roadpreview

@@ -1,0 +1,13 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Umbrella header: #include <roadpreview/roadpreview.hpp>
+#pragma once
+
+#include "roadpreview/config.hpp"
+#include "roadpreview/frames.hpp"
+#include "roadpreview/ground.hpp"
+#include "roadpreview/io.hpp"
+#include "roadpreview/path.hpp"
+#include "roadpreview/pipeline.hpp"
+#include "roadpreview/profile.hpp"
+#include "roadpreview/roughness.hpp"
+#include "roadpreview/version.hpp"

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Stage 4 — roughness: one-sided displacement PSD of a profile and its ISO 8608 class (docs/method.md §4).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/config.hpp"
+
+namespace roadpreview {
+
+inline constexpr double kIsoN0 = 0.1;  ///< ISO 8608 reference spatial frequency, cycles/m
+inline constexpr char kIsoClasses[] = "ABCDEFGH";
+
+/// One-sided displacement PSD; n[0] = 0 (the DC ordinate) and n[k] = k/(N·ds).
+struct Spectrum {
+    std::vector<double> n;    ///< cycles/m
+    std::vector<double> psd;  ///< G_d(n), m³
+};
+
+/// Detrend (least-squares line), periodic Hann window with power correction, FFT, one-sided PSD.
+/// Parseval: Σ psd·Δn = mean((x·w)²) / mean(w²) for the detrended profile x.
+Spectrum displacement_psd(const double* z, std::size_t count, double ds);
+
+struct Roughness {
+    std::optional<char> iso_class;  ///< 'A'..'H'; nullopt when the data do not support a class
+    double gd_n0 = 0.0;             ///< m³, G_d(n0) of the w = 2 fit
+    double gd_n0_free = 0.0;        ///< m³, G_d(n0) of the free-waviness fit
+    double waviness = 0.0;          ///< w of the free fit
+    double band_lo = 0.0, band_hi = 0.0;  ///< cycles/m, band actually used (0, 0 when none)
+    Spectrum spectrum;
+    std::vector<double> octave_centers;   ///< cycles/m
+    std::vector<double> octave_gd;        ///< m³, mean G_d in each ISO 8608 octave band
+    std::string reason;                   ///< empty when classified
+};
+
+/// ISO 8608 class of G_d(n0) in m³ (limits at the geometric midpoints; a limit belongs to the rougher class).
+char iso_class(double gd_n0_m3);
+
+/// Steps 6–9 of §4 on a spectrum of a stretch `length_m` long.
+Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg);
+
+/// The whole of §4 on a profile with NaN for missing bins.
+Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg);
+
+/// Both wheels over the longest stretch valid in both, PSDs averaged.
+Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
+                            const RoughnessConfig& cfg);
+
+/// Half-open [first, last) of the longest run of finite values (the first on ties).
+std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z);
+
+}  // namespace roadpreview

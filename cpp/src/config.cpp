@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/config.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace roadpreview {
+
+using nlohmann::json;
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
+                                                min_cycles, min_band_points)
+
+const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
+
+void to_json(json& j, const GroundMethod& m) { j = to_string(m); }
+void from_json(const json& j, GroundMethod& m) {
+    const auto name = j.get<std::string>();
+    if (name == "pca") {
+        m = GroundMethod::Pca;
+    } else if (name == "ransac") {
+        m = GroundMethod::Ransac;
+    } else {
+        throw std::invalid_argument("ground.method must be \"pca\" or \"ransac\", got \"" + name + "\"");
+    }
+}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_m, roi_x_max_m, roi_y_abs_max_m,
+                                                pca_iterations, pca_threshold_m, ransac_distance_m,
+                                                ransac_max_tilt_deg, ransac_max_iterations, ransac_seed)
+
+void to_json(json& j, const Config& c) {
+    j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
+             {"extrinsics", c.extrinsics ? json(*c.extrinsics) : json(nullptr)},
+             {"track_width", c.track_width},
+             {"tire_width", c.tire_width},
+             {"ground", c.ground},
+             {"path", c.path},
+             {"profile", c.profile},
+             {"roughness", c.roughness}};
+}
+
+void from_json(const json& j, Config& c) {
+    const Config defaults;
+    if (j.contains("sensor_height") && !j["sensor_height"].is_null()) c.sensor_height = j["sensor_height"].get<double>();
+    if (j.contains("extrinsics") && !j["extrinsics"].is_null()) c.extrinsics = j["extrinsics"].get<Extrinsics>();
+    c.track_width = j.value("track_width", defaults.track_width);
+    c.tire_width = j.value("tire_width", defaults.tire_width);
+    c.ground = j.value("ground", defaults.ground);
+    c.path = j.value("path", defaults.path);
+    c.profile = j.value("profile", defaults.profile);
+    c.roughness = j.value("roughness", defaults.roughness);
+}
+
+namespace {
+
+// Unknown keys are almost always typos; the defaults' own JSON is the list of known ones.
+void reject_unknown_keys(const json& given, const json& known, const std::string& where) {
+    if (!given.is_object()) throw std::invalid_argument(where + " must be a JSON object");
+    for (const auto& [key, value] : given.items()) {
+        if (!known.contains(key)) throw std::invalid_argument("unknown config field " + where + "." + key);
+        if (value.is_object() && known[key].is_object()) reject_unknown_keys(value, known[key], where + "." + key);
+    }
+}
+
+void require(bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("invalid config: " + what);
+}
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+}  // namespace
+
+void validate(const Config& c) {
+    require(!(c.sensor_height && c.extrinsics), "set sensor_height or extrinsics, not both");
+    if (c.sensor_height) require(std::isfinite(*c.sensor_height), "sensor_height must be finite");
+    if (c.extrinsics) {
+        const Extrinsics& e = *c.extrinsics;
+        for (double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad})
+            require(std::isfinite(v), "extrinsics must be finite");
+    }
+    require(positive(c.track_width), "track_width must be > 0 m");
+    require(positive(c.tire_width), "tire_width must be > 0 m");
+    require(c.tire_width < c.track_width, "tire_width must be smaller than track_width");
+
+    const GroundConfig& g = c.ground;
+    require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
+            "ground.roi_x_min_m must be < ground.roi_x_max_m");
+    require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
+    require(g.pca_iterations >= 1, "ground.pca_iterations must be >= 1");
+    require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
+    require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
+    require(positive(g.ransac_max_tilt_deg) && g.ransac_max_tilt_deg < 90.0,
+            "ground.ransac_max_tilt_deg must be in (0, 90)");
+    require(g.ransac_max_iterations >= 1, "ground.ransac_max_iterations must be >= 1");
+
+    require(positive(c.path.straight_radius_m), "path.straight_radius_m must be > 0");
+    require(std::isfinite(c.path.stopped_speed_mps) && c.path.stopped_speed_mps >= 0.0,
+            "path.stopped_speed_mps must be >= 0");
+
+    const ProfileConfig& p = c.profile;
+    require(positive(p.ds_m), "profile.ds_m must be > 0");
+    require(positive(p.preview_length_m) && p.preview_length_m >= p.ds_m,
+            "profile.preview_length_m must be >= profile.ds_m");
+    require(p.preview_length_m / p.ds_m <= 1e6, "profile.preview_length_m / profile.ds_m must be <= 1e6 bins");
+    require(std::isfinite(p.max_gap_m) && p.max_gap_m >= 0.0, "profile.max_gap_m must be >= 0");
+
+    const RoughnessConfig& r = c.roughness;
+    require(positive(r.band_min_cpm) && std::isfinite(r.band_max_cpm) && r.band_min_cpm < r.band_max_cpm,
+            "roughness.band_min_cpm must be > 0 and < roughness.band_max_cpm");
+    require(positive(r.min_length_m), "roughness.min_length_m must be > 0");
+    require(std::isfinite(r.min_cycles) && r.min_cycles >= 1.0, "roughness.min_cycles must be >= 1");
+    require(r.min_band_points >= 2, "roughness.min_band_points must be >= 2");
+}
+
+Extrinsics effective_extrinsics(const Config& c) {
+    if (c.extrinsics) return *c.extrinsics;
+    Extrinsics e;
+    if (c.sensor_height) e.z_m = *c.sensor_height;
+    return e;
+}
+
+Config config_from_json(const std::string& text, const std::string& source) {
+    try {
+        const json j = json::parse(text);
+        Config known;
+        known.extrinsics = Extrinsics{};  // so the nested extrinsics keys are known too
+        reject_unknown_keys(j, json(known), "config");
+        Config cfg = j.get<Config>();
+        validate(cfg);
+        return cfg;
+    } catch (const json::exception& e) {
+        throw std::invalid_argument(source + ": " + e.what());
+    } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(source + ": " + e.what());
+    }
+}
+
+std::string config_to_json(const Config& cfg) { return json(cfg).dump(); }
+
+}  // namespace roadpreview

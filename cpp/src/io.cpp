@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/io.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <pcl/common/io.h>
+#include <pcl/console/print.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+namespace roadpreview {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string extension_of(const fs::path& p) {
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+bool is_frame_file(const fs::path& p) {
+    const std::string ext = extension_of(p);
+    return ext == ".bin" || ext == ".pcd";
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+    throw std::runtime_error(path + ": " + what);
+}
+
+Frame read_kitti_bin(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) fail(path, "cannot open file");
+    const auto bytes = static_cast<std::size_t>(in.tellg());
+    constexpr std::size_t kPointBytes = 4 * sizeof(float);
+    if (bytes % kPointBytes != 0)
+        fail(path, "size " + std::to_string(bytes) +
+                       " bytes is not a multiple of 16 (KITTI .bin holds float32 x, y, z, intensity per point); "
+                       "the file is truncated or not a KITTI scan");
+    Frame f;
+    f.source = path;
+    f.points.resize(static_cast<Eigen::Index>(bytes / kPointBytes), 4);
+    in.seekg(0);
+    if (!in.read(reinterpret_cast<char*>(f.points.data()), static_cast<std::streamsize>(bytes)))
+        fail(path, "read error");
+    return f;
+}
+
+Frame read_pcd(const std::string& path) {
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are reported by our exception
+    pcl::PCLPointCloud2 blob;
+    pcl::PCDReader reader;
+    if (reader.read(path, blob) < 0) fail(path, "not a readable PCD file (corrupt header or data)");
+    for (const char* axis : {"x", "y", "z"})
+        if (pcl::getFieldIndex(blob, axis) < 0) fail(path, std::string("PCD file has no '") + axis + "' field");
+    const std::size_t expected = static_cast<std::size_t>(blob.width) * blob.height * blob.point_step;
+    if (blob.data.size() < expected) fail(path, "PCD data is shorter than its header declares");
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    pcl::fromPCLPointCloud2(blob, cloud);
+    const bool has_intensity = pcl::getFieldIndex(blob, "intensity") >= 0;
+    Frame f;
+    f.source = path;
+    f.points.resize(static_cast<Eigen::Index>(cloud.size()), 4);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud[i];
+        f.points.row(static_cast<Eigen::Index>(i)) << p.x, p.y, p.z, has_intensity ? p.intensity : 0.0f;
+    }
+    return f;
+}
+
+}  // namespace
+
+Frame read_frame(const std::string& path) {
+    const fs::path p(path);
+    std::error_code ec;
+    if (!fs::exists(p, ec)) fail(path, "no such file");
+    if (!fs::is_regular_file(p, ec)) fail(path, "not a regular file");
+    const std::string ext = extension_of(p);
+    if (ext == ".bin") return read_kitti_bin(path);
+    if (ext == ".pcd") return read_pcd(path);
+    fail(path, "unsupported file type '" + ext + "' (expected .bin or .pcd)");
+}
+
+std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
+    std::vector<std::string> files;
+    for (const std::string& input : inputs) {
+        const fs::path p(input);
+        std::error_code ec;
+        if (!fs::exists(p, ec)) fail(input, "no such file or directory");
+        if (!fs::is_directory(p, ec)) {
+            if (!is_frame_file(p)) fail(input, "unsupported file type (expected .bin or .pcd)");
+            files.push_back(input);
+            continue;
+        }
+        std::vector<std::string> found;
+        for (const auto& entry : fs::directory_iterator(p))
+            if (entry.is_regular_file() && is_frame_file(entry.path())) found.push_back(entry.path().string());
+        if (found.empty()) fail(input, "directory holds no .bin or .pcd files");
+        std::sort(found.begin(), found.end());
+        files.insert(files.end(), found.begin(), found.end());
+    }
+    return files;
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/pipeline.hpp"
+
+#include <chrono>
+#include <limits>
+#include <stdexcept>
+
+#include "roadpreview/frames.hpp"
+#include "ground_pcl.hpp"
+#include "roi_cloud.hpp"
+
+namespace roadpreview {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point& mark) {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - mark).count();
+    mark = now;
+    return ms;
+}
+
+// Why no profile can be built for this frame, or empty when one can.
+std::string blocking_reason(const Result& r) {
+    if (r.points.finite == 0) return "no finite points";
+    if (!r.plane) return "no ground";
+    if (r.path.status == PathStatus::Stopped) return "vehicle stopped";
+    return {};
+}
+
+void mark_empty(Profile& p, const ProfileConfig& cfg, const std::string& reason) {
+    p.ds = cfg.ds_m;
+    p.s0 = 0.5 * cfg.ds_m;
+    p.roughness.reason = reason;
+}
+
+}  // namespace
+
+struct Estimator::Impl {
+    Config cfg;
+    RigidTransform sensor_to_base;
+    RoiCloud roi;  // reused across frames
+    std::int64_t frames = 0;
+};
+
+Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
+    validate(cfg);
+    impl_->cfg = cfg;
+    impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
+}
+
+Estimator::~Estimator() = default;
+Estimator::Estimator(Estimator&&) noexcept = default;
+Estimator& Estimator::operator=(Estimator&&) noexcept = default;
+
+const Config& Estimator::config() const { return impl_->cfg; }
+
+Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
+    const Config& cfg = impl_->cfg;
+    if (points.rows() > std::numeric_limits<std::int32_t>::max())
+        throw std::invalid_argument("too many points in one frame: " + std::to_string(points.rows()));
+    auto mark = Clock::now();
+    const auto start = mark;
+    Result r;
+    r.path = plan_paths(speed_mps, yaw_rate_rps, cfg.track_width, cfg.path);  // validates the motion first
+    r.timing_ms.path = ms_since(mark);
+    r.frame = impl_->frames++;
+    r.source = source;
+    r.speed_mps = speed_mps;
+    r.yaw_rate_rps = yaw_rate_rps;
+    r.ground_method = cfg.ground.method;
+
+    RoiCloud& roi = impl_->roi;
+    crop_roi(points, impl_->sensor_to_base, cfg.ground, roi);
+    const GroundFit ground = fit_ground(roi, cfg.ground);
+    r.points = {points.rows(), roi.finite, roi.size(), ground.count};
+    r.plane = ground.plane;
+    r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
+    for (std::size_t i = 0; i < ground.mask.size(); ++i)
+        if (ground.mask[i]) r.ground_mask[static_cast<std::size_t>(roi.input_index[i])] = 1;
+    r.timing_ms.ground = ms_since(mark);
+
+    r.reason = blocking_reason(r);
+    if (!r.reason.empty()) {
+        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg.profile, r.reason);
+        r.vehicle.reason = r.reason;
+        r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        return r;
+    }
+    const Levelling L = levelling_for(cfg.profile.level ? &*r.plane : nullptr);
+    WheelProfiles wheels = build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile);
+    r.left = std::move(wheels.left);
+    r.right = std::move(wheels.right);
+    r.timing_ms.profile = ms_since(mark);
+
+    r.left.roughness = analyze_roughness(r.left.z, cfg.profile.ds_m, cfg.roughness);
+    r.right.roughness = analyze_roughness(r.right.z, cfg.profile.ds_m, cfg.roughness);
+    r.vehicle = vehicle_roughness(r.left.z, r.right.z, cfg.profile.ds_m, cfg.roughness);
+    r.timing_ms.roughness = ms_since(mark);
+    r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return r;
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/profile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace roadpreview {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Hit {
+    std::int32_t bin;
+    double z;
+};
+
+// Median of the values (mean of the two middle ones for an even count); reorders them.
+double median(std::vector<double>::iterator first, std::vector<double>::iterator last) {
+    const auto n = last - first;
+    const auto upper = first + n / 2;
+    std::nth_element(first, upper, last);
+    if (n % 2 == 1) return *upper;
+    return 0.5 * (*std::max_element(first, upper) + *upper);
+}
+
+// Bins the hits of one wheel (counting sort by bin), takes per-bin medians, fills short gaps.
+Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg) {
+    Profile p;
+    p.ds = cfg.ds_m;
+    p.s0 = 0.5 * cfg.ds_m;
+    p.s.resize(bins);
+    for (std::size_t k = 0; k < bins; ++k) p.s[k] = (static_cast<double>(k) + 0.5) * cfg.ds_m;
+    p.count.assign(bins, 0);
+    for (const Hit& h : hits) ++p.count[static_cast<std::size_t>(h.bin)];
+
+    std::vector<std::size_t> start(bins + 1, 0);
+    for (std::size_t k = 0; k < bins; ++k) start[k + 1] = start[k] + static_cast<std::size_t>(p.count[k]);
+    std::vector<double> sorted(hits.size());
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (const Hit& h : hits) sorted[next[static_cast<std::size_t>(h.bin)]++] = h.z;
+
+    p.z.assign(bins, kNaN);
+    for (std::size_t k = 0; k < bins; ++k)
+        if (p.count[k] > 0) p.z[k] = median(sorted.begin() + start[k], sorted.begin() + start[k + 1]);
+    fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m);
+    return p;
+}
+
+}  // namespace
+
+Levelling levelling_for(const Plane* plane) {
+    Levelling L{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+    if (!plane) return L;
+    const double a = (*plane)[0], b = (*plane)[1], c = (*plane)[2];  // unit normal, c > 0
+    // Shortest-arc rotation taking (a, b, c) onto (0, 0, 1) (Rodrigues' formula, axis n × z).
+    const double k = 1.0 / (1.0 + c);
+    L = Levelling{{{1.0 - a * a * k, -a * b * k, -a}, {-a * b * k, 1.0 - b * b * k, -b}, {a, b, c}}};
+    return L;
+}
+
+WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                             const WheelPaths& paths, double tire_width, const ProfileConfig& cfg) {
+    WheelProfiles out;
+    if (paths.status == PathStatus::Stopped) return out;
+    const auto bins = static_cast<std::size_t>(std::ceil(cfg.preview_length_m / cfg.ds_m - 1e-9));
+    std::vector<Hit> hits[2];
+    const auto& R = L.R;
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        if (!mask[static_cast<std::size_t>(i)]) continue;
+        const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+        const double xl = R[0][0] * x + R[0][1] * y + R[0][2] * z;
+        const double yl = R[1][0] * x + R[1][1] * y + R[1][2] * z;
+        const double zl = R[2][0] * x + R[2][1] * y + R[2][2] * z;
+        for (const Wheel w : {Wheel::Left, Wheel::Right}) {
+            const auto s = arc_length(paths, w, xl, yl, tire_width);
+            if (!s || *s >= cfg.preview_length_m) continue;
+            const auto bin = static_cast<std::size_t>(*s / cfg.ds_m);
+            if (bin < bins) hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl});
+        }
+    }
+    out.left = bin_profile(hits[static_cast<int>(Wheel::Left)], bins, cfg);
+    out.right = bin_profile(hits[static_cast<int>(Wheel::Right)], bins, cfg);
+    return out;
+}
+
+void fill_gaps(std::vector<double>& z, double ds, double max_gap_m) {
+    std::size_t last_valid = z.size();  // none yet
+    for (std::size_t k = 0; k < z.size(); ++k) {
+        if (std::isnan(z[k])) continue;
+        if (last_valid != z.size() && k - last_valid > 1) {
+            const std::size_t gap = k - last_valid - 1;
+            if (static_cast<double>(gap) * ds <= max_gap_m + 1e-9) {
+                const double z0 = z[last_valid], z1 = z[k];
+                for (std::size_t j = 1; j <= gap; ++j)
+                    z[last_valid + j] = z0 + (z1 - z0) * static_cast<double>(j) / static_cast<double>(gap + 1);
+            }
+        }
+        last_valid = k;
+    }
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,248 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// pybind11 bindings. Points are read in place when they are float32 with unit column stride (N×3, N×4,
+// or a column slice of either); anything else is converted once. Result arrays are read-only numpy
+// views of the C++ result's buffers (no copy), kept alive by the result object.
+#include <pybind11/pybind11.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "roadpreview/roadpreview.hpp"
+
+namespace py = pybind11;
+namespace rp = roadpreview;
+
+namespace {
+
+template <typename T>
+py::array view_of(const std::vector<T>& v, py::handle owner, py::dtype dtype = py::dtype::of<T>()) {
+    py::array a(dtype, {static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner);
+    a.attr("setflags")(false);  // writing would change the C++ result behind the user's back
+    return a;
+}
+
+// Points as a view; `holder` keeps a converted copy alive when one is needed.
+rp::PointsView points_from(const py::handle& obj, py::object& holder, const char* name = "points") {
+    if (!py::isinstance<py::array>(obj))
+        throw py::type_error(std::string(name) + " must be a numpy array, got " + std::string(py::str(obj.get_type().attr("__name__"))));
+    auto a = py::reinterpret_borrow<py::array>(obj);
+    const std::string shape = py::str(a.attr("shape"));
+    if (a.ndim() != 2) throw py::value_error(std::string(name) + " must be a 2-D array (N, 3) or (N, 4), got shape " + shape);
+    if (a.shape(1) < 3) throw py::value_error(std::string(name) + " needs at least 3 columns (x, y, z), got shape " + shape);
+    const char kind = a.dtype().kind();
+    if (kind != 'f' || (a.itemsize() != 4 && a.itemsize() != 8))
+        throw py::type_error(std::string(name) + " must be float32 or float64, got " + std::string(py::str(a.dtype())));
+    const bool in_place = a.itemsize() == 4 && a.strides(1) == 4 && a.strides(0) > 0 && a.strides(0) % 4 == 0;
+    if (in_place) {
+        holder = a;
+        return rp::points_view(static_cast<const float*>(a.data()), a.shape(0), a.strides(0) / 4);
+    }
+    auto copy = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+    holder = copy;
+    return rp::points_view(copy.data(), copy.shape(0), copy.shape(1));
+}
+
+py::object optional_number(bool present, double v) { return present ? py::object(py::float_(v)) : py::object(py::none()); }
+
+py::object plane_array(const std::optional<rp::Plane>& p) {
+    if (!p) return py::none();
+    return py::array_t<double>(4, p->data());
+}
+
+py::dict path_dict(const rp::WheelPaths& p) {
+    const bool arc = p.status == rp::PathStatus::Arc;
+    py::dict d;
+    d["status"] = rp::to_string(p.status);
+    d["icr_y"] = optional_number(arc, p.icr_y);
+    d["left_radius"] = optional_number(arc, p.left_radius);
+    d["right_radius"] = optional_number(arc, p.right_radius);
+    return d;
+}
+
+rp::Config config_from(const std::string& json) { return rp::config_from_json(json, "config"); }
+
+std::vector<double> as_vector(const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+    if (a.ndim() != 1) throw py::value_error("expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
+    return std::vector<double>(a.data(), a.data() + a.size());
+}
+
+void bind_results(py::module_& m) {
+    py::class_<rp::Roughness>(m, "Roughness", "ISO 8608 roughness of one profile (or of the vehicle)")
+        .def_property_readonly("iso_class", [](const rp::Roughness& r) -> py::object {
+            return r.iso_class ? py::object(py::str(std::string(1, *r.iso_class))) : py::object(py::none());
+        }, "'A'..'H', or None with .reason")
+        .def_property_readonly("gd_n0", [](const rp::Roughness& r) { return optional_number(r.iso_class.has_value(), r.gd_n0); },
+                               "G_d(n0) of the w = 2 fit, m³")
+        .def_property_readonly("gd_n0_free", [](const rp::Roughness& r) { return optional_number(r.iso_class.has_value(), r.gd_n0_free); },
+                               "G_d(n0) of the free-waviness fit, m³")
+        .def_property_readonly("waviness", [](const rp::Roughness& r) { return optional_number(r.iso_class.has_value(), r.waviness); },
+                               "w of the free fit")
+        .def_property_readonly("band", [](const rp::Roughness& r) -> py::object {
+            if (!r.iso_class) return py::none();
+            return py::make_tuple(r.band_lo, r.band_hi);
+        }, "(lo, hi) cycles/m actually used by the fit")
+        .def_property_readonly("n", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().spectrum.n, self); },
+                               "spatial frequencies, cycles/m (n[0] = 0)")
+        .def_property_readonly("psd", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().spectrum.psd, self); },
+                               "one-sided displacement PSD G_d(n), m³")
+        .def_property_readonly("octave_centers", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().octave_centers, self); })
+        .def_property_readonly("octave_gd", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().octave_gd, self); })
+        .def_property_readonly("reason", [](const rp::Roughness& r) -> py::object {
+            return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
+        });
+
+    py::class_<rp::Profile>(m, "Profile", "Height profile under one wheel, binned along its path")
+        .def_readonly("s0", &rp::Profile::s0)
+        .def_readonly("ds", &rp::Profile::ds)
+        .def_property_readonly("s", [](py::object self) { return view_of(self.cast<const rp::Profile&>().s, self); }, "bin centres, m")
+        .def_property_readonly("z", [](py::object self) { return view_of(self.cast<const rp::Profile&>().z, self); },
+                               "levelled height per bin, m; NaN where missing")
+        .def_property_readonly("count", [](py::object self) { return view_of(self.cast<const rp::Profile&>().count, self); },
+                               "points per bin (0 where interpolated or missing)")
+        .def_readonly("roughness", &rp::Profile::roughness);
+
+    py::class_<rp::Result>(m, "Result", "Everything one frame yields")
+        .def_readonly("frame", &rp::Result::frame)
+        .def_readonly("source", &rp::Result::source)
+        .def_readonly("timestamp", &rp::Result::timestamp)
+        .def_property_readonly("ground_mask", [](py::object self) {
+            return view_of(self.cast<const rp::Result&>().ground_mask, self, py::dtype("bool"));
+        }, "bool per input row")
+        .def_property_readonly("plane", [](const rp::Result& r) { return plane_array(r.plane); }, "(a, b, c, d), base frame, c > 0")
+        .def_property_readonly("points", [](const rp::Result& r) {
+            py::dict d;
+            d["input"] = r.points.input, d["finite"] = r.points.finite, d["roi"] = r.points.roi, d["ground"] = r.points.ground;
+            return d;
+        })
+        .def_property_readonly("path", [](const rp::Result& r) { return path_dict(r.path); })
+        .def_readonly("left", &rp::Result::left)
+        .def_readonly("right", &rp::Result::right)
+        .def_readonly("vehicle", &rp::Result::vehicle)
+        .def_property_readonly("timing_ms", [](const rp::Result& r) {
+            py::dict d;
+            d["ground"] = r.timing_ms.ground, d["path"] = r.timing_ms.path, d["profile"] = r.timing_ms.profile;
+            d["roughness"] = r.timing_ms.roughness, d["total"] = r.timing_ms.total;
+            return d;
+        })
+        .def_property_readonly("reason", [](const rp::Result& r) -> py::object {
+            return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
+        })
+        .def("to_json", &rp::result_to_json, "The CLI's output line for this frame")
+        .def("to_dict", [](const rp::Result& r) { return py::module_::import("json").attr("loads")(rp::result_to_json(r)); },
+             "The CLI's output line for this frame, parsed");
+}
+
+void bind_estimator(py::module_& m) {
+    py::class_<rp::Estimator>(m, "Estimator")
+        .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
+        .def("process", [](rp::Estimator& est, py::handle points, double speed, double yaw_rate, const std::string& source,
+                           std::optional<double> timestamp) {
+            py::object holder;
+            const rp::PointsView view = points_from(points, holder);
+            rp::Result r;
+            {
+                py::gil_scoped_release release;
+                r = est.process(view, speed, yaw_rate, source);
+            }
+            r.timestamp = timestamp;
+            return r;
+        }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none());
+}
+
+void bind_stages(py::module_& m) {
+    m.def("fit_plane", [](py::handle points) {
+        py::object holder;
+        return plane_array(rp::fit_plane(points_from(points, holder)));
+    });
+    m.def("fit_ground", [](py::handle points, const std::string& config_json) {
+        py::object holder;
+        const rp::Config cfg = config_from(config_json);
+        const rp::PointsView view = points_from(points, holder);
+        rp::GroundFit fit;
+        {
+            py::gil_scoped_release release;
+            fit = rp::fit_ground(view, cfg.ground);
+        }
+        py::array_t<bool> mask(static_cast<py::ssize_t>(fit.mask.size()));
+        std::copy(fit.mask.begin(), fit.mask.end(), mask.mutable_data());
+        return py::make_tuple(mask, plane_array(fit.plane));
+    });
+    m.def("plan_path", [](double speed, double yaw_rate, const std::string& config_json) {
+        const rp::Config cfg = config_from(config_json);
+        return path_dict(rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path));
+    });
+    m.def("wheel_profiles", [](py::handle ground_points, py::object plane, double speed, double yaw_rate,
+                               const std::string& config_json) {
+        py::object holder;
+        const rp::Config cfg = config_from(config_json);
+        const rp::PointsView view = points_from(ground_points, holder, "ground_points");
+        std::optional<rp::Plane> pl;
+        if (!plane.is_none()) pl = plane.cast<std::array<double, 4>>();
+        const rp::Levelling L = rp::levelling_for(cfg.profile.level && pl ? &*pl : nullptr);
+        const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
+        const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
+        rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile);
+        return py::make_tuple(std::move(w.left), std::move(w.right));
+    }, "Profiles (without roughness) of ground points given in the base frame");
+    m.def("level_points", [](py::handle points, std::array<double, 4> plane) {
+        py::object holder;
+        const rp::PointsView v = points_from(points, holder);
+        const rp::Levelling L = rp::levelling_for(&plane);
+        py::array_t<double> out({v.rows(), Eigen::Index(3)});
+        auto o = out.mutable_unchecked<2>();
+        for (Eigen::Index i = 0; i < v.rows(); ++i)
+            for (int r = 0; r < 3; ++r) o(i, r) = L.R[r][0] * v(i, 0) + L.R[r][1] * v(i, 1) + L.R[r][2] * v(i, 2);
+        return out;
+    });
+    m.def("fill_gaps", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds, double max_gap_m) {
+        std::vector<double> v = as_vector(z);
+        rp::fill_gaps(v, ds, max_gap_m);
+        return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+    });
+    m.def("longest_valid_stretch", [](py::array_t<double, py::array::c_style | py::array::forcecast> z) {
+        return rp::longest_valid_stretch(as_vector(z));
+    });
+    m.def("displacement_psd", [](py::array_t<double, py::array::c_style | py::array::forcecast> x, double ds) {
+        const std::vector<double> v = as_vector(x);
+        if (v.size() < 2) throw py::value_error("displacement_psd needs at least 2 samples");
+        rp::Spectrum sp = rp::displacement_psd(v.data(), v.size(), ds);
+        return py::make_tuple(py::array_t<double>(static_cast<py::ssize_t>(sp.n.size()), sp.n.data()),
+                              py::array_t<double>(static_cast<py::ssize_t>(sp.psd.size()), sp.psd.data()));
+    });
+    m.def("analyze_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds,
+                                  const std::string& config_json) {
+        return rp::analyze_roughness(as_vector(z), ds, config_from(config_json).roughness);
+    });
+    m.def("vehicle_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> zl,
+                                  py::array_t<double, py::array::c_style | py::array::forcecast> zr, double ds,
+                                  const std::string& config_json) {
+        return rp::vehicle_roughness(as_vector(zl), as_vector(zr), ds, config_from(config_json).roughness);
+    });
+    m.def("iso_class", [](double gd) { return std::string(1, rp::iso_class(gd)); });
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "roadpreview C++ core (use the roadpreview package, not this module directly)";
+    m.attr("__version__") = rp::kVersion;
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const std::invalid_argument& e) {
+            PyErr_SetString(PyExc_ValueError, e.what());
+        }
+    });
+    bind_results(m);
+    bind_estimator(m);
+    bind_stages(m);
+    m.def("read_frame", [](const std::string& path) {
+        rp::Frame f = rp::read_frame(path);
+        auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));
+        rp::PointMatrix* raw = owner.get();
+        py::capsule free_when_done(owner.release(), [](void* p) { delete static_cast<rp::PointMatrix*>(p); });
+        return py::array_t<float>({raw->rows(), Eigen::Index(4)}, raw->data(), free_when_done);
+    }, py::arg("path"), "N×4 float32 (x, y, z, intensity) of a KITTI .bin or .pcd file");
+    m.def("expand_inputs", &rp::expand_inputs);
+    m.def("default_config_json", [] { return rp::config_to_json(rp::Config{}); });
+    m.def("validate_config", [](const std::string& json) { config_from(json); });
+}

@@ -1,0 +1,34 @@
+"""roadpreview — road height profiles and ISO 8608 roughness ahead of the wheels, from LiDAR.
+
+    import roadpreview as rp
+    est = rp.Estimator(rp.Config(sensor_height=1.73))
+    res = est.process(points, speed=5.0, yaw_rate=0.0)   # points: N×3 or N×4 float32/float64, sensor frame
+    res.left.z, res.left.roughness.iso_class, res.vehicle.gd_n0, res.to_dict()
+
+Frames: base frame x forward, y left, z up, origin on the ground; metres, seconds, radians.
+``rp.reference`` is the pure-numpy implementation of the same method, used to cross-check the C++ core.
+"""
+
+from pathlib import Path
+
+from . import reference
+from ._native import native_available
+from .config import Config, Extrinsics, GroundConfig, PathConfig, ProfileConfig, RoughnessConfig
+from .estimator import Estimator
+
+if native_available():
+    from . import io
+    from ._core import Profile, Result, Roughness, __version__
+else:  # a source checkout without the compiled extension: only the reference works
+    __version__ = "0+source"
+
+
+def cmake_dir() -> str:
+    """Directory of the installed CMake package: ``cmake -Droadpreview_DIR=$(python -c ...)``."""
+    return str(Path(__file__).resolve().parent / "lib" / "cmake" / "roadpreview")
+
+
+__all__ = [
+    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
+    "Estimator", "Result", "Profile", "Roughness", "io", "reference", "cmake_dir", "__version__",
+]

@@ -1,0 +1,143 @@
+"""Pipeline configuration: one dataclass per stage, nested in :class:`Config`.
+
+Field names carry their units (``_m`` metres, ``_mps`` m/s, ``_cpm`` cycles/m, ``_deg`` degrees); the
+vehicle geometry at the top level (``sensor_height``, ``track_width``, ``tire_width``) is in metres.
+The same names are used by the C++ ``roadpreview::Config``, the CLI's ``--config`` JSON file and
+``docs/method.md``; ``Config.to_dict()`` is exactly what the C++ side parses.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Optional
+
+
+@dataclass
+class Extrinsics:
+    """Pose of the sensor in the base frame (x forward, y left, z up); R = Rz(yaw)·Ry(pitch)·Rx(roll)."""
+
+    x_m: float = 0.0
+    y_m: float = 0.0
+    z_m: float = 0.0
+    roll_rad: float = 0.0
+    pitch_rad: float = 0.0
+    yaw_rad: float = 0.0
+
+
+@dataclass
+class GroundConfig:
+    method: str = "pca"  #: "pca" (the paper's iterative plane fit) or "ransac" (PCL)
+    roi_x_min_m: float = 1.0
+    roi_x_max_m: float = 40.0
+    roi_y_abs_max_m: float = 10.0
+    pca_iterations: int = 3
+    pca_threshold_m: float = 0.20  #: points farther than this above the plane are not ground
+    ransac_distance_m: float = 0.20
+    ransac_max_tilt_deg: float = 15.0  #: largest angle between the plane normal and the up axis
+    ransac_max_iterations: int = 200
+    ransac_seed: int = 1
+
+
+@dataclass
+class PathConfig:
+    straight_radius_m: float = 1000.0  #: |V/ω| above this is driven as a straight line
+    stopped_speed_mps: float = 0.0  #: |V| at or below this means the vehicle is stopped (no path)
+
+
+@dataclass
+class ProfileConfig:
+    preview_length_m: float = 40.0
+    ds_m: float = 0.1  #: resampling step along the wheel path
+    max_gap_m: float = 1.0  #: interior gaps up to this length are linearly interpolated
+    level: bool = True  #: remove the fitted ground plane's tilt before reading heights
+
+
+@dataclass
+class RoughnessConfig:
+    band_min_cpm: float = 0.1
+    band_max_cpm: float = 4.0
+    min_length_m: float = 5.0  #: shortest valid stretch that is analysed
+    min_cycles: float = 2.0  #: the band starts no lower than min_cycles / stretch length
+    min_band_points: int = 5  #: fewest PSD ordinates in the band for a class
+
+
+_STAGES = {
+    "extrinsics": Extrinsics,
+    "ground": GroundConfig,
+    "path": PathConfig,
+    "profile": ProfileConfig,
+    "roughness": RoughnessConfig,
+}
+
+
+@dataclass
+class Config:
+    """Everything the pipeline needs besides the points, the speed and the yaw rate.
+
+    Keyword-constructible; stage blocks accept dataclasses or plain dicts::
+
+        rp.Config(sensor_height=1.73, track_width=1.6, ground={"method": "ransac"})
+    """
+
+    sensor_height: Optional[float] = None  #: shortcut for extrinsics (0, 0, h, 0, 0, 0)
+    extrinsics: Optional[Extrinsics] = None
+    track_width: float = 1.6
+    tire_width: float = 0.3
+    ground: GroundConfig = field(default_factory=GroundConfig)
+    path: PathConfig = field(default_factory=PathConfig)
+    profile: ProfileConfig = field(default_factory=ProfileConfig)
+    roughness: RoughnessConfig = field(default_factory=RoughnessConfig)
+
+    def __post_init__(self) -> None:
+        for name, cls in _STAGES.items():
+            value = getattr(self, name)
+            if isinstance(value, dict):
+                setattr(self, name, _stage_from_dict(cls, value, name))
+            elif value is not None and not isinstance(value, cls):
+                raise TypeError(f"Config.{name} must be a {cls.__name__} or a dict, got {type(value).__name__}")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, source: str = "config") -> "Config":
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: expected a mapping of config fields, got {type(data).__name__}")
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{source}: unknown config field(s) {unknown}; known: {sorted(known)}")
+        return cls(**data)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "Config":
+        """Read a JSON or YAML file holding (a subset of) the fields of :meth:`to_dict`."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as err:
+            raise ValueError(f"{path}: cannot read config file ({err.strerror})") from None
+        try:
+            if path.suffix.lower() in (".yaml", ".yml"):
+                import yaml
+
+                data = yaml.safe_load(text)
+            else:
+                data = json.loads(text)
+        except Exception as err:  # parser errors differ between json and yaml
+            raise ValueError(f"{path}: not a valid config file: {err}") from None
+        return cls.from_dict(data or {}, source=str(path))
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+
+def _stage_from_dict(cls: type, data: dict[str, Any], name: str) -> Any:
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise ValueError(f"Config.{name}: unknown field(s) {unknown}; known: {sorted(known)}")
+    return cls(**data)

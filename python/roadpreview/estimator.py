@@ -1,0 +1,32 @@
+"""The pipeline estimator: a thin layer over the C++ ``Estimator``."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+from ._native import core
+from .config import Config
+
+
+class Estimator:
+    """Runs the C++ pipeline frame by frame; keeps its work buffers between calls (not thread-safe).
+
+    ``Estimator(cfg)`` raises ValueError for an invalid config, naming the field.
+    """
+
+    def __init__(self, cfg: Optional[Config] = None):
+        self.config = cfg if cfg is not None else Config()
+        if not isinstance(self.config, Config):
+            raise TypeError(f"cfg must be a roadpreview.Config, got {type(self.config).__name__}")
+        self._impl = core().Estimator(self.config.to_json())
+
+    def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
+                timestamp: Optional[float] = None):
+        """One frame.
+
+        points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
+        are contiguous) or float64 (converted once); extra columns are ignored, non-finite rows dropped.
+        speed: m/s, negative when reversing. yaw_rate: rad/s, positive turning left.
+        Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
+        """
+        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp)

@@ -1,0 +1,72 @@
+"""The C++ core's stage functions with the call shapes of ``roadpreview.reference``.
+
+Tests run the same known-answer cases on both modules and compare them on shared inputs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._native import core
+from .config import Config
+
+ISO_CLASSES = "ABCDEFGH"
+ISO_GEOMETRIC_MEANS = tuple(16e-6 * 4.0**k for k in range(8))  # m³, ISO 8608 class centres at n0
+
+
+def _cfg(cfg: Config | None) -> str:
+    return (cfg if cfg is not None else Config()).to_json()
+
+
+def process(points, speed, yaw_rate, cfg: Config | None = None):
+    from .estimator import Estimator
+
+    return Estimator(cfg).process(points, speed, yaw_rate)
+
+
+def fit_plane(points_xyz):
+    return core().fit_plane(np.asarray(points_xyz))
+
+
+def fit_ground(base_xyz, cfg: Config | None = None):
+    return core().fit_ground(np.asarray(base_xyz), _cfg(cfg))
+
+
+def plan_path(speed, yaw_rate, cfg: Config | None = None):
+    return core().plan_path(float(speed), float(yaw_rate), _cfg(cfg))
+
+
+def wheel_profile(ground_xyz, plane, path, wheel, speed, yaw_rate, cfg: Config | None = None):
+    """``path`` is accepted for call-shape parity; the C++ side plans it again from speed and yaw rate."""
+    if wheel not in ("left", "right"):
+        raise ValueError(f"wheel must be 'left' or 'right', got {wheel!r}")
+    left, right = core().wheel_profiles(np.asarray(ground_xyz), plane, float(speed), float(yaw_rate), _cfg(cfg))
+    return left if wheel == "left" else right
+
+
+def level_points(xyz, plane):
+    return core().level_points(np.asarray(xyz), [float(v) for v in plane])
+
+
+def fill_gaps(z, ds, max_gap_m):
+    return core().fill_gaps(np.asarray(z, dtype=float), float(ds), float(max_gap_m))
+
+
+def longest_valid_stretch(z):
+    return tuple(core().longest_valid_stretch(np.asarray(z, dtype=float)))
+
+
+def displacement_psd(x, ds):
+    return core().displacement_psd(np.asarray(x, dtype=float), float(ds))
+
+
+def analyze_roughness(z, ds, cfg: Config | None = None):
+    return core().analyze_roughness(np.asarray(z, dtype=float), float(ds), _cfg(cfg))
+
+
+def vehicle_roughness(z_left, z_right, ds, cfg: Config | None = None):
+    return core().vehicle_roughness(np.asarray(z_left, dtype=float), np.asarray(z_right, dtype=float), float(ds), _cfg(cfg))
+
+
+def iso_class(gd_n0):
+    return core().iso_class(float(gd_n0))
