@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+// Type errors then name the offending field (/track_width); the setting is part of nlohmann's ABI tag.
+#define JSON_DIAGNOSTICS 1
 #include <nlohmann/json.hpp>
 
 namespace roadpreview {

@@ -54,6 +54,14 @@ Frame read_pcd(const std::string& path) {
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are reported by our exception
     pcl::PCLPointCloud2 blob;
     pcl::PCDReader reader;
+    // PCL 1.13 accepts a header without FIELDS or DATA and then crashes while reading: check it first.
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0, data_type = 0;
+    unsigned int data_start = 0;
+    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_start) < 0 || blob.fields.empty() ||
+        data_start == 0)
+        fail(path, "not a PCD file (no valid header with FIELDS and DATA)");
     if (reader.read(path, blob) < 0) fail(path, "not a readable PCD file (corrupt header or data)");
     for (const char* axis : {"x", "y", "z"})
         if (pcl::getFieldIndex(blob, axis) < 0) fail(path, std::string("PCD file has no '") + axis + "' field");

@@ -1,0 +1,69 @@
+#include <gtest/gtest.h>
+
+#include <roadpreview/config.hpp>
+
+namespace rp = roadpreview;
+
+TEST(Config, DefaultsAreThePapers) {
+    const rp::Config c;
+    EXPECT_EQ(c.ground.method, rp::GroundMethod::Pca);
+    EXPECT_DOUBLE_EQ(c.ground.pca_threshold_m, 0.20);
+    EXPECT_EQ(c.ground.pca_iterations, 3);
+    EXPECT_DOUBLE_EQ(c.profile.ds_m, 0.1);
+    EXPECT_DOUBLE_EQ(c.roughness.band_min_cpm, 0.1);
+    EXPECT_DOUBLE_EQ(c.roughness.band_max_cpm, 4.0);
+    EXPECT_NO_THROW(rp::validate(c));
+}
+
+TEST(Config, JsonRoundTripKeepsEveryField) {
+    rp::Config c;
+    c.extrinsics = rp::Extrinsics{0.1, 0.2, 1.9, 0.01, -0.02, 0.03};
+    c.track_width = 1.7;
+    c.ground.method = rp::GroundMethod::Ransac;
+    c.ground.ransac_seed = 42;
+    c.profile.level = false;
+    c.roughness.min_band_points = 9;
+    const rp::Config back = rp::config_from_json(rp::config_to_json(c));
+    EXPECT_EQ(rp::config_to_json(back), rp::config_to_json(c));
+    EXPECT_DOUBLE_EQ(back.extrinsics->pitch_rad, -0.02);
+    EXPECT_EQ(back.ground.method, rp::GroundMethod::Ransac);
+}
+
+TEST(Config, MissingFieldsKeepDefaults) {
+    const rp::Config c = rp::config_from_json(R"({"sensor_height": 1.73, "ground": {"method": "ransac"}})");
+    EXPECT_DOUBLE_EQ(*c.sensor_height, 1.73);
+    EXPECT_EQ(c.ground.method, rp::GroundMethod::Ransac);
+    EXPECT_DOUBLE_EQ(c.ground.roi_x_max_m, 40.0);
+    EXPECT_DOUBLE_EQ(c.track_width, 1.6);
+}
+
+void expect_rejected(const std::string& json, const std::string& words) {
+    try {
+        rp::config_from_json(json, "my.json");
+        FAIL() << "accepted " << json;
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("my.json"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+}
+
+TEST(Config, BadFilesAreRejectedWithTheFieldNamed) {
+    expect_rejected(R"({"trackwidth": 1.6})", "trackwidth");
+    expect_rejected(R"({"ground": {"methdo": "pca"}})", "ground.methdo");
+    expect_rejected(R"({"extrinsics": {"x": 1}})", "extrinsics.x");
+    expect_rejected(R"({"ground": {"method": "lidar"}})", "ground.method");
+    expect_rejected(R"({"track_width": -1})", "track_width");
+    expect_rejected(R"({"track_width": "wide"})", "track_width");
+    expect_rejected(R"({"sensor_height": 1.7, "extrinsics": {"z_m": 1.7}})", "not both");
+    expect_rejected(R"({"profile": {"ds_m": 0}})", "profile.ds_m");
+    expect_rejected(R"({"roughness": {"band_min_cpm": 5, "band_max_cpm": 4}})", "band_min_cpm");
+    expect_rejected(R"([1, 2])", "object");
+    expect_rejected(R"({"track_width": )", "parse");
+}
+
+TEST(Config, EffectiveExtrinsics) {
+    rp::Config c;
+    EXPECT_DOUBLE_EQ(rp::effective_extrinsics(c).z_m, 0.0);
+    c.sensor_height = 1.73;
+    EXPECT_DOUBLE_EQ(rp::effective_extrinsics(c).z_m, 1.73);
+}
