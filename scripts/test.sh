@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Sets up roadpreview and runs every test: the C++ suite (GoogleTest + find_package consumer, via ctest)
+# and the Python suite (bindings, numpy reference, cross-checks, CLI, CMake package; via pytest).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+source "$ROOT/scripts/setup.sh"
+
+cd "$ROOT"
+log "building and running the C++ tests"
+cmake -S . -B build/ctest -G Ninja -DROADPREVIEW_BUILD_TESTS=ON -DROADPREVIEW_BUILD_PYTHON=OFF >/dev/null
+cmake --build build/ctest -j "$(nproc)"
+ctest --test-dir build/ctest -j "$(nproc)" --output-on-failure
+
+log "running the Python tests"
+python -m pytest -q tests/python

@@ -1,0 +1,98 @@
+"""The `roadpreview` command-line tool, run as a user would."""
+
+import json
+import subprocess
+
+import pytest
+
+import roadpreview as rp
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, PCD_FILE, cli
+
+
+def run(*args, check=True):
+    proc = subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=120)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def lines(text):
+    return [json.loads(line) for line in text.splitlines()]
+
+
+def test_version_and_help():
+    assert run("--version").stdout.strip() == f"roadpreview {rp.__version__}"
+    assert "--sensor-height" in run("run", "--help").stdout
+
+
+def test_directory_input_gives_one_line_per_frame_in_name_order():
+    proc = run("run", KITTI_FRAMES[0].parent, "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT)
+    out = lines(proc.stdout)
+    assert [o["source"] for o in out] == [str(p) for p in KITTI_FRAMES]
+    assert [o["frame"] for o in out] == list(range(len(KITTI_FRAMES)))
+    assert len(proc.stderr.strip().splitlines()) == len(KITTI_FRAMES) + 1  # progress + summary
+    assert "frame(s)" in proc.stderr.splitlines()[-1]
+
+
+def test_cli_line_equals_python_to_dict(tmp_path):
+    out = tmp_path / "out.jsonl"
+    run("run", KITTI_FRAMES[1], "--speed", 7, "--yaw-rate", -0.2, "--sensor-height", KITTI_SENSOR_HEIGHT,
+        "--frame-rate", 10, "-o", out)
+    line = lines(out.read_text())[0]
+    res = rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)).process(
+        rp.io.read(KITTI_FRAMES[1]), 7.0, -0.2, source=str(KITTI_FRAMES[1]), timestamp=0.0)
+    expected = res.to_dict()
+    for d in (line, expected):
+        d.pop("timing_ms")
+    assert line == expected
+
+
+def test_flags_override_the_config_file(tmp_path):
+    cfg = tmp_path / "cfg.json"
+    cfg.write_text(json.dumps({"sensor_height": 1.0, "ground": {"method": "ransac"}, "track_width": 1.4}))
+    out = lines(run("run", KITTI_FRAMES[0], "--speed", 5, "--yaw-rate", 0.5, "--config", cfg,
+                    "--sensor-height", KITTI_SENSOR_HEIGHT, "--track-width", 1.8).stdout)[0]
+    assert out["ground"]["method"] == "ransac"
+    assert out["path"]["left_radius"] == pytest.approx(10.0 - 0.9)  # 1.8 m track from the flag
+
+
+def test_pcd_input():
+    out = lines(run("run", PCD_FILE, "--speed", 3, "-q").stdout)[0]  # this cloud's origin is on the ground
+    assert out["points"]["input"] == 240000  # organized 1875 × 128; no-return pixels are (0, 0, 0)
+    assert 0 < out["points"]["ground"] < out["points"]["roi"] < 205898
+    assert out["ground"]["plane"] is not None
+
+
+def one_line_error(proc, *words):
+    assert proc.returncode != 0
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1, proc.stderr
+    for w in words:
+        assert w in err[0], err[0]
+
+
+def test_bad_inputs_exit_non_zero_with_one_line_naming_the_file(tmp_path):
+    one_line_error(run("run", tmp_path / "nope.bin", "--speed", 5, check=False), "nope.bin", "no such file")
+    cut = tmp_path / "cut.bin"
+    cut.write_bytes(b"\0" * 17)
+    one_line_error(run("run", cut, "--speed", 5, "-q", check=False), "cut.bin", "multiple of 16")
+    junk = tmp_path / "junk.pcd"
+    junk.write_text("garbage\n")
+    one_line_error(run("run", junk, "--speed", 5, "-q", check=False), "junk.pcd")
+    bad_cfg = tmp_path / "bad.json"
+    bad_cfg.write_text('{"tire_width": -1}')
+    one_line_error(run("run", KITTI_FRAMES[0], "--speed", 5, "--config", bad_cfg, check=False), "bad.json",
+                   "tire_width")
+
+
+def test_missing_speed_and_bad_flags_are_usage_errors():
+    assert run("run", KITTI_FRAMES[0], check=False).returncode != 0
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--ground", "magic", check=False)
+    assert proc.returncode != 0 and "magic" in proc.stderr
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", 1, "--extrinsics", "0,0,1,0,0,0", check=False)
+    assert proc.returncode != 0 and "excludes" in proc.stderr
+
+
+def test_zero_speed_is_a_documented_result_not_an_error():
+    out = lines(run("run", KITTI_FRAMES[0], "--speed", 0, "--sensor-height", KITTI_SENSOR_HEIGHT, "-q").stdout)[0]
+    assert out["reason"] == "vehicle stopped" and out["profiles"]["left"]["z"] == []
