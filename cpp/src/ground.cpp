@@ -36,7 +36,7 @@ std::optional<Plane> plane_from(const Moments& m) {
     const Eigen::Matrix3d cov = m.outer / n - mean_q * mean_q.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     // Collinear or coincident points span no plane.
-    if (eig.info() != Eigen::Success || !(eig.eigenvalues()(1) > 1e-12 * std::max(1.0, eig.eigenvalues()(2))))
+    if (eig.info() != Eigen::Success || !(eig.eigenvalues()(1) > 1e-12 * eig.eigenvalues()(2)))
         return std::nullopt;
     Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();  // eigenvalues ascend
     if (normal.z() < 0.0) normal = -normal;
@@ -80,7 +80,9 @@ public:
     }
 };
 
-GroundFit ransac_ground(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const GroundConfig& cfg) {
+// PCL finds the consensus set; the plane is then refined by this file's double-precision PCA on it, and
+// the ground is every point within the distance of the refined plane (method.md §1).
+GroundFit ransac_ground(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, PointsView pts, const GroundConfig& cfg) {
     GroundFit fit;
     fit.mask.assign(cloud->size(), 0);
     if (cloud->size() < 3) return fit;
@@ -93,19 +95,19 @@ GroundFit ransac_ground(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, c
     if (!ransac.computeModel()) return fit;
 
     pcl::Indices inliers;
-    Eigen::VectorXf coeffs, refined;
     ransac.getInliers(inliers);
-    ransac.getModelCoefficients(coeffs);
-    model->optimizeModelCoefficients(inliers, coeffs, refined);  // least squares on the inliers
-    model->selectWithinDistance(refined, cfg.ransac_distance_m, inliers);
-    if (inliers.size() < 3) return fit;
-
-    Eigen::Vector4d pl = refined.cast<double>();
-    pl /= pl.head<3>().norm();
-    if (pl.z() < 0.0) pl = -pl;
-    fit.plane = Plane{pl[0], pl[1], pl[2], pl[3]};
     for (const auto i : inliers) fit.mask[static_cast<std::size_t>(i)] = 1;
-    fit.count = static_cast<std::int64_t>(inliers.size());
+    fit.plane = fit_plane(pts, &fit.mask);
+    if (!fit.plane) {
+        std::fill(fit.mask.begin(), fit.mask.end(), 0);
+        return fit;
+    }
+    fit.count = 0;
+    for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+        const bool near = std::abs(height_above(*fit.plane, pts(i, 0), pts(i, 1), pts(i, 2))) <= cfg.ransac_distance_m;
+        fit.mask[static_cast<std::size_t>(i)] = near;
+        fit.count += near;
+    }
     return fit;
 }
 
@@ -120,15 +122,19 @@ std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t
 
 GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     if (cfg.method == GroundMethod::Pca) return pca_ground(roi.view(), cfg);
-    return ransac_ground(roi.cloud, cfg);
+    return ransac_ground(roi.cloud, roi.view(), cfg);
 }
 
 GroundFit fit_ground(PointsView points, const GroundConfig& cfg) {
-    if (cfg.method == GroundMethod::Pca) return pca_ground(points, cfg);
-    auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();  // PCL needs its own container
-    cloud->reserve(static_cast<std::size_t>(points.rows()));
-    for (Eigen::Index i = 0; i < points.rows(); ++i) cloud->emplace_back(points(i, 0), points(i, 1), points(i, 2));
-    return ransac_ground(cloud, cfg);
+    RoiCloud roi;
+    crop_roi(points, to_rigid_transform(Extrinsics{}), cfg, roi);  // the points are in the base frame already
+    GroundFit in_roi = fit_ground(roi, cfg);
+    GroundFit fit;
+    fit.plane = in_roi.plane;
+    fit.count = in_roi.count;
+    fit.mask.assign(static_cast<std::size_t>(points.rows()), 0);
+    for (std::size_t i = 0; i < in_roi.mask.size(); ++i) fit.mask[static_cast<std::size_t>(roi.input_index[i])] = in_roi.mask[i];
+    return fit;
 }
 
 }  // namespace roadpreview

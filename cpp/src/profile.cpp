@@ -75,8 +75,9 @@ WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>&
         for (const Wheel w : {Wheel::Left, Wheel::Right}) {
             const auto s = arc_length(paths, w, xl, yl, tire_width);
             if (!s || *s >= cfg.preview_length_m) continue;
-            const auto bin = static_cast<std::size_t>(*s / cfg.ds_m);
-            if (bin < bins) hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl});
+            // s < preview but s/ds can round up to `bins`: such a point belongs to the last bin.
+            const auto bin = std::min(static_cast<std::size_t>(*s / cfg.ds_m), bins - 1);
+            hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl});
         }
     }
     out.left = bin_profile(hits[static_cast<int>(Wheel::Left)], bins, cfg);

@@ -162,6 +162,7 @@ Roughness analyze_roughness(const std::vector<double>& z, double ds, const Rough
 
 Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
                             const RoughnessConfig& cfg) {
+    if (z_left.empty() || z_right.empty()) return declined("no valid profile");
     if (z_left.size() != z_right.size()) throw std::invalid_argument("left and right profiles differ in length");
     const auto [first, last] = longest_run(
         z_left.size(), [&](std::size_t k) { return is_finite(z_left[k]) && is_finite(z_right[k]); });

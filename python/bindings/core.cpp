@@ -2,6 +2,8 @@
 // pybind11 bindings. Points are read in place when they are float32 with unit column stride (N×3, N×4,
 // or a column slice of either); anything else is converted once. Result arrays are read-only numpy
 // views of the C++ result's buffers (no copy), kept alive by the result object.
+#include <cmath>
+
 #include <pybind11/pybind11.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -41,7 +43,10 @@ rp::PointsView points_from(const py::handle& obj, py::object& holder, const char
     return rp::points_view(copy.data(), copy.shape(0), copy.shape(1));
 }
 
-py::object optional_number(bool present, double v) { return present ? py::object(py::float_(v)) : py::object(py::none()); }
+// None where the JSON line has null: absent, or not finite (a flat stretch has no free-fit slope).
+py::object optional_number(bool present, double v) {
+    return present && std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none());
+}
 
 py::object plane_array(const std::optional<rp::Plane>& p) {
     if (!p) return py::none();
@@ -149,6 +154,24 @@ void bind_estimator(py::module_& m) {
 }
 
 void bind_stages(py::module_& m) {
+    m.def("to_base_frame", [](py::handle points, const std::string& config_json) {
+        py::object holder;
+        const rp::PointsView v = points_from(points, holder);
+        const rp::RigidTransform T = rp::to_rigid_transform(rp::effective_extrinsics(config_from(config_json)));
+        py::array_t<bool> finite(v.rows());
+        std::vector<double> base;
+        for (Eigen::Index i = 0; i < v.rows(); ++i) {
+            const double p[3] = {v(i, 0), v(i, 1), v(i, 2)};
+            finite.mutable_at(i) = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+            if (!finite.at(i)) continue;
+            double b[3];
+            rp::transform_point(T, p, b);
+            base.insert(base.end(), b, b + 3);
+        }
+        py::array_t<double> xyz({static_cast<py::ssize_t>(base.size() / 3), py::ssize_t(3)});
+        std::copy(base.begin(), base.end(), xyz.mutable_data());
+        return py::make_tuple(xyz, finite);
+    });
     m.def("fit_plane", [](py::handle points) {
         py::object holder;
         return plane_array(rp::fit_plane(points_from(points, holder)));

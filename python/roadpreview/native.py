@@ -10,6 +10,7 @@ import numpy as np
 from ._native import core
 from .config import Config
 
+POINT_DTYPE = np.float32  #: the C++ core reads points as float32 (x, y, z rounded to ~1e-7 relative)
 ISO_CLASSES = "ABCDEFGH"
 ISO_GEOMETRIC_MEANS = tuple(16e-6 * 4.0**k for k in range(8))  # m³, ISO 8608 class centres at n0
 
@@ -24,8 +25,15 @@ def process(points, speed, yaw_rate, cfg: Config | None = None):
     return Estimator(cfg).process(points, speed, yaw_rate)
 
 
+def to_base_frame(points, cfg: Config | None = None):
+    return core().to_base_frame(points, _cfg(cfg))
+
+
 def fit_plane(points_xyz):
-    return core().fit_plane(np.asarray(points_xyz))
+    plane = core().fit_plane(np.asarray(points_xyz))
+    if plane is None:
+        raise ValueError("no plane: fewer than 3 points, or all of them on one line")
+    return plane
 
 
 def fit_ground(base_xyz, cfg: Config | None = None):

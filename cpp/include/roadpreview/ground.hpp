@@ -31,7 +31,8 @@ struct GroundFit {
     std::int64_t count = 0;          ///< ground points
 };
 
-/// Ground among `points` (already cropped to the ROI), by `cfg.method`.
+/// Ground among base-frame `points` by `cfg.method`; only points in the front ROI can be ground.
+/// The mask has one entry per point given.
 GroundFit fit_ground(PointsView points, const GroundConfig& cfg);
 
 }  // namespace roadpreview

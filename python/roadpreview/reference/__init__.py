@@ -1,0 +1,45 @@
+"""Pure-numpy reference implementation of docs/method.md: the independent test oracle for the C++ core.
+
+Written for clarity, not speed; every stage function below has a C++ twin with the same name.
+"""
+
+import numpy as _np
+
+from .frames import to_base_frame
+from .ground import fit_ground, fit_plane
+from .path import plan_path
+from .pipeline import Result, process
+from .profile import Profile, fill_gaps, level_points, wheel_profile
+from .roughness import (
+    ISO_CLASSES,
+    ISO_GEOMETRIC_MEANS,
+    Roughness,
+    analyze_roughness,
+    displacement_psd,
+    iso_class,
+    longest_valid_stretch,
+    vehicle_roughness,
+)
+
+POINT_DTYPE = _np.float64  #: points are used in double precision
+
+__all__ = [
+    "POINT_DTYPE",
+    "ISO_CLASSES",
+    "ISO_GEOMETRIC_MEANS",
+    "Profile",
+    "Result",
+    "Roughness",
+    "analyze_roughness",
+    "displacement_psd",
+    "fill_gaps",
+    "fit_ground",
+    "fit_plane",
+    "iso_class",
+    "level_points",
+    "longest_valid_stretch",
+    "plan_path",
+    "process",
+    "to_base_frame",
+    "vehicle_roughness",
+]

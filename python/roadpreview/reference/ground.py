@@ -1,0 +1,117 @@
+"""Ground segmentation (docs/method.md §1 Ground): ROI, PCA plane fit, iterative `pca` and `ransac` methods."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..config import Config
+
+# Relative size of the middle covariance eigenvalue below which a point set is a line (or a point),
+# so its plane normal is undefined.
+_DEGENERATE_RATIO = 1e-12
+
+
+class DegenerateFit(ValueError):
+    """A plane cannot be fitted: fewer than 3 points or all of them on one line."""
+
+
+def roi_mask(base_xyz: np.ndarray, cfg: Config) -> np.ndarray:
+    g = cfg.ground
+    x, y = base_xyz[:, 0], base_xyz[:, 1]
+    return (x >= g.roi_x_min_m) & (x <= g.roi_x_max_m) & (np.abs(y) <= g.roi_y_abs_max_m)
+
+
+def fit_plane(points_xyz) -> np.ndarray:
+    """PCA plane (a, b, c, d) with unit normal and c > 0 (c = 0 keeps the solver's sign)."""
+    xyz = np.asarray(points_xyz, dtype=np.float64)[:, :3]
+    if len(xyz) < 3:
+        raise DegenerateFit(f"a plane needs at least 3 points, got {len(xyz)}")
+    centre = xyz.mean(axis=0)
+    offsets = xyz - centre
+    covariance = offsets.T @ offsets / len(xyz)
+    eigenvalues, eigenvectors = np.linalg.eigh(covariance)  # ascending
+    if eigenvalues[1] <= _DEGENERATE_RATIO * eigenvalues[2]:
+        raise DegenerateFit("the points are collinear or coincident")
+    normal = eigenvectors[:, 0]
+    if normal[2] < 0:
+        normal = -normal
+    return np.append(normal, -normal @ centre)
+
+
+def height_above(xyz: np.ndarray, plane: np.ndarray) -> np.ndarray:
+    return xyz @ plane[:3] + plane[3]
+
+
+def fit_ground(base_xyz, cfg: Config | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """Ground mask over ``base_xyz`` and the ground plane, or (all False, None) when there is no ground."""
+    cfg = cfg or Config()
+    xyz = np.asarray(base_xyz, dtype=np.float64)
+    roi = np.flatnonzero(roi_mask(xyz, cfg))
+    fitters = {"pca": _pca_ground, "ransac": _ransac_ground}
+    if cfg.ground.method not in fitters:
+        raise ValueError(f"unknown ground method {cfg.ground.method!r}; expected 'pca' or 'ransac'")
+    mask = np.zeros(len(xyz), dtype=bool)
+    try:
+        ground, plane = fitters[cfg.ground.method](xyz[roi], cfg)
+    except DegenerateFit:
+        return mask, None
+    mask[roi[ground]] = True
+    return mask, plane
+
+
+def _pca_ground(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's method: refit and drop points too far ABOVE the plane, `pca_iterations` times."""
+    g = cfg.ground
+    if g.pca_iterations < 1:
+        raise ValueError(f"ground.pca_iterations must be >= 1, got {g.pca_iterations}")
+    kept = np.arange(len(xyz))
+    for _ in range(g.pca_iterations):
+        plane = fit_plane(xyz[kept])
+        kept = kept[height_above(xyz[kept], plane) <= g.pca_threshold_m]
+    if len(kept) < 3:
+        raise DegenerateFit("fewer than 3 ground points")
+    return kept, plane
+
+
+def _ransac_ground(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
+    """Best near-horizontal 3-point plane, refined by PCA on its inliers."""
+    g = cfg.ground
+    best = _ransac_best_plane(xyz, cfg)
+    plane = fit_plane(xyz[np.abs(height_above(xyz, best)) <= g.ransac_distance_m])
+    ground = np.flatnonzero(np.abs(height_above(xyz, plane)) <= g.ransac_distance_m)
+    if len(ground) < 3:
+        raise DegenerateFit("fewer than 3 ground points")
+    return ground, plane
+
+
+def _ransac_best_plane(xyz: np.ndarray, cfg: Config) -> np.ndarray:
+    g = cfg.ground
+    if len(xyz) < 3:
+        raise DegenerateFit(f"a plane needs at least 3 points, got {len(xyz)}")
+    rng = np.random.default_rng(g.ransac_seed)
+    min_up = math.cos(math.radians(g.ransac_max_tilt_deg))
+    best, best_count = None, 0
+    for _ in range(g.ransac_max_iterations):
+        plane = _plane_through(xyz[rng.choice(len(xyz), size=3, replace=False)])
+        if plane is None or plane[2] < min_up:  # collinear sample, or tilted too far from the up axis
+            continue
+        count = np.count_nonzero(np.abs(height_above(xyz, plane)) <= g.ransac_distance_m)
+        if count > best_count:
+            best, best_count = plane, count
+    if best is None:
+        raise DegenerateFit("no RANSAC sample gave a plane within the tilt limit")
+    return best
+
+
+def _plane_through(triangle: np.ndarray) -> np.ndarray | None:
+    """Plane (unit normal, c >= 0) through three points, or None if they are (nearly) collinear."""
+    normal = np.cross(triangle[1] - triangle[0], triangle[2] - triangle[0])
+    length = np.linalg.norm(normal)
+    if length < 1e-12:
+        return None
+    normal = normal / length
+    if normal[2] < 0:
+        normal = -normal
+    return np.append(normal, -normal @ triangle[0])

@@ -1,0 +1,45 @@
+"""Wheel paths from speed and yaw rate (docs/method.md §2 Wheel paths)."""
+
+from __future__ import annotations
+
+import math
+
+from ..config import Config
+
+
+def check_motion(speed, yaw_rate) -> tuple[float, float]:
+    """(V, ω) as floats; ValueError when either is not a finite number."""
+    values = []
+    for name, value in (("speed", speed), ("yaw_rate", yaw_rate)):
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be a number, got {value!r}") from None
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value}")
+        values.append(value)
+    return values[0], values[1]
+
+
+def wheel_y(wheel: str, cfg: Config) -> float:
+    if wheel not in ("left", "right"):
+        raise ValueError(f"wheel must be 'left' or 'right', got {wheel!r}")
+    half_track = cfg.track_width / 2
+    return half_track if wheel == "left" else -half_track
+
+
+def plan_path(speed, yaw_rate, cfg: Config | None = None) -> dict:
+    """{"status": "arc"|"straight"|"stopped", "icr_y", "left_radius", "right_radius"} (None unless arc)."""
+    cfg = cfg or Config()
+    speed, yaw_rate = check_motion(speed, yaw_rate)
+    path = {"status": "arc", "icr_y": None, "left_radius": None, "right_radius": None}
+    if abs(speed) <= cfg.path.stopped_speed_mps:
+        path["status"] = "stopped"
+    elif yaw_rate == 0 or abs(speed / yaw_rate) > cfg.path.straight_radius_m:
+        path["status"] = "straight"
+    else:
+        icr_y = speed / yaw_rate  # valid for every sign combination of V and ω
+        path["icr_y"] = icr_y
+        path["left_radius"] = abs(icr_y - wheel_y("left", cfg))
+        path["right_radius"] = abs(icr_y - wheel_y("right", cfg))
+    return path

@@ -1,0 +1,109 @@
+"""Wheel height profiles (docs/method.md §3 Profiles): levelling, wheel corridors and arc length,
+median binning and gap filling. `wheel_profile` also fills in the profile's roughness (§4)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..config import Config
+from .path import wheel_y
+from .roughness import Roughness, analyze_roughness, true_runs
+
+# Tolerance on "run length ≤ max_gap_m", so that e.g. 3 bins × 0.1 m count as 0.3 m.
+_GAP_LENGTH_TOLERANCE = 1e-9
+
+
+@dataclass
+class Profile:
+    s: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: bin centres, m
+    z: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: median height per bin, NaN = missing
+    count: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  #: points per bin
+    roughness: Roughness = field(default_factory=Roughness)
+
+
+def level_points(xyz, plane) -> np.ndarray:
+    """Rotate the points about the origin so the plane normal n goes onto ẑ along the shortest arc (z' = n·p)."""
+    xyz = np.asarray(xyz, dtype=np.float64)
+    normal = np.asarray(plane[:3], dtype=np.float64)
+    normal = normal / np.linalg.norm(normal)
+    # Rodrigues for a onto b: R = I + [v]× + [v]×² / (1 + a·b), v = a × b; identity when n = ẑ.
+    vx, vy, vz = np.cross(normal, [0.0, 0.0, 1.0])
+    skew = np.array([[0, -vz, vy], [vz, 0, -vx], [-vy, vx, 0]])
+    rotation = np.eye(3) + skew + skew @ skew / (1 + normal[2])
+    return xyz @ rotation.T
+
+
+def arc_length(xy: np.ndarray, path: dict, wheel: str, speed: float, yaw_rate: float, cfg: Config):
+    """(s, in_corridor) per point: signed distance along the wheel's path (ahead ≥ 0) and corridor membership."""
+    half_tire = cfg.tire_width / 2
+    y_wheel = wheel_y(wheel, cfg)
+    if path["status"] == "straight":
+        return math.copysign(1.0, speed) * xy[:, 0], np.abs(xy[:, 1] - y_wheel) <= half_tire
+    radius = path[f"{wheel}_radius"]
+    u = xy - [0.0, path["icr_y"]]  # points relative to the ICR
+    w0 = np.array([0.0, y_wheel - path["icr_y"]])  # the wheel relative to the ICR
+    cross = w0[0] * u[:, 1] - w0[1] * u[:, 0] + 0.0  # + 0.0 turns −0 into +0, so φ = π, never −π
+    phi = np.arctan2(cross, u @ w0)
+    in_corridor = (np.abs(np.hypot(u[:, 0], u[:, 1]) - radius) <= half_tire) & (radius > 0)
+    # The wheel turns in the sense of ω whatever the sign of V: ahead when sign(φ) = sign(ω).
+    return math.copysign(1.0, yaw_rate) * phi * radius, in_corridor
+
+
+def bin_count(cfg: Config) -> int:
+    p = cfg.profile
+    return math.ceil(p.preview_length_m / p.ds_m - 1e-9)
+
+
+def bin_medians(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
+    """(median z, count) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m."""
+    k_bins = bin_count(cfg)
+    kept = (s >= 0) & (s < cfg.profile.preview_length_m)
+    # s just below the preview length can round to bin K; it still belongs to the last bin.
+    k = np.minimum(np.floor(s[kept] / cfg.profile.ds_m).astype(np.int64), k_bins - 1)
+    order = np.lexsort((z[kept], k))  # by bin, then by height
+    k, z_sorted = k[order], z[kept][order]
+    count = np.bincount(k, minlength=k_bins).astype(np.int64)
+    first = np.concatenate(([0], np.cumsum(count)[:-1]))
+    filled = count > 0
+    lower = first[filled] + (count[filled] - 1) // 2  # the two middle values coincide for odd counts
+    upper = first[filled] + count[filled] // 2
+    median = np.full(k_bins, np.nan)
+    median[filled] = (z_sorted[lower] + z_sorted[upper]) / 2
+    return median, count
+
+
+def fill_gaps(z, ds: float, max_gap_m: float) -> np.ndarray:
+    """Linearly interpolate interior NaN runs no longer than max_gap_m; leading/trailing runs stay NaN."""
+    z = np.array(z, dtype=np.float64)
+    for start, stop in true_runs(np.isnan(z)):
+        interior = start > 0 and stop < len(z)
+        if interior and (stop - start) * ds <= max_gap_m + _GAP_LENGTH_TOLERANCE:
+            left, right = z[start - 1], z[stop]
+            fraction = np.arange(1, stop - start + 1) / (stop - start + 1)
+            z[start:stop] = left + (right - left) * fraction
+    return z
+
+
+def empty_profile(reason: str) -> Profile:
+    return Profile(roughness=Roughness(reason=reason))
+
+
+def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
+                  cfg: Config | None = None) -> Profile:
+    """Height profile along one wheel's path from ground points (levelled by ``plane`` unless it is None),
+    with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped"."""
+    cfg = cfg or Config()
+    if path["status"] == "stopped":
+        return empty_profile("vehicle stopped")
+    xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
+    if cfg.profile.level and plane is not None:
+        xyz = level_points(xyz, plane)
+    s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
+    median, count = bin_medians(s[in_corridor], xyz[in_corridor, 2], cfg)
+    ds = cfg.profile.ds_m
+    z = fill_gaps(median, ds, cfg.profile.max_gap_m)
+    centres = (np.arange(len(z)) + 0.5) * ds
+    return Profile(s=centres, z=z, count=count, roughness=analyze_roughness(z, ds, cfg))
