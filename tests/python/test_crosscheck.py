@@ -1,0 +1,138 @@
+"""The C++ core and the numpy reference, run on the same inputs, must agree.
+
+Both read the same float32 coordinates; the C++ core keeps base-frame ROI points as float32 (rounding of
+~1e-7 m per metre), so decisions can only differ for points within that distance of a threshold.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import roadpreview as rp
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
+
+NEAR = 1e-4  # m: points this close to a decision threshold may fall either way
+
+
+def run_both(points, speed, yaw_rate, cfg):
+    cpp = rp.Estimator(cfg).process(points, speed, yaw_rate)
+    ref = rp.reference.process(points, speed, yaw_rate, cfg)
+    return cpp, ref
+
+
+def near_a_ground_threshold(points, cfg, plane):
+    """Rows within NEAR of the ROI boundary or of the PCA threshold above the (reference's) plane."""
+    base, finite = rp.reference.to_base_frame(points, cfg)
+    g = cfg.ground
+    x, y = base[:, 0], base[:, 1]
+    near = (np.abs(x - g.roi_x_min_m) < NEAR) | (np.abs(x - g.roi_x_max_m) < NEAR) | (np.abs(np.abs(y) - g.roi_y_abs_max_m) < NEAR)
+    if plane is not None:
+        near |= np.abs(base @ plane[:3] + plane[3] - g.pca_threshold_m) < NEAR
+    out = np.zeros(len(points), bool)
+    out[np.flatnonzero(finite)] = near
+    return out
+
+
+def assert_ground_agrees(points, cfg, cpp, ref):
+    differ = cpp.ground_mask != ref.ground_mask
+    assert not (differ & ~near_a_ground_threshold(points, cfg, ref.plane)).any(), f"{differ.sum()} points differ"
+    assert cpp.points["input"] == ref.points["input"] and cpp.points["finite"] == ref.points["finite"]
+    assert abs(cpp.points["ground"] - ref.points["ground"]) <= differ.sum()
+    assert (cpp.plane is None) == (ref.plane is None)
+    if ref.plane is not None:
+        np.testing.assert_allclose(cpp.plane, ref.plane, atol=1e-6)
+
+
+def assert_profiles_agree(cpp, ref, ground_identical):
+    assert cpp.reason == ref.reason
+    assert cpp.path == ref.path
+    for c, r in ((cpp.left, ref.left), (cpp.right, ref.right)):
+        np.testing.assert_allclose(c.s, r.s, rtol=1e-12)
+        if not ground_identical:
+            continue  # a point flipping ground/non-ground moves a median: compare only what both saw alike
+        np.testing.assert_array_equal(c.count, r.count)
+        np.testing.assert_array_equal(np.isnan(c.z), np.isnan(r.z))
+        np.testing.assert_allclose(c.z, r.z, atol=1e-5, equal_nan=True)
+        assert_roughness_agrees(c.roughness, r.roughness)
+    if ground_identical:
+        assert_roughness_agrees(cpp.vehicle, ref.vehicle)
+
+
+def assert_roughness_agrees(c, r):
+    assert c.reason == r.reason
+    assert c.iso_class == r.iso_class or _on_a_class_limit(r.gd_n0)
+    if r.gd_n0 is None:
+        assert c.gd_n0 is None
+        return
+    np.testing.assert_allclose(c.n, r.n, rtol=1e-12)
+    np.testing.assert_allclose(c.psd, r.psd, rtol=1e-4, atol=1e-6 * np.max(r.psd))
+    assert c.gd_n0 == pytest.approx(r.gd_n0, rel=1e-4)
+    assert c.band == pytest.approx(r.band, rel=1e-12)
+    np.testing.assert_allclose(c.octave_gd, r.octave_gd, rtol=1e-4)
+    if r.waviness is not None:
+        assert c.waviness == pytest.approx(r.waviness, abs=1e-4)
+
+
+def _on_a_class_limit(gd):
+    limits = 2.0 * np.asarray(rp.reference.ISO_GEOMETRIC_MEANS[:-1])
+    return gd is not None and np.min(np.abs(np.log(gd / limits))) < 1e-4
+
+
+@pytest.mark.parametrize("frame", KITTI_FRAMES, ids=lambda p: p.name)
+@pytest.mark.parametrize("yaw_rate", [0.0, 0.15, -0.4])
+def test_real_kitti_frames_agree(frame, yaw_rate):
+    points = rp.io.read(frame)
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    cpp, ref = run_both(points, 6.0, yaw_rate, cfg)
+    assert_ground_agrees(points, cfg, cpp, ref)
+    assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
+    assert np.isfinite(cpp.left.z).sum() > 50  # real, non-trivial profiles (a 15 m curve leaves the road early)
+    if yaw_rate == 0.0:
+        assert cpp.vehicle.iso_class is not None
+
+
+def random_scene(rng, sensor_height, pitch, roll, obstacles, noise):
+    """A sensor-frame cloud: a tilted, noisy ground seen from `sensor_height`, plus box-like obstacles."""
+    n = 15000
+    x, y = rng.uniform(-5, 45, n), rng.uniform(-12, 12, n)
+    z = -sensor_height + np.tan(pitch) * x + np.tan(roll) * y + rng.normal(0, noise, n)
+    z += 0.02 * np.sin(0.7 * x) * np.cos(0.3 * y)
+    parts = [np.column_stack([x, y, z])]
+    for _ in range(obstacles):
+        cx, cy, h = rng.uniform(3, 35), rng.uniform(-5, 5), rng.uniform(0.3, 2.0)
+        m = 300
+        parts.append(np.column_stack([cx + rng.uniform(0, 1.5, m), cy + rng.uniform(0, 1.5, m),
+                                      -sensor_height + rng.uniform(0.25, h, m)]))
+    pts = np.vstack(parts).astype(np.float32)
+    pts[rng.random(len(pts)) < 0.01, rng.integers(0, 3)] = np.nan  # dropouts
+    return pts
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), sensor_height=st.floats(0.5, 2.5), pitch=st.floats(-0.05, 0.05),
+       roll=st.floats(-0.05, 0.05), obstacles=st.integers(0, 4), noise=st.floats(0.0, 0.03),
+       speed=st.sampled_from([0.0, 3.0, -2.0, 15.0]), yaw_rate=st.floats(-0.8, 0.8),
+       level=st.booleans())
+def test_random_scenes_agree(seed, sensor_height, pitch, roll, obstacles, noise, speed, yaw_rate, level):
+    rng = np.random.default_rng(seed)
+    points = random_scene(rng, sensor_height, pitch, roll, obstacles, noise)
+    cfg = rp.Config(sensor_height=sensor_height, profile={"level": level})
+    cpp, ref = run_both(points, speed, yaw_rate, cfg)
+    assert_ground_agrees(points, cfg, cpp, ref)
+    assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), count=st.integers(2, 600), ds=st.sampled_from([0.05, 0.1, 0.25]),
+       gap=st.floats(0.0, 0.6))
+def test_roughness_stage_agrees_on_random_profiles(seed, count, ds, gap):
+    rng = np.random.default_rng(seed)
+    z = np.cumsum(rng.normal(0, 0.003, count))
+    z[rng.random(count) < 0.15] = np.nan
+    cfg = rp.Config()
+    filled_cpp, filled_ref = rp.native.fill_gaps(z, ds, gap), rp.reference.fill_gaps(z, ds, gap)
+    np.testing.assert_array_equal(np.isnan(filled_cpp), np.isnan(filled_ref))
+    np.testing.assert_allclose(filled_cpp, filled_ref, rtol=1e-14, atol=1e-15, equal_nan=True)  # rounding only
+    assert rp.native.longest_valid_stretch(z) == rp.reference.longest_valid_stretch(z)
+    assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg))
