@@ -49,7 +49,8 @@ std::optional<double> arc_length(const WheelPaths& p, Wheel w, double x, double 
     if (p.status != PathStatus::Arc) return std::nullopt;
     const double r_w = p.radius(w);
     const double ux = x, uy = y - p.icr_y;  // point relative to the ICR
-    if (std::abs(std::hypot(ux, uy) - r_w) > half || r_w <= 0.0) return std::nullopt;
+    // sqrt, not std::hypot: coordinates are metres, far from overflow, and hypot is several times slower.
+    if (std::abs(std::sqrt(ux * ux + uy * uy) - r_w) > half || r_w <= 0.0) return std::nullopt;
     const double w0y = y_w - p.icr_y;  // wheel relative to the ICR (its x is 0)
     const double phi = std::atan2(-w0y * ux, w0y * uy);  // angle from w0 to u: atan2(w0 × u, w0 · u)
     if (phi * p.rotation < 0.0) return std::nullopt;      // behind the wheel
