@@ -5,7 +5,6 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <sstream>
 
 #include <CLI/CLI.hpp>
 
@@ -30,17 +29,9 @@ struct RunOptions {
     bool quiet = false;
 };
 
-std::string read_text(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open config file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
 // Config file first, then the flags that were given on the command line.
 rp::Config build_config(const RunOptions& o, const CLI::App& run) {
-    rp::Config cfg = o.config_file.empty() ? rp::Config{} : rp::config_from_json(read_text(o.config_file), o.config_file);
+    rp::Config cfg = o.config_file.empty() ? rp::Config{} : rp::config_from_file(o.config_file);
     if (run.count("--sensor-height")) {
         cfg.sensor_height = o.sensor_height;
         cfg.extrinsics.reset();
@@ -119,7 +110,7 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
     run_cmd->add_option("--frame-rate", o.frame_rate, "Frames per second; adds timestamps frame/rate")
         ->check(CLI::PositiveNumber);
-    run_cmd->add_option("--config", o.config_file, "JSON config file with the fields of rp.Config; flags override it");
+    run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");
 

@@ -2,11 +2,14 @@
 #include "roadpreview/config.hpp"
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 // Type errors then name the offending field (/track_width); the setting is part of nlohmann's ABI tag.
 #define JSON_DIAGNOSTICS 1
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 namespace roadpreview {
 
@@ -143,5 +146,56 @@ Config config_from_json(const std::string& text, const std::string& source) {
 }
 
 std::string config_to_json(const Config& cfg) { return json(cfg).dump(); }
+
+namespace {
+
+// YAML scalars carry no type; read them as JSON would (bool, integer, number), quoted ones as strings.
+json yaml_to_json(const YAML::Node& node) {
+    switch (node.Type()) {
+        case YAML::NodeType::Sequence: {
+            json out = json::array();
+            for (const auto& item : node) out.push_back(yaml_to_json(item));
+            return out;
+        }
+        case YAML::NodeType::Map: {
+            json out = json::object();
+            for (const auto& kv : node) out[kv.first.as<std::string>()] = yaml_to_json(kv.second);
+            return out;
+        }
+        case YAML::NodeType::Scalar: {
+            if (node.Tag() == "!") return node.Scalar();
+            bool b;
+            long long i;
+            double d;
+            if (YAML::convert<bool>::decode(node, b)) return b;
+            if (YAML::convert<long long>::decode(node, i)) return i;
+            if (YAML::convert<double>::decode(node, d)) return d;
+            return node.Scalar();
+        }
+        default:
+            return nullptr;
+    }
+}
+
+bool is_yaml(const std::string& path) {
+    const auto dot = path.find_last_of('.');
+    const std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+    return ext == ".yaml" || ext == ".yml";
+}
+
+}  // namespace
+
+Config config_from_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::invalid_argument(path + ": cannot open config file");
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!is_yaml(path)) return config_from_json(text.str(), path);
+    try {
+        return config_from_json(yaml_to_json(YAML::Load(text.str())).dump(), path);
+    } catch (const YAML::Exception& e) {
+        throw std::invalid_argument(path + ": not valid YAML: " + e.what());
+    }
+}
 
 }  // namespace roadpreview

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include <roadpreview/config.hpp>
 
 namespace rp = roadpreview;
@@ -47,6 +50,16 @@ void expect_rejected(const std::string& json, const std::string& words) {
     }
 }
 
+void expect_rejected_file(const std::string& path, const std::string& words) {
+    try {
+        rp::config_from_file(path);
+        FAIL() << "accepted " << path;
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+}
+
 TEST(Config, BadFilesAreRejectedWithTheFieldNamed) {
     expect_rejected(R"({"trackwidth": 1.6})", "trackwidth");
     expect_rejected(R"({"ground": {"methdo": "pca"}})", "ground.methdo");
@@ -66,4 +79,18 @@ TEST(Config, EffectiveExtrinsics) {
     EXPECT_DOUBLE_EQ(rp::effective_extrinsics(c).z_m, 0.0);
     c.sensor_height = 1.73;
     EXPECT_DOUBLE_EQ(rp::effective_extrinsics(c).z_m, 1.73);
+}
+
+TEST(Config, YamlAndJsonFilesGiveTheSameConfig) {
+    const auto dir = std::filesystem::temp_directory_path();
+    const auto yaml = (dir / "roadpreview_cfg.yaml").string(), json = (dir / "roadpreview_cfg.json").string();
+    std::ofstream(yaml) << "sensor_height: 1.73\nground:\n  method: ransac\n  ransac_seed: 7\nprofile:\n  level: false\n";
+    std::ofstream(json) << R"({"sensor_height": 1.73, "ground": {"method": "ransac", "ransac_seed": 7},
+                             "profile": {"level": false}})";
+    EXPECT_EQ(rp::config_to_json(rp::config_from_file(yaml)), rp::config_to_json(rp::config_from_file(json)));
+    std::ofstream(yaml) << "ground: [unclosed\n";
+    EXPECT_THROW(rp::config_from_file(yaml), std::invalid_argument);
+    std::ofstream(yaml) << "track_width: wide\n";
+    expect_rejected_file(yaml, "track_width");
+    EXPECT_THROW(rp::config_from_file((dir / "absent.yaml").string()), std::invalid_argument);
 }

@@ -56,6 +56,13 @@ def test_flags_override_the_config_file(tmp_path):
     assert out["path"]["left_radius"] == pytest.approx(10.0 - 0.9)  # 1.8 m track from the flag
 
 
+def test_yaml_config_file(tmp_path):
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(f"sensor_height: {KITTI_SENSOR_HEIGHT}\nground:\n  method: ransac\n")
+    out = lines(run("run", KITTI_FRAMES[0], "--speed", 5, "--config", cfg, "-q").stdout)[0]
+    assert out["ground"]["method"] == "ransac" and out["ground"]["plane"][3] == pytest.approx(0.0, abs=0.1)
+
+
 def test_pcd_input():
     out = lines(run("run", PCD_FILE, "--speed", 3, "-q").stdout)[0]  # this cloud's origin is on the ground
     assert out["points"]["input"] == 240000  # organized 1875 × 128; no-return pixels are (0, 0, 0)

@@ -74,6 +74,8 @@ Extrinsics effective_extrinsics(const Config& cfg);
 /// JSON (the field names above; missing fields keep their defaults). `source` names the input in errors.
 Config config_from_json(const std::string& text, const std::string& source = "config");
 std::string config_to_json(const Config& cfg);
+/// A .json, .yaml or .yml file of the same fields. Throws std::invalid_argument naming the file.
+Config config_from_file(const std::string& path);
 
 const char* to_string(GroundMethod method);
 
