@@ -204,8 +204,9 @@ void bind_stages(py::module_& m) {
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
         const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
         rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile);
+        for (rp::Profile* p : {&w.left, &w.right}) p->roughness = rp::analyze_roughness(p->z, cfg.profile.ds_m, cfg.roughness);
         return py::make_tuple(std::move(w.left), std::move(w.right));
-    }, "Profiles (without roughness) of ground points given in the base frame");
+    }, "Profiles of both wheels, with their roughness, from ground points given in the base frame");
     m.def("level_points", [](py::handle points, std::array<double, 4> plane) {
         py::object holder;
         const rp::PointsView v = points_from(points, holder);

@@ -351,6 +351,8 @@ def test_levelling_flattens_a_pitched_ground(impl, offset):
     np.testing.assert_allclose(levelled.z[valid], -plane[3], atol=1e-6)
     slope = np.polyfit(raw.s[~np.isnan(raw.z)], raw.z[~np.isnan(raw.z)], 1)[0]
     assert slope == pytest.approx(math.tan(pitch), rel=1e-3)
+    assert levelled.roughness.iso_class == "A"  # the profile comes with its roughness: flat is class A
+    assert levelled.roughness.gd_n0 < 1e-9
 
 
 def test_level_points_takes_the_normal_onto_up(impl):

@@ -51,7 +51,7 @@ struct Result {
     std::string reason;  ///< why profiles are empty ("vehicle stopped", "no ground", ...); empty otherwise
 };
 
-/// Runs the pipeline. Keeps its work buffers between frames (no per-frame allocation once warm);
+/// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;
 /// not thread-safe — use one Estimator per thread.
 class Estimator {
 public:
