@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// roadpreview — command-line front end: `roadpreview run INPUT... [options]` writes one JSON line per frame.
+// roadpreview — command-line front end: `roadpreview run INPUT... [options]` writes one JSON line per frame;
+// `roadpreview info INPUT...` describes a recording.
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
@@ -27,6 +30,9 @@ struct RunOptions {
     std::string config_file;
     std::string output;
     bool quiet = false;
+    std::string motion_file;
+    std::string frames;  // "A:B"
+    rp::SourceOptions source;
 };
 
 // Config file first, then the flags that were given on the command line.
@@ -50,17 +56,81 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
 
 std::string class_of(const rp::Roughness& r) { return r.iso_class ? std::string(1, *r.iso_class) : "-"; }
 
-void report_frame(std::size_t i, std::size_t total, const rp::Result& r) {
-    std::fprintf(stderr, "[%zu/%zu] %s: %lld points, %lld ground, class L=%s R=%s vehicle=%s%s%s, %.2f ms\n", i + 1,
-                 total, r.source.c_str(), static_cast<long long>(r.points.input),
+// Half-open range of frame indices [first, last) from "A:B", "A:" or ":B".
+std::pair<std::int64_t, std::int64_t> parse_frame_range(const std::string& text) {
+    constexpr auto kAll = std::numeric_limits<std::int64_t>::max();
+    if (text.empty()) return {0, kAll};
+    const auto colon = text.find(':');
+    const auto number = [&](const std::string& part, std::int64_t fallback) -> std::int64_t {
+        if (part.empty()) return fallback;
+        std::size_t used = 0;
+        long long v = -1;
+        try {
+            v = std::stoll(part, &used);
+        } catch (const std::exception&) {
+        }
+        if (used != part.size() || v < 0) throw std::invalid_argument("--frames " + text + ": expected A:B with A, B >= 0");
+        return v;
+    };
+    if (colon == std::string::npos) throw std::invalid_argument("--frames " + text + ": expected A:B, A: or :B");
+    const auto range = std::make_pair(number(text.substr(0, colon), 0), number(text.substr(colon + 1), kAll));
+    if (range.first >= range.second) throw std::invalid_argument("--frames " + text + ": A must be smaller than B");
+    return range;
+}
+
+std::string frame_label(const rp::Frame& f) {
+    return f.source + (f.frame_id >= 0 && rp::is_pcap_path(f.source) ? " #" + std::to_string(f.frame_id) : "");
+}
+
+void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp::Result& r) {
+    const std::string counter = total ? std::to_string(i + 1) + "/" + std::to_string(total) : std::to_string(i + 1);
+    std::string decode;
+    if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
+    if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
+    if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
+    std::fprintf(stderr, "[%s] %s: %lld points, %lld ground, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
+                 counter.c_str(), frame_label(f).c_str(), static_cast<long long>(r.points.input),
                  static_cast<long long>(r.points.ground), class_of(r.left.roughness).c_str(),
                  class_of(r.right.roughness).c_str(), class_of(r.vehicle).c_str(), r.reason.empty() ? "" : " — ",
-                 r.reason.c_str(), r.timing_ms.total);
+                 r.reason.c_str(), r.timing_ms.total, decode.c_str());
+}
+
+void report_source(const rp::SourceInfo& s) {
+    if (s.format == "files") return;
+    std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
+                 s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
+                 s.metadata.empty() ? "" : ", ", s.metadata.c_str());
+    for (const auto& note : s.notes) std::fprintf(stderr, "roadpreview: %s\n", note.c_str());
+}
+
+// Speed and yaw rate of one frame, and where the yaw rate came from.
+struct FrameMotion {
+    rp::Motion motion;
+    std::string yaw_rate_source;
+};
+
+FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::optional<rp::MotionTable>& table,
+                       const rp::Frame& f, const rp::Config& cfg) {
+    if (table) {
+        if (!f.timestamp) throw std::runtime_error(f.source + ": frame has no timestamp to look up in " + table->source() +
+                                                   " (use --frame-rate for file inputs)");
+        return {table->at(*f.timestamp), "motion"};
+    }
+    if (run.count("--yaw-rate")) return {{o.speed, o.yaw_rate}, "option"};
+    if (const auto imu = rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(cfg))) return {{o.speed, *imu}, "imu"};
+    return {{o.speed, 0.0}, "default"};
 }
 
 int run(const RunOptions& o, const CLI::App& app) {
-    rp::Estimator est(build_config(o, app));
-    const std::vector<std::string> files = rp::expand_inputs(o.inputs);
+    if (!app.count("--speed") && o.motion_file.empty())
+        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
+    const rp::Config cfg = build_config(o, app);
+    rp::Estimator est(cfg);
+    const auto [first, last] = parse_frame_range(o.frames);
+    std::optional<rp::MotionTable> table;
+    if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
+    const auto source = rp::open_frames(o.inputs, o.source);
+    const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     std::ofstream file;
     if (!o.output.empty()) {
         file.open(o.output);
@@ -70,22 +140,90 @@ int run(const RunOptions& o, const CLI::App& app) {
 
     std::map<std::string, int> classes;
     std::vector<double> ms;
-    for (std::size_t i = 0; i < files.size(); ++i) {
-        const rp::Frame frame = rp::read_frame(files[i]);
-        rp::Result r = est.process(frame.points, o.speed, o.yaw_rate, frame.source);
-        if (o.frame_rate > 0.0) r.timestamp = static_cast<double>(i) / o.frame_rate;
+    std::int64_t index = 0;
+    for (; index < last; ++index) {
+        std::optional<rp::Frame> frame = source->next();
+        if (!frame) break;
+        if (index == 0 && !o.quiet) report_source(source->info());
+        if (index < first) continue;
+        const FrameMotion m = motion_for(o, app, table, *frame, cfg);
+        rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source);
+        r.yaw_rate_source = m.yaw_rate_source;
+        r.timestamp = frame->timestamp;
+        if (!r.timestamp && o.frame_rate > 0.0) r.timestamp = static_cast<double>(index) / o.frame_rate;
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
         ++classes[class_of(r.vehicle)];
         ms.push_back(r.timing_ms.total);
-        if (!o.quiet) report_frame(i, files.size(), r);
+        if (!o.quiet) report_frame(static_cast<std::size_t>(index), total, *frame, r);
     }
+    if (ms.empty())
+        throw std::runtime_error(o.inputs[0] + ": no frames" +
+                                 (first > 0 ? " from index " + std::to_string(first) + " on (it has " +
+                                                  std::to_string(index) + ")"
+                                            : std::string()));
     std::sort(ms.begin(), ms.end());
     std::fprintf(stderr, "roadpreview: %zu frame(s), pipeline median %.2f ms, max %.2f ms; vehicle classes:", ms.size(),
                  ms[ms.size() / 2], ms.back());
     for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
     std::fprintf(stderr, "\n");
     return 0;
+}
+
+// Decodes every frame and prints what the recording holds.
+int info(const std::vector<std::string>& inputs, const rp::SourceOptions& options) {
+    const auto source = rp::open_frames(inputs, options);
+    std::int64_t frames = 0, complete = 0, imu = 0, missing = 0, skipped = 0, first_id = -1, last_id = -1;
+    std::vector<Eigen::Index> points;
+    std::optional<double> t0, t1;
+    while (std::optional<rp::Frame> f = source->next()) {
+        ++frames;
+        complete += f->diagnostics.complete;
+        imu += static_cast<std::int64_t>(f->imu.size());
+        missing += f->diagnostics.missing_columns;
+        skipped += f->diagnostics.skipped_packets;
+        points.push_back(f->points.rows());
+        if (first_id < 0) first_id = f->frame_id;
+        last_id = f->frame_id;
+        if (f->timestamp) {
+            if (!t0) t0 = f->timestamp;
+            t1 = f->timestamp;
+        }
+    }
+    const rp::SourceInfo s = source->info();
+    std::printf("input: %s\nformat: %s\n", inputs[0].c_str(), s.format.c_str());
+    if (!s.sensor_model.empty()) std::printf("sensor model: %s\n", s.sensor_model.c_str());
+    if (!s.profile.empty()) std::printf("packet profile: %s\n", s.profile.c_str());
+    if (!s.metadata.empty()) std::printf("metadata: %s\n", s.metadata.c_str());
+    if (s.lidar_port) std::printf("lidar UDP port: %d (%s)\n", s.lidar_port, s.lidar_port_origin.c_str());
+    if (s.frame_rate_hz > 0) std::printf("frame rate: %g Hz (nominal)\n", s.frame_rate_hz);
+    std::printf("frames: %lld (%lld complete), frame ids %lld..%lld\n", static_cast<long long>(frames),
+                static_cast<long long>(complete), static_cast<long long>(first_id), static_cast<long long>(last_id));
+    if (!points.empty()) {
+        std::sort(points.begin(), points.end());
+        std::printf("points per frame: min %lld, median %lld, max %lld\n", static_cast<long long>(points.front()),
+                    static_cast<long long>(points[points.size() / 2]), static_cast<long long>(points.back()));
+    }
+    if (t0) {
+        const double period = s.frame_rate_hz > 0 ? 1.0 / s.frame_rate_hz : 0.0;
+        std::printf("duration: %.3f s (first frame at %.6f s, UNIX time)\n", *t1 - *t0 + period, *t0);
+    }
+    if (missing) std::printf("missing columns: %lld\n", static_cast<long long>(missing));
+    if (skipped) std::printf("skipped packets: %lld\n", static_cast<long long>(skipped));
+    if (imu) std::printf("IMU samples: %lld\n", static_cast<long long>(imu));
+    for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
+    return 0;
+}
+
+void add_source_options(CLI::App* cmd, rp::SourceOptions& s) {
+    cmd->add_option("--meta", s.meta, "Ouster metadata JSON (default: found next to the pcap by name)");
+    cmd->add_option("--sensor-model", s.sensor_model, "Velodyne model: VLP-16, VLP-32C, HDL-32E, HDL-64E (default: from the packets)");
+    cmd->add_option("--calibration", s.calibration, "Velodyne calibration YAML (ROS velodyne_pointcloud format; HDL-64E needs one)");
+    cmd->add_option("--cut-angle", s.cut_angle_deg, "Velodyne: azimuth (deg, 0 = ahead) where one sweep ends and the next begins")
+        ->check(CLI::Range(0.0, 359.999));
+    cmd->add_option("--lidar-port", s.lidar_port, "UDP port of the lidar packets (default: metadata, else detected)")
+        ->check(CLI::Range(1, 65535));
+    cmd->add_flag("--skip-bad-packets", s.skip_bad_packets, "Skip and count lidar packets that do not decode instead of stopping");
 }
 
 }  // namespace
@@ -96,10 +234,15 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     RunOptions o;
-    CLI::App* run_cmd = app.add_subcommand("run", "Process KITTI .bin / .pcd frames (files or directories)");
-    run_cmd->add_option("INPUT", o.inputs, "Frame files, or directories of them (sorted by name)")->required();
-    run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)")->required();
-    run_cmd->add_option("--yaw-rate", o.yaw_rate, "Yaw rate ω in rad/s (positive turning left)")->default_val(0.0);
+    CLI::App* run_cmd = app.add_subcommand("run", "Process KITTI .bin / .pcd frames (files or directories) or a pcap recording");
+    run_cmd->add_option("INPUT", o.inputs, "Frame files, or directories of them (sorted by name), or one Ouster/Velodyne .pcap")->required();
+    auto* speed = run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)");
+    auto* yaw = run_cmd->add_option("--yaw-rate", o.yaw_rate,
+                                    "Yaw rate ω in rad/s (positive turning left); default: the Ouster IMU's gyro if the pcap has one, else 0");
+    auto* motion = run_cmd->add_option("--motion", o.motion_file, "CSV with columns t,speed,yaw_rate, interpolated at each frame's timestamp");
+    motion->excludes(speed)->excludes(yaw);
+    run_cmd->add_option("--frames", o.frames, "Frames A:B of the input (0-based, B excluded; A: or :B)");
+    add_source_options(run_cmd, o.source);
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height, "Sensor height above the ground, m");
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
                      ->delimiter(',')
@@ -109,13 +252,20 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--tire-width", o.tire_width, "Tire width, m (default 0.3)");
     run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
     run_cmd->add_option("--frame-rate", o.frame_rate, "Frames per second; adds timestamps frame/rate")
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber);  // pcaps carry their own timestamps
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");
 
+    std::vector<std::string> info_inputs;
+    rp::SourceOptions info_options;
+    CLI::App* info_cmd = app.add_subcommand("info", "Describe a recording: sensor model, packet profile, frames, duration");
+    info_cmd->add_option("INPUT", info_inputs, "One pcap, or frame files / directories")->required();
+    add_source_options(info_cmd, info_options);
+
     CLI11_PARSE(app, argc, argv);
     try {
+        if (info_cmd->parsed()) return info(info_inputs, info_options);
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

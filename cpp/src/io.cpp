@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "roadpreview/io.hpp"
 
+#include "io/pcap_source.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
@@ -100,7 +102,8 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
         std::error_code ec;
         if (!fs::exists(p, ec)) fail(input, "no such file or directory");
         if (!fs::is_directory(p, ec)) {
-            if (!is_frame_file(p)) fail(input, "unsupported file type (expected .bin or .pcd)");
+            if (!is_frame_file(p))
+                fail(input, "unsupported file type (expected .bin, .pcd, or a single .pcap/.pcapng recording)");
             files.push_back(input);
             continue;
         }
@@ -112,6 +115,75 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
         files.insert(files.end(), found.begin(), found.end());
     }
     return files;
+}
+
+namespace {
+
+// .bin and .pcd files, one frame each; frame_id is the position in the list.
+class FileListSource : public FrameSource {
+public:
+    explicit FileListSource(std::vector<std::string> files) : files_(std::move(files)) {}
+
+    std::optional<Frame> next() override {
+        if (next_ == files_.size()) return std::nullopt;
+        Frame f = read_frame(files_[next_]);
+        f.frame_id = static_cast<std::int64_t>(next_++);
+        return f;
+    }
+
+    SourceInfo info() const override {
+        SourceInfo i;
+        i.format = "files";
+        return i;
+    }
+
+private:
+    std::vector<std::string> files_;
+    std::size_t next_ = 0;
+};
+
+std::unique_ptr<FrameSource> open_pcap(const std::string& path, const SourceOptions& o) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) fail(path, "no such file");
+    const bool velodyne_asked = !o.sensor_model.empty() || !o.calibration.empty();
+    if (!o.meta.empty()) {
+        if (velodyne_asked) fail(path, "Ouster metadata and Velodyne options given together");
+        return open_ouster_pcap(path, o.meta, o);
+    }
+    if (velodyne_asked) return open_velodyne_pcap(path, o);
+    const std::string meta = find_ouster_metadata(path);
+    if (!meta.empty()) return open_ouster_pcap(path, meta, o);
+    if (looks_like_velodyne(path)) return open_velodyne_pcap(path, o);
+    fail(path, "holds no Velodyne data packets and no Ouster metadata JSON was found next to it (looked for " +
+                   fs::path(path).stem().string() + ".json and the names its '_'-separated prefixes give); "
+                   "pass the metadata with --meta");
+}
+
+}  // namespace
+
+bool is_pcap_path(const std::string& path) {
+    const std::string ext = extension_of(fs::path(path));
+    return ext == ".pcap" || ext == ".pcapng";
+}
+
+std::string find_ouster_metadata(const std::string& pcap_path) {
+    const fs::path p(pcap_path);
+    std::string stem = p.stem().string();
+    for (;;) {
+        const fs::path candidate = p.parent_path() / (stem + ".json");
+        std::error_code ec;
+        if (fs::is_regular_file(candidate, ec)) return candidate.string();
+        const auto cut = stem.find_last_of('_');
+        if (cut == std::string::npos || cut == 0) return {};
+        stem.erase(cut);
+    }
+}
+
+std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
+    const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
+    if (pcaps == 0) return std::make_unique<FileListSource>(expand_inputs(inputs));
+    if (inputs.size() > 1) fail(inputs[0], "give one .pcap/.pcapng recording at a time, without other inputs");
+    return open_pcap(inputs[0], options);
 }
 
 }  // namespace roadpreview

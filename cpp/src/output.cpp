@@ -39,9 +39,14 @@ json roughness_json(const Roughness& r) {
             {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)}};
 }
 
-json path_json(const WheelPaths& p) {
-    if (p.status != PathStatus::Arc) return nullptr;
-    return {{"icr_y", p.icr_y}, {"left_radius", p.left_radius}, {"right_radius", p.right_radius}};
+json path_json(const WheelPaths& p, const std::string& yaw_rate_source) {
+    const bool arc = p.status == PathStatus::Arc;
+    if (!arc && yaw_rate_source.empty()) return nullptr;
+    json out = {{"icr_y", arc ? json(p.icr_y) : json(nullptr)},
+                {"left_radius", arc ? json(p.left_radius) : json(nullptr)},
+                {"right_radius", arc ? json(p.right_radius) : json(nullptr)}};
+    if (!yaw_rate_source.empty()) out["yaw_rate_source"] = yaw_rate_source;
+    return out;
 }
 
 }  // namespace
@@ -56,7 +61,7 @@ std::string result_to_json(const Result& r) {
                     {"ground", r.points.ground}}},
         {"ground", {{"method", to_string(r.ground_method)},
                     {"plane", r.plane ? json(*r.plane) : json(nullptr)}}},
-        {"path", path_json(r.path)},
+        {"path", path_json(r.path, r.yaw_rate_source)},
         {"profiles", {{"left", profile_json(r.left)}, {"right", profile_json(r.right)}}},
         {"roughness", {{"left", roughness_json(r.left.roughness)},
                        {"right", roughness_json(r.right.roughness)},

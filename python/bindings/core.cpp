@@ -13,6 +13,8 @@
 namespace py = pybind11;
 namespace rp = roadpreview;
 
+void bind_io(py::module_& m);  // io.cpp
+
 namespace {
 
 template <typename T>
@@ -140,7 +142,7 @@ void bind_estimator(py::module_& m) {
     py::class_<rp::Estimator>(m, "Estimator")
         .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
         .def("process", [](rp::Estimator& est, py::handle points, double speed, double yaw_rate, const std::string& source,
-                           std::optional<double> timestamp) {
+                           std::optional<double> timestamp, const std::string& yaw_rate_source) {
             py::object holder;
             const rp::PointsView view = points_from(points, holder);
             rp::Result r;
@@ -149,8 +151,10 @@ void bind_estimator(py::module_& m) {
                 r = est.process(view, speed, yaw_rate, source);
             }
             r.timestamp = timestamp;
+            r.yaw_rate_source = yaw_rate_source;
             return r;
-        }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none());
+        }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
+           py::arg("yaw_rate_source") = "");
 }
 
 void bind_stages(py::module_& m) {
@@ -259,6 +263,7 @@ PYBIND11_MODULE(_core, m) {
     bind_results(m);
     bind_estimator(m);
     bind_stages(m);
+    bind_io(m);
     m.def("read_frame", [](const std::string& path) {
         rp::Frame f = rp::read_frame(path);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));

@@ -21,12 +21,14 @@ class Estimator:
         self._impl = core().Estimator(self.config.to_json())
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
-                timestamp: Optional[float] = None):
+                timestamp: Optional[float] = None, yaw_rate_source: str = ""):
         """One frame.
 
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
         are contiguous) or float64 (converted once); extra columns are ignored, non-finite rows dropped.
         speed: m/s, negative when reversing. yaw_rate: rad/s, positive turning left.
+        yaw_rate_source: where the yaw rate came from (e.g. "imu"); when given, the output line's ``path``
+        carries it (docs/output.md).
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
-        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp)
+        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source)

@@ -49,6 +49,9 @@ struct Result {
     Roughness vehicle;
     TimingMs timing_ms;
     std::string reason;  ///< why profiles are empty ("vehicle stopped", "no ground", ...); empty otherwise
+    /// Where the yaw rate came from ("option", "motion", "imu", "default"), set by the caller; when set, the
+    /// output line's `path` is an object for every motion status and carries it (docs/output.md).
+    std::string yaw_rate_source;
 };
 
 /// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;

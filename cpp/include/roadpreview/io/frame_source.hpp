@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What every reader yields: one frame of points at a time, with its time, id and decode diagnostics.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace roadpreview {
+
+using PointMatrix = Eigen::Matrix<float, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+struct FrameDiagnostics {
+    std::int64_t missing_columns = 0;  ///< Ouster: columns of the column window never received
+    std::int64_t invalid_columns = 0;  ///< Ouster: columns received with the status bit clear (skipped)
+    std::int64_t skipped_packets = 0;  ///< lidar packets of the wrong size skipped (only with skip_bad_packets)
+    bool complete = true;  ///< false: columns are missing, or a Velodyne sweep was cut short by the file's ends
+};
+
+/// One IMU reading in the sensor frame (Ouster IMU packets).
+struct ImuSample {
+    double timestamp = 0.0;                      ///< s, capture time of the packet
+    std::array<double, 3> angular_velocity{};    ///< rad/s about the sensor frame's x, y, z
+    std::array<double, 3> linear_acceleration{}; ///< m/s²
+};
+
+struct Frame {
+    PointMatrix points;  ///< sensor frame x, y, z (m) and an intensity-like channel (0 when there is none)
+    std::string source;  ///< the file it came from
+    std::optional<double> timestamp;  ///< s; pcaps: capture time (UNIX epoch) of the frame's first packet
+    std::int64_t frame_id = -1;       ///< Ouster: the packets' frame id; Velodyne: sweep count; files: index
+    std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
+    std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
+    FrameDiagnostics diagnostics;
+};
+
+/// What a reader knows about its input (`roadpreview info`).
+struct SourceInfo {
+    std::string format;        ///< "ouster pcap", "velodyne pcap" or "files"
+    std::string sensor_model;  ///< e.g. "OS-1-128", "VLP-16"; empty when unknown
+    std::string profile;       ///< Ouster UDP lidar profile or Velodyne return mode
+    std::string metadata;      ///< metadata or calibration file used, if any
+    int lidar_port = 0;        ///< UDP destination port of the lidar packets (0: not a pcap or none seen)
+    std::string lidar_port_origin;  ///< "metadata", "option", "detected" or "default"
+    double frame_rate_hz = 0.0;     ///< nominal sweep rate; 0 when unknown
+    std::vector<std::string> notes; ///< anything worth a user's attention (model choice, ID mismatches)
+};
+
+/// Streams frames one at a time; memory does not grow with the input's size.
+class FrameSource {
+public:
+    virtual ~FrameSource() = default;
+    /// The next frame, or nullopt at the end. Throws std::runtime_error naming the file on bad input;
+    /// frames returned before the error stay valid.
+    virtual std::optional<Frame> next() = 0;
+    virtual SourceInfo info() const = 0;
+};
+
+}  // namespace roadpreview

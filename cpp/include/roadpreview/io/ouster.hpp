@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Ouster OS sensors: metadata JSON (legacy flat and firmware 2.x/3.x nested layouts), lidar packet
+// profiles, XYZ from the beam intrinsics, frames assembled by frame id, IMU packets.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/io/frame_source.hpp"
+
+namespace roadpreview {
+
+enum class OusterProfile { Legacy, Rng19Rfl8Sig16Nir16, Rng19Rfl8Sig16Nir16Dual, Rng15Rfl8Nir8, FusaRng15Rfl8Nir8Dual };
+
+/// The name the metadata uses ("LEGACY", "RNG15_RFL8_NIR8", ...).
+const char* to_string(OusterProfile p);
+
+using Mat4 = std::array<double, 16>;  ///< row-major 4×4 homogeneous transform, translation in mm
+
+struct OusterMetadata {
+    std::string source;     ///< the JSON file, for messages
+    std::string prod_line;  ///< e.g. "OS-1-128"; empty in reduced legacy files
+    std::string prod_sn;    ///< serial number; empty when unknown
+    std::uint32_t init_id = 0;  ///< initialization id; 0 when unknown
+    std::string lidar_mode;     ///< e.g. "1024x10"
+    double frame_rate_hz = 0.0; ///< from lidar_mode; 0 when unknown
+    OusterProfile profile = OusterProfile::Legacy;
+    int pixels_per_column = 0;   ///< beams
+    int columns_per_packet = 16;
+    int columns_per_frame = 0;   ///< 512, 1024, 2048 or 4096
+    std::array<int, 2> column_window{0, 0};  ///< first and last measurement id sent (may wrap)
+    std::vector<int> pixel_shift_by_row;     ///< destagger shift per beam (zeros when unknown)
+    std::vector<double> beam_altitude_deg;   ///< per beam, from the top beam down
+    std::vector<double> beam_azimuth_deg;
+    Mat4 beam_to_lidar{};    ///< beam origin in the lidar frame (mm)
+    Mat4 lidar_to_sensor{};  ///< lidar frame → sensor frame (mm)
+    Mat4 imu_to_sensor{};    ///< IMU frame → sensor frame (mm)
+    int udp_port_lidar = 0;  ///< 0: not in the metadata
+    int udp_port_imu = 0;
+
+    std::size_t lidar_packet_bytes() const;
+    int window_columns() const;  ///< columns per frame inside the column window
+};
+
+/// Parses either layout. Throws std::runtime_error naming `source` and the missing or invalid field.
+OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::string& source);
+OusterMetadata read_ouster_metadata(const std::string& path);
+
+/// Bytes of one Ouster IMU packet.
+inline constexpr std::size_t kOusterImuPacketBytes = 48;
+
+/// Gyro and accelerometer of one IMU packet, rotated into the sensor frame. Throws std::invalid_argument
+/// for a packet of the wrong size.
+ImuSample decode_ouster_imu(const std::uint8_t* data, std::size_t size, double capture_time, const Mat4& imu_to_sensor);
+
+/// Turns lidar packets into frames. Points are in the sensor frame (m) with reflectivity as the fourth
+/// channel, ordered by beam then destaggered column, only valid columns and non-zero ranges.
+class OusterDecoder {
+public:
+    explicit OusterDecoder(OusterMetadata meta);
+
+    /// Adds one lidar packet. Returns the previous frame when this packet starts a new frame id.
+    /// Throws std::invalid_argument describing the problem when the packet does not fit the metadata
+    /// (size, measurement id, serial number, column spacing).
+    std::optional<Frame> add_packet(const std::uint8_t* data, std::size_t size, double capture_time);
+    /// Attaches an IMU reading to the frame being assembled.
+    void add_imu(const ImuSample& s) { imu_.push_back(s); }
+    /// The frame being assembled, if any (call at the end of the input).
+    std::optional<Frame> finish();
+
+    const OusterMetadata& metadata() const { return meta_; }
+
+private:
+    struct Lut {
+        std::vector<float> direction;  // 3 per pixel (row-major beam × column), m per mm of range
+        std::vector<float> offset;     // 3 per pixel, m
+    };
+    void check_header(const std::uint8_t* data) const;
+    void check_column_spacing(const std::uint8_t* data);
+    void start_frame(std::int64_t id, double capture_time);
+    Frame build_frame();
+
+    OusterMetadata meta_;
+    Lut lut_;
+    bool open_ = false;
+    bool spacing_checked_ = false;
+    std::int64_t frame_id_ = -1;
+    double frame_time_ = 0.0;
+    std::uint64_t first_column_ns_ = 0;
+    std::vector<std::uint32_t> range_mm_;     // beam × column, staggered
+    std::vector<std::uint16_t> reflectivity_;
+    std::vector<std::uint8_t> column_state_;  // 0 missing, 1 valid, 2 invalid
+    std::vector<std::uint64_t> column_ns_;
+    std::vector<ImuSample> imu_;
+};
+
+}  // namespace roadpreview

@@ -1,0 +1,398 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Packet layouts follow the Ouster sensor documentation ("Sensor Data", lidar and IMU packet formats);
+// XYZ follows its "Lidar Range to XYZ" section, which the vendor SDK's XYZLut implements.
+#include "roadpreview/io/ouster.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "bytes.hpp"
+
+namespace roadpreview {
+namespace {
+
+using json = nlohmann::json;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kStandardGravity = 9.80665;  // m/s² per g
+
+struct Layout {
+    std::size_t packet_header, column_header, pixel, column_footer, packet_footer;
+    std::uint32_t range_mask;
+    int range_shift;  // left shift to millimetres (RNG15 profiles count 8 mm steps)
+    std::size_t reflectivity_offset;
+    bool reflectivity_16bit;
+};
+
+Layout layout_of(OusterProfile p) {
+    switch (p) {
+        case OusterProfile::Legacy:
+            return {0, 16, 12, 4, 0, 0x000fffff, 0, 4, true};
+        case OusterProfile::Rng19Rfl8Sig16Nir16:
+            return {32, 12, 12, 0, 32, 0x0007ffff, 0, 4, false};
+        case OusterProfile::Rng19Rfl8Sig16Nir16Dual:
+            return {32, 12, 16, 0, 32, 0x0007ffff, 0, 3, false};
+        case OusterProfile::Rng15Rfl8Nir8:
+            return {32, 12, 4, 0, 32, 0x7fff, 3, 2, false};
+        case OusterProfile::FusaRng15Rfl8Nir8Dual:
+            return {32, 12, 8, 0, 32, 0x7fff, 3, 2, false};
+    }
+    throw std::logic_error("unknown Ouster profile");
+}
+
+std::size_t column_bytes(const Layout& l, int pixels) {
+    return l.column_header + static_cast<std::size_t>(pixels) * l.pixel + l.column_footer;
+}
+
+OusterProfile profile_from(const std::string& name, const std::string& source) {
+    for (auto p : {OusterProfile::Legacy, OusterProfile::Rng19Rfl8Sig16Nir16, OusterProfile::Rng19Rfl8Sig16Nir16Dual,
+                   OusterProfile::Rng15Rfl8Nir8, OusterProfile::FusaRng15Rfl8Nir8Dual})
+        if (name == to_string(p)) return p;
+    throw std::runtime_error(source + ": udp_profile_lidar \"" + name +
+                             "\" is not supported (LEGACY, RNG19_RFL8_SIG16_NIR16, RNG19_RFL8_SIG16_NIR16_DUAL, "
+                             "RNG15_RFL8_NIR8, FUSA_RNG15_RFL8_NIR8_DUAL are)");
+}
+
+Mat4 identity4() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
+
+// The vendor's defaults for files that predate these fields (reduced legacy metadata).
+double default_beam_origin_mm(const std::string& prod_line) {
+    if (prod_line.rfind("OS-0-", 0) == 0) return 27.67;
+    if (prod_line.rfind("OS-1-", 0) == 0) return 15.806;
+    if (prod_line.rfind("OS-2-", 0) == 0) return 13.762;
+    return 12.163;  // first-generation OS-1
+}
+const Mat4 kDefaultLidarToSensor = {-1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 36.18, 0, 0, 0, 1};
+const Mat4 kDefaultImuToSensor = {1, 0, 0, 6.253, 0, 1, 0, -11.775, 0, 0, 1, 7.645, 0, 0, 0, 1};
+
+// A field of the nested layout (section.key) or of the flat one (flat_section.key or key).
+const json* find_field(const json& j, const char* section, const char* flat_section, const char* key) {
+    for (const char* s : {section, flat_section}) {
+        if (s && j.contains(s) && j[s].is_object() && j[s].contains(key)) return &j[s][key];
+    }
+    return j.contains(key) ? &j[key] : nullptr;
+}
+
+template <typename T>
+T get_or(const json& j, const char* section, const char* flat_section, const char* key, T fallback) {
+    const json* f = find_field(j, section, flat_section, key);
+    return f && !f->is_null() ? f->get<T>() : fallback;
+}
+
+template <typename T>
+T require_field(const json& j, const char* section, const char* flat_section, const char* key,
+                const std::string& source) {
+    const json* f = find_field(j, section, flat_section, key);
+    if (!f || f->is_null()) throw std::runtime_error(source + ": Ouster metadata has no " + key);
+    return f->get<T>();
+}
+
+Mat4 mat4_or(const json& j, const char* section, const char* key, const Mat4& fallback, const std::string& source) {
+    const json* f = find_field(j, section, nullptr, key);
+    if (!f) return fallback;
+    const auto v = f->get<std::vector<double>>();
+    if (v.size() != 16) throw std::runtime_error(source + ": " + key + " must hold 16 numbers (4×4 row-major)");
+    Mat4 m{};
+    std::copy(v.begin(), v.end(), m.begin());
+    return m;
+}
+
+// "1024x10" → (1024, 10).
+std::pair<int, double> parse_lidar_mode(const std::string& mode, const std::string& source) {
+    const auto x = mode.find('x');
+    try {
+        if (x != std::string::npos) return {std::stoi(mode.substr(0, x)), std::stod(mode.substr(x + 1))};
+    } catch (const std::exception&) {
+    }
+    throw std::runtime_error(source + ": lidar_mode \"" + mode + "\" is not of the form COLUMNSxHZ (e.g. 1024x10)");
+}
+
+void validate(const OusterMetadata& m) {
+    const auto bad = [&](const std::string& what) { throw std::runtime_error(m.source + ": " + what); };
+    const int H = m.pixels_per_column;
+    if (H <= 0 || H > 512) bad("pixels_per_column must be 1..512, got " + std::to_string(H));
+    const int W = m.columns_per_frame;
+    if (W != 512 && W != 1024 && W != 2048 && W != 4096)
+        bad("columns_per_frame must be 512, 1024, 2048 or 4096, got " + std::to_string(W));
+    if (m.columns_per_packet <= 0 || m.columns_per_packet > W)
+        bad("columns_per_packet must be 1.." + std::to_string(W) + ", got " + std::to_string(m.columns_per_packet));
+    if (static_cast<int>(m.beam_altitude_deg.size()) != H || static_cast<int>(m.beam_azimuth_deg.size()) != H)
+        bad("beam_altitude_angles and beam_azimuth_angles must have pixels_per_column = " + std::to_string(H) +
+            " entries, got " + std::to_string(m.beam_altitude_deg.size()) + " and " +
+            std::to_string(m.beam_azimuth_deg.size()));
+    if (static_cast<int>(m.pixel_shift_by_row.size()) != H)
+        bad("pixel_shift_by_row must have " + std::to_string(H) + " entries");
+    for (int c : m.column_window)
+        if (c < 0 || c >= W) bad("column_window must lie in 0.." + std::to_string(W - 1));
+    if (m.lidar_packet_bytes() > 65507) bad("the lidar packet would exceed a UDP datagram");
+}
+
+}  // namespace
+
+const char* to_string(OusterProfile p) {
+    switch (p) {
+        case OusterProfile::Legacy: return "LEGACY";
+        case OusterProfile::Rng19Rfl8Sig16Nir16: return "RNG19_RFL8_SIG16_NIR16";
+        case OusterProfile::Rng19Rfl8Sig16Nir16Dual: return "RNG19_RFL8_SIG16_NIR16_DUAL";
+        case OusterProfile::Rng15Rfl8Nir8: return "RNG15_RFL8_NIR8";
+        case OusterProfile::FusaRng15Rfl8Nir8Dual: return "FUSA_RNG15_RFL8_NIR8_DUAL";
+    }
+    return "?";
+}
+
+std::size_t OusterMetadata::lidar_packet_bytes() const {
+    const Layout l = layout_of(profile);
+    return l.packet_header + static_cast<std::size_t>(columns_per_packet) * column_bytes(l, pixels_per_column) +
+           l.packet_footer;
+}
+
+int OusterMetadata::window_columns() const {
+    const int a = column_window[0], b = column_window[1];
+    return a <= b ? b - a + 1 : columns_per_frame - a + b + 1;
+}
+
+OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::string& source) {
+    OusterMetadata m;
+    m.source = source;
+    try {
+        const json j = json::parse(json_text);
+        if (!j.is_object()) throw std::runtime_error(source + ": Ouster metadata must be a JSON object");
+        // Nested (firmware 2.x/3.x) sections first, then the flat layout's data_format / top level.
+        m.prod_line = get_or<std::string>(j, "sensor_info", nullptr, "prod_line", "");
+        const json* sn = find_field(j, "sensor_info", nullptr, "prod_sn");
+        if (sn && !sn->is_null()) m.prod_sn = sn->is_string() ? sn->get<std::string>() : std::to_string(sn->get<std::uint64_t>());
+        m.init_id = get_or<std::uint32_t>(j, "sensor_info", nullptr, "initialization_id", 0);
+        m.lidar_mode = require_field<std::string>(j, "config_params", nullptr, "lidar_mode", source);
+        const auto [mode_columns, rate] = parse_lidar_mode(m.lidar_mode, source);
+        m.frame_rate_hz = rate;
+        m.profile = profile_from(get_or<std::string>(j, "lidar_data_format", "data_format", "udp_profile_lidar", "LEGACY"), source);
+        m.beam_altitude_deg = require_field<std::vector<double>>(j, "beam_intrinsics", nullptr, "beam_altitude_angles", source);
+        m.beam_azimuth_deg = require_field<std::vector<double>>(j, "beam_intrinsics", nullptr, "beam_azimuth_angles", source);
+        m.pixels_per_column = get_or<int>(j, "lidar_data_format", "data_format", "pixels_per_column",
+                                          static_cast<int>(m.beam_altitude_deg.size()));
+        m.columns_per_packet = get_or<int>(j, "lidar_data_format", "data_format", "columns_per_packet", 16);
+        m.columns_per_frame = get_or<int>(j, "lidar_data_format", "data_format", "columns_per_frame", mode_columns);
+        const auto window = get_or<std::vector<int>>(j, "lidar_data_format", "data_format", "column_window",
+                                                     {0, m.columns_per_frame - 1});
+        if (window.size() != 2) throw std::runtime_error(source + ": column_window must hold 2 numbers");
+        m.column_window = {window[0], window[1]};
+        m.pixel_shift_by_row = get_or<std::vector<int>>(j, "lidar_data_format", "data_format", "pixel_shift_by_row",
+                                                        std::vector<int>(static_cast<std::size_t>(m.pixels_per_column), 0));
+        Mat4 beam = identity4();
+        beam[3] = get_or<double>(j, "beam_intrinsics", nullptr, "lidar_origin_to_beam_origin_mm",
+                                 default_beam_origin_mm(m.prod_line));
+        m.beam_to_lidar = mat4_or(j, "beam_intrinsics", "beam_to_lidar_transform", beam, source);
+        m.lidar_to_sensor = mat4_or(j, "lidar_intrinsics", "lidar_to_sensor_transform", kDefaultLidarToSensor, source);
+        m.imu_to_sensor = mat4_or(j, "imu_intrinsics", "imu_to_sensor_transform", kDefaultImuToSensor, source);
+        m.udp_port_lidar = get_or<int>(j, "config_params", nullptr, "udp_port_lidar", 0);
+        m.udp_port_imu = get_or<int>(j, "config_params", nullptr, "udp_port_imu", 0);
+    } catch (const json::exception& e) {
+        throw std::runtime_error(source + ": not valid Ouster metadata (" + e.what() + ")");
+    }
+    validate(m);
+    return m;
+}
+
+OusterMetadata read_ouster_metadata(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open Ouster metadata file");
+    std::stringstream text;
+    text << in.rdbuf();
+    return parse_ouster_metadata(text.str(), path);
+}
+
+ImuSample decode_ouster_imu(const std::uint8_t* data, std::size_t size, double capture_time, const Mat4& imu_to_sensor) {
+    if (size != kOusterImuPacketBytes)
+        throw std::invalid_argument("IMU packet of " + std::to_string(size) + " bytes, expected 48");
+    ImuSample s;
+    s.timestamp = capture_time;
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            const double R = imu_to_sensor[static_cast<std::size_t>(4 * r + c)];
+            s.linear_acceleration[r] += R * read_le<float>(data + 24 + 4 * c) * kStandardGravity;
+            s.angular_velocity[r] += R * read_le<float>(data + 36 + 4 * c) * kPi / 180.0;
+        }
+    }
+    return s;
+}
+
+OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
+    validate(meta_);
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    const std::size_t pixels = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
+    lut_.direction.resize(3 * pixels);
+    lut_.offset.resize(3 * pixels);
+    const Mat4& B = meta_.beam_to_lidar;
+    const Mat4& T = meta_.lidar_to_sensor;
+    const double beam_x = B[3], beam_z = B[11];
+    const double beam_dist = beam_z != 0.0 ? std::hypot(beam_x, beam_z) : beam_x;
+    for (int u = 0; u < H; ++u) {
+        const double azimuth = -meta_.beam_azimuth_deg[static_cast<std::size_t>(u)] * kPi / 180.0;
+        const double altitude = meta_.beam_altitude_deg[static_cast<std::size_t>(u)] * kPi / 180.0;
+        for (int v = 0; v < W; ++v) {
+            const double encoder = 2.0 * kPi * (1.0 - static_cast<double>(v) / W);
+            const double d[3] = {std::cos(encoder + azimuth) * std::cos(altitude),
+                                 std::sin(encoder + azimuth) * std::cos(altitude), std::sin(altitude)};
+            const double o[3] = {std::cos(encoder) * beam_x - d[0] * beam_dist,
+                                 std::sin(encoder) * beam_x - d[1] * beam_dist, -d[2] * beam_dist + beam_z};
+            const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
+            for (int r = 0; r < 3; ++r) {
+                const double* R = &T[static_cast<std::size_t>(4 * r)];
+                lut_.direction[i + r] = static_cast<float>(1e-3 * (R[0] * d[0] + R[1] * d[1] + R[2] * d[2]));
+                lut_.offset[i + r] = static_cast<float>(1e-3 * (R[0] * o[0] + R[1] * o[1] + R[2] * o[2] + R[3]));
+            }
+        }
+    }
+    range_mm_.resize(pixels);
+    reflectivity_.resize(pixels);
+    column_state_.assign(static_cast<std::size_t>(W), 0);
+    column_ns_.assign(static_cast<std::size_t>(W), 0);
+}
+
+void OusterDecoder::check_header(const std::uint8_t* data) const {
+    if (meta_.profile == OusterProfile::Legacy || meta_.prod_sn.empty()) return;
+    const std::size_t at = meta_.profile == OusterProfile::FusaRng15Rfl8Nir8Dual ? 11 : 7;
+    std::uint64_t sn = 0;
+    std::memcpy(&sn, data + at, 5);  // 40-bit serial number
+    if (sn != 0 && std::to_string(sn) != meta_.prod_sn)
+        throw std::invalid_argument("packet from sensor serial " + std::to_string(sn) + ", but " + meta_.source +
+                                    " describes serial " + meta_.prod_sn + ": the metadata belongs to another sensor");
+}
+
+// Catches metadata whose columns_per_frame or rate does not match the recording: the measured time between
+// columns must be the metadata's 1 / (rate × columns_per_frame).
+void OusterDecoder::check_column_spacing(const std::uint8_t* data) {
+    if (spacing_checked_ || meta_.frame_rate_hz <= 0.0) return;
+    const Layout l = layout_of(meta_.profile);
+    const std::size_t col_bytes = column_bytes(l, meta_.pixels_per_column);
+    const std::uint8_t* a = data + l.packet_header;
+    const std::uint8_t* b = a + (meta_.columns_per_packet - 1) * col_bytes;
+    const int steps = read_le<std::uint16_t>(b + 8) - read_le<std::uint16_t>(a + 8);
+    const auto ta = read_le<std::uint64_t>(a), tb = read_le<std::uint64_t>(b);
+    if (steps <= 0 || ta == 0 || tb <= ta) return;  // one column per packet, a wrap, or no clock: try the next
+    spacing_checked_ = true;
+    const double measured_us = 1e-3 * static_cast<double>(tb - ta) / steps;
+    const double expected_us = 1e6 / (meta_.frame_rate_hz * meta_.columns_per_frame);
+    if (measured_us > 1.5 * expected_us || measured_us < expected_us / 1.5) {
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "columns arrive " << measured_us << " µs apart, but " << meta_.source << " (lidar_mode "
+            << meta_.lidar_mode << ", " << meta_.columns_per_frame << " columns per frame) implies " << expected_us
+            << " µs: the metadata's column count or rate does not match the recording";
+        throw std::invalid_argument(msg.str());
+    }
+}
+
+void OusterDecoder::start_frame(std::int64_t id, double capture_time) {
+    open_ = true;
+    frame_id_ = id;
+    frame_time_ = capture_time;
+    first_column_ns_ = 0;
+    std::fill(column_state_.begin(), column_state_.end(), 0);
+}
+
+std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::size_t size, double capture_time) {
+    const std::size_t expected = meta_.lidar_packet_bytes();
+    if (size != expected)
+        throw std::invalid_argument("lidar packet of " + std::to_string(size) + " bytes, but " + meta_.source + " (" +
+                                    to_string(meta_.profile) + ", " + std::to_string(meta_.pixels_per_column) +
+                                    " pixels × " + std::to_string(meta_.columns_per_packet) + " columns) implies " +
+                                    std::to_string(expected) + ": the metadata does not match the recording");
+    check_header(data);
+    check_column_spacing(data);
+    const Layout l = layout_of(meta_.profile);
+    const std::size_t col_bytes = column_bytes(l, meta_.pixels_per_column);
+    const std::uint8_t* first_col = data + l.packet_header;
+    std::int64_t id = 0;
+    switch (meta_.profile) {
+        case OusterProfile::Legacy: id = read_le<std::uint16_t>(first_col + 10); break;
+        case OusterProfile::FusaRng15Rfl8Nir8Dual: id = read_le<std::uint32_t>(data + 4); break;
+        default: id = read_le<std::uint16_t>(data + 2); break;
+    }
+    std::optional<Frame> done;
+    if (open_ && id != frame_id_) done = build_frame();
+    if (!open_) start_frame(id, capture_time);
+
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    for (int c = 0; c < meta_.columns_per_packet; ++c) {
+        const std::uint8_t* col = first_col + static_cast<std::size_t>(c) * col_bytes;
+        const int mid = read_le<std::uint16_t>(col + 8);
+        if (mid >= W)
+            throw std::invalid_argument("measurement id " + std::to_string(mid) + " is beyond the " + std::to_string(W) +
+                                        " columns per frame of " + meta_.source +
+                                        ": the metadata's column count does not match the recording");
+        const std::uint32_t status = l.column_footer ? read_le<std::uint32_t>(col + col_bytes - 4)
+                                                     : read_le<std::uint16_t>(col + 10);
+        const auto ts = read_le<std::uint64_t>(col);
+        if (first_column_ns_ == 0) first_column_ns_ = ts;
+        column_ns_[static_cast<std::size_t>(mid)] = ts;
+        if (!(status & 1u)) {
+            column_state_[static_cast<std::size_t>(mid)] = 2;
+            continue;
+        }
+        column_state_[static_cast<std::size_t>(mid)] = 1;
+        const std::uint8_t* px = col + l.column_header;
+        for (int u = 0; u < H; ++u, px += l.pixel) {
+            const std::size_t i = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(mid);
+            range_mm_[i] = (read_le<std::uint32_t>(px) & l.range_mask) << l.range_shift;
+            reflectivity_[i] = l.reflectivity_16bit ? read_le<std::uint16_t>(px + l.reflectivity_offset)
+                                                    : px[l.reflectivity_offset];
+        }
+    }
+    return done;
+}
+
+Frame OusterDecoder::build_frame() {
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    Frame f;
+    f.frame_id = frame_id_;
+    f.timestamp = frame_time_;
+    f.imu = std::move(imu_);
+    imu_.clear();
+    for (int k = 0, v = meta_.column_window[0]; k < meta_.window_columns(); ++k, v = (v + 1) % W)
+        if (column_state_[static_cast<std::size_t>(v)] == 0) ++f.diagnostics.missing_columns;
+    for (std::uint8_t s : column_state_)
+        if (s == 2) ++f.diagnostics.invalid_columns;
+    f.diagnostics.complete = f.diagnostics.missing_columns == 0;
+
+    // Destaggered order: pixel (u, v_d) of the image holds staggered column v = v_d − shift[u] (mod W).
+    const auto staggered = [&](int u, int vd) {
+        const int v = (vd - meta_.pixel_shift_by_row[static_cast<std::size_t>(u)]) % W;
+        return v < 0 ? v + W : v;
+    };
+    Eigen::Index n = 0;
+    for (int u = 0; u < H; ++u)
+        for (int vd = 0; vd < W; ++vd) {
+            const int v = staggered(u, vd);
+            n += column_state_[static_cast<std::size_t>(v)] == 1 && range_mm_[static_cast<std::size_t>(u) * W + v] != 0;
+        }
+    f.points.resize(n, 4);
+    f.point_times.resize(static_cast<std::size_t>(n));
+    Eigen::Index k = 0;
+    for (int u = 0; u < H; ++u)
+        for (int vd = 0; vd < W; ++vd) {
+            const int v = staggered(u, vd);
+            const std::size_t i = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v);
+            if (column_state_[static_cast<std::size_t>(v)] != 1 || range_mm_[i] == 0) continue;
+            const float r = static_cast<float>(range_mm_[i]);
+            for (int c = 0; c < 3; ++c) f.points(k, c) = lut_.direction[3 * i + c] * r + lut_.offset[3 * i + c];
+            f.points(k, 3) = static_cast<float>(reflectivity_[i]);
+            f.point_times[static_cast<std::size_t>(k)] =
+                static_cast<float>(1e-9 * static_cast<double>(static_cast<std::int64_t>(
+                    column_ns_[static_cast<std::size_t>(v)] - first_column_ns_)));
+            ++k;
+        }
+    open_ = false;
+    return f;
+}
+
+std::optional<Frame> OusterDecoder::finish() {
+    if (!open_) return std::nullopt;
+    return build_frame();
+}
+
+}  // namespace roadpreview

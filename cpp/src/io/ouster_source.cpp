@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// An Ouster pcap: lidar packets to OusterDecoder, IMU packets attached to the frame being assembled.
+#include "roadpreview/io/ouster.hpp"
+#include "pcap_source.hpp"
+
+namespace roadpreview {
+namespace {
+
+class OusterPcapSource : public PcapSource {
+public:
+    OusterPcapSource(const std::string& path, OusterMetadata meta, const SourceOptions& o)
+        : PcapSource(path, meta.lidar_packet_bytes(), o.lidar_port ? o.lidar_port : meta.udp_port_lidar,
+                     o.lidar_port ? "option" : "metadata", o.skip_bad_packets),
+          imu_port_(meta.udp_port_imu),
+          decoder_(std::move(meta)) {
+        const OusterMetadata& m = decoder_.metadata();
+        info_.format = "ouster pcap";
+        info_.sensor_model = m.prod_line.empty() ? "Ouster (model not in the metadata)" : m.prod_line;
+        info_.profile = to_string(m.profile);
+        info_.metadata = m.source;
+        info_.frame_rate_hz = m.frame_rate_hz;
+    }
+
+private:
+    void on_lidar(const UdpDatagram& d, std::deque<Frame>& ready) override {
+        if (auto f = decoder_.add_packet(d.payload.data(), d.payload.size(), d.timestamp)) ready.push_back(std::move(*f));
+    }
+
+    void on_other(const UdpDatagram& d) override {
+        const bool imu = imu_port_ ? d.dst_port == imu_port_ : d.payload.size() == kOusterImuPacketBytes;
+        if (!imu || d.payload.size() != kOusterImuPacketBytes) return;
+        decoder_.add_imu(decode_ouster_imu(d.payload.data(), d.payload.size(), d.timestamp,
+                                           decoder_.metadata().imu_to_sensor));
+    }
+
+    void on_end(std::deque<Frame>& ready) override {
+        if (auto f = decoder_.finish()) ready.push_back(std::move(*f));
+    }
+
+    int imu_port_;
+    OusterDecoder decoder_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> open_ouster_pcap(const std::string& path, const std::string& meta_path,
+                                              const SourceOptions& options) {
+    return std::make_unique<OusterPcapSource>(path, read_ouster_metadata(meta_path), options);
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "pcap_source.hpp"
+
+#include <stdexcept>
+
+#include "roadpreview/io/velodyne.hpp"
+
+namespace roadpreview {
+
+PcapSource::PcapSource(const std::string& path, std::size_t packet_bytes, int port, const std::string& port_origin,
+                       bool skip_bad_packets)
+    : reader_(path), packet_bytes_(packet_bytes), skip_bad_packets_(skip_bad_packets) {
+    info_.lidar_port = port;
+    info_.lidar_port_origin = port ? port_origin : "detected";
+}
+
+void PcapSource::fail(const std::string& what) const { throw std::runtime_error(path() + ": " + what); }
+
+bool PcapSource::is_lidar(const UdpDatagram& d) {
+    if (info_.lidar_port) return d.dst_port == info_.lidar_port;
+    if (d.payload.size() != packet_bytes_) return false;
+    info_.lidar_port = d.dst_port;
+    return true;
+}
+
+void PcapSource::read_until_frame() {
+    while (ready_.empty() && !ended_) {
+        if (!reader_.next(datagram_)) {
+            ended_ = true;
+            if (decoded_ == 0) {
+                if (!first_problem_.empty()) fail("no lidar packet could be decoded; the first problem: " + first_problem_);
+                fail("no lidar packets (" + std::to_string(packet_bytes_) + "-byte UDP datagrams" +
+                     (info_.lidar_port ? " on port " + std::to_string(info_.lidar_port) + ", from the " +
+                                             info_.lidar_port_origin
+                                       : std::string()) +
+                     ") in " + std::to_string(reader_.counts().records) + " records; the largest datagram is " +
+                     std::to_string(largest_) + " bytes on port " + std::to_string(largest_port_));
+            }
+            try {
+                on_end(ready_);
+            } catch (const std::invalid_argument& e) {
+                fail(e.what());
+            }
+            return;
+        }
+        if (datagram_.payload.size() > largest_) {
+            largest_ = datagram_.payload.size();
+            largest_port_ = datagram_.dst_port;
+        }
+        if (!is_lidar(datagram_)) {
+            on_other(datagram_);
+            continue;
+        }
+        try {
+            on_lidar(datagram_, ready_);
+            ++decoded_;
+        } catch (const std::invalid_argument& e) {
+            const std::string problem = "record " + std::to_string(datagram_.record) + " (UDP port " +
+                                        std::to_string(datagram_.dst_port) + "): " + e.what();
+            if (!skip_bad_packets_) fail(problem);
+            if (first_problem_.empty()) first_problem_ = problem;
+            ++skipped_;
+        }
+    }
+}
+
+std::optional<Frame> PcapSource::next() {
+    read_until_frame();
+    if (ready_.empty()) return std::nullopt;
+    Frame f = std::move(ready_.front());
+    ready_.pop_front();
+    f.source = path();
+    f.diagnostics.skipped_packets = skipped_;
+    skipped_ = 0;
+    return f;
+}
+
+bool looks_like_velodyne(const std::string& path) {
+    PcapReader reader(path);
+    UdpDatagram d;
+    for (int i = 0; i < 1000 && reader.next(d); ++i)
+        if (d.payload.size() == kVelodynePacketBytes) return true;
+    return false;
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,280 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Packet layout, firing timing and nominal angles from the Velodyne user manuals (VLP-16, VLP-32C, HDL-32E,
+// HDL-64E S3); the per-laser correction formula is that of the ROS velodyne_pointcloud calibration files.
+#include "roadpreview/io/velodyne.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+
+#include "bytes.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kBlocks = 12;
+constexpr std::size_t kBlockBytes = 100;
+constexpr int kChannelsPerBlock = 32;
+constexpr double kHourUs = 3600e6;
+constexpr std::size_t kMaxSweepPoints = 4'000'000;  // far beyond any real sweep: a sensor that stops turning
+
+// How a model fires: lasers per firing sequence, sequences per 32-channel block, timing in µs.
+struct FiringPattern {
+    int lasers;           // lasers in one sequence
+    int sequences;        // sequences per block (VLP-16 packs two)
+    double block_us;      // time one block covers
+    double sequence_us;   // time between sequences
+    double laser_us;      // time between consecutive firings within a sequence
+    int lasers_per_slot;  // lasers fired together (VLP-32C fires pairs)
+};
+
+FiringPattern pattern_of(VelodyneModel m) {
+    switch (m) {
+        case VelodyneModel::Vlp16: return {16, 2, 110.592, 55.296, 2.304, 1};
+        case VelodyneModel::Vlp32c: return {32, 1, 55.296, 55.296, 2.304, 2};
+        case VelodyneModel::Hdl32e: return {32, 1, 46.080, 46.080, 1.152, 1};
+        case VelodyneModel::Hdl64e: return {64, 1, 0.0, 0.0, 0.0, 64};  // upper + lower block fire together
+    }
+    throw std::logic_error("unknown Velodyne model");
+}
+
+double deg(double d) { return d * kPi / 180.0; }
+
+VelodyneCalibration nominal(VelodyneModel m, const std::vector<double>& vert_deg, const std::vector<double>& rot_deg,
+                            double resolution) {
+    VelodyneCalibration c;
+    c.source = std::string("built-in ") + to_string(m);
+    c.distance_resolution_m = resolution;
+    for (std::size_t i = 0; i < vert_deg.size(); ++i) {
+        VelodyneLaser l;
+        l.vert_correction = deg(vert_deg[i]);
+        l.rot_correction = rot_deg.empty() ? 0.0 : deg(rot_deg[i]);
+        c.lasers.push_back(l);
+    }
+    return c;
+}
+
+}  // namespace
+
+struct VelodyneDecoder::Firing {
+    const std::uint8_t* channels;  // 3 bytes per laser: distance u16, reflectivity u8
+    int first_laser;               // calibration index of the first channel
+    int lasers;
+    double azimuth_deg;            // of the sequence's first firing
+    double azimuth_rate;           // ° per µs within the sequence
+    double time_us;                // sensor time of the sequence's first firing
+    double laser_us;
+    int lasers_per_slot;
+};
+
+const char* to_string(VelodyneModel m) {
+    switch (m) {
+        case VelodyneModel::Vlp16: return "VLP-16";
+        case VelodyneModel::Vlp32c: return "VLP-32C";
+        case VelodyneModel::Hdl32e: return "HDL-32E";
+        case VelodyneModel::Hdl64e: return "HDL-64E";
+    }
+    return "?";
+}
+
+VelodyneModel velodyne_model_from_name(const std::string& name) {
+    std::string upper = name;
+    std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+    for (auto m : {VelodyneModel::Vlp16, VelodyneModel::Vlp32c, VelodyneModel::Hdl32e, VelodyneModel::Hdl64e})
+        if (upper == to_string(m)) return m;
+    throw std::invalid_argument("unknown Velodyne model \"" + name + "\" (expected VLP-16, VLP-32C, HDL-32E or HDL-64E)");
+}
+
+VelodyneCalibration default_velodyne_calibration(VelodyneModel m) {
+    switch (m) {
+        case VelodyneModel::Vlp16:
+            return nominal(m, {-15, 1, -13, 3, -11, 5, -9, 7, -7, 9, -5, 11, -3, 13, -1, 15}, {}, 0.002);
+        case VelodyneModel::Hdl32e:
+            return nominal(m, {-30.67, -9.33, -29.33, -8.00, -28.00, -6.67, -26.67, -5.33, -25.33, -4.00, -24.00,
+                               -2.67, -22.67, -1.33, -21.33, 0.00, -20.00, 1.33, -18.67, 2.67, -17.33, 4.00,
+                               -16.00, 5.33, -14.67, 6.67, -13.33, 8.00, -12.00, 9.33, -10.67, 10.67},
+                           {}, 0.002);
+        case VelodyneModel::Vlp32c:
+            // The manual's azimuth offsets, negated: rot_correction is subtracted from the azimuth.
+            return nominal(m, {-25, -1, -1.667, -15.639, -11.31, 0, -0.667, -8.843, -7.254, 0.333, -0.333,
+                               -6.148, -5.333, 1.333, 0.667, -4, -4.667, 1.667, 1, -3.667, -3.333, 3.333, 2.333,
+                               -2.667, -3, 7, 4.667, -2.333, -2, 15, 10.333, -1.333},
+                           {-1.4, 4.2, -1.4, 1.4, -1.4, 1.4, -4.2, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 1.4,
+                            -1.4, 4.2, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4, -1.4, 1.4, -1.4, 4.2, -4.2, 1.4, -1.4, 1.4},
+                           0.004);
+        case VelodyneModel::Hdl64e:
+            break;
+    }
+    throw std::invalid_argument("HDL-64E units are calibrated one by one: give their calibration file");
+}
+
+VelodyneCalibration read_velodyne_calibration(const std::string& path) {
+    VelodyneCalibration c;
+    c.source = path;
+    try {
+        const YAML::Node root = YAML::LoadFile(path);
+        if (root["distance_resolution"]) c.distance_resolution_m = root["distance_resolution"].as<double>();
+        const YAML::Node lasers = root["lasers"];
+        if (!lasers || !lasers.IsSequence() || lasers.size() == 0)
+            throw std::runtime_error(path + ": Velodyne calibration has no `lasers` list");
+        c.lasers.resize(lasers.size());
+        for (const auto& node : lasers) {
+            const int id = node["laser_id"].as<int>();
+            if (id < 0 || id >= static_cast<int>(lasers.size()))
+                throw std::runtime_error(path + ": laser_id " + std::to_string(id) + " outside 0.." +
+                                         std::to_string(lasers.size() - 1));
+            const auto opt = [&](const char* key) { return node[key] ? node[key].as<double>() : 0.0; };
+            c.lasers[static_cast<std::size_t>(id)] = {node["vert_correction"].as<double>(), opt("rot_correction"),
+                                                      opt("dist_correction"), opt("vert_offset_correction"),
+                                                      opt("horiz_offset_correction")};
+        }
+    } catch (const YAML::Exception& e) {
+        throw std::runtime_error(path + ": not a readable Velodyne calibration YAML (" + e.what() + ")");
+    }
+    if (!(c.distance_resolution_m > 0.0)) throw std::runtime_error(path + ": distance_resolution must be > 0");
+    return c;
+}
+
+VelodyneFactory velodyne_factory(const std::uint8_t* packet) {
+    VelodyneFactory f;
+    const std::uint8_t mode = packet[1204];
+    f.product_id = packet[1205];
+    f.dual = mode == 0x39;
+    f.return_mode = mode == 0x37 ? "strongest" : mode == 0x38 ? "last" : mode == 0x39 ? "dual" : "unknown";
+    switch (f.product_id) {
+        case 0x21: f.model = VelodyneModel::Hdl32e; break;
+        case 0x22: f.model = VelodyneModel::Vlp16; break;
+        case 0x28: f.model = VelodyneModel::Vlp32c; break;
+        default: break;
+    }
+    return f;
+}
+
+double velodyne_packet_period_us(VelodyneModel model, bool dual) {
+    const FiringPattern f = pattern_of(model);
+    return f.block_us * (dual ? kBlocks / 2 : kBlocks);
+}
+
+std::uint32_t velodyne_packet_time_us(const std::uint8_t* packet) { return read_le<std::uint32_t>(packet + 1200); }
+
+VelodyneDecoder::VelodyneDecoder(VelodyneModel model, VelodyneCalibration calibration, double cut_angle_deg)
+    : model_(model), calibration_(std::move(calibration)), cut_angle_deg_(cut_angle_deg) {
+    const int lasers = pattern_of(model).lasers;
+    if (static_cast<int>(calibration_.lasers.size()) != lasers)
+        throw std::invalid_argument(calibration_.source + ": " + std::to_string(calibration_.lasers.size()) +
+                                    " lasers, but a " + to_string(model) + " has " + std::to_string(lasers));
+    if (!std::isfinite(cut_angle_deg) || cut_angle_deg < 0.0 || cut_angle_deg >= 360.0)
+        throw std::invalid_argument("cut angle must be in [0, 360) degrees, got " + std::to_string(cut_angle_deg));
+}
+
+void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, double capture_time,
+                                 std::vector<Frame>& done) {
+    if (size != kVelodynePacketBytes)
+        throw std::invalid_argument("Velodyne data packet of " + std::to_string(size) + " bytes, expected 1206");
+    const bool dual = data[1204] == 0x39;
+    if (dual && model_ == VelodyneModel::Hdl64e) throw std::invalid_argument("dual-return HDL-64E packets are not supported");
+    // Sensor time, unwrapped across the hour (the packets count µs past the hour).
+    const double t = velodyne_packet_time_us(data);
+    if (packet_us_ < 0.0) {
+        packet_us_ = t;
+    } else {
+        packet_us_ += std::fmod(t - std::fmod(packet_us_, kHourUs) + kHourUs, kHourUs);
+    }
+    packet_capture_time_ = capture_time;
+
+    const FiringPattern spec = pattern_of(model_);
+    const int step = dual ? 2 : (model_ == VelodyneModel::Hdl64e ? 2 : 1);  // blocks per firing slot
+    double azimuth[kBlocks];
+    for (int b = 0; b < kBlocks; ++b) {
+        const std::uint8_t* block = data + b * kBlockBytes;
+        const auto flag = read_le<std::uint16_t>(block);
+        if (flag != 0xEEFF && flag != 0xDDFF)
+            throw std::invalid_argument("Velodyne block " + std::to_string(b) + " starts with " + std::to_string(flag) +
+                                        ", not a block flag (0xEEFF or 0xDDFF)");
+        azimuth[b] = 0.01 * read_le<std::uint16_t>(block + 2);
+    }
+    const int slots = kBlocks / step;
+    const auto turn = [](double from, double to) { return std::fmod(to - from + 360.0, 360.0); };
+    for (int s = 0; s < slots; ++s) {
+        const int b = s * step;
+        // Degrees the head turns until the next slot (the last slot repeats the one before).
+        const double gap = slots == 1       ? 0.0
+                           : s + 1 < slots ? turn(azimuth[b], azimuth[b + step])
+                                           : turn(azimuth[b - step], azimuth[b]);
+        if (model_ == VelodyneModel::Hdl64e) {  // upper and lower block fire together; no per-laser timing
+            for (int half = 0; half < 2; ++half) {
+                const std::uint8_t* block = data + (b + half) * kBlockBytes;
+                const int first = read_le<std::uint16_t>(block) == 0xDDFF ? 32 : 0;
+                add_firing({block + 4, first, kChannelsPerBlock, azimuth[b], 0.0, packet_us_, 0.0, 1}, done);
+            }
+            continue;
+        }
+        const double rate = gap / spec.block_us;
+        for (int q = 0; q < spec.sequences; ++q) {
+            const double dt = q * spec.sequence_us;
+            add_firing({data + b * kBlockBytes + 4 + q * spec.lasers * 3, 0, spec.lasers, azimuth[b] + rate * dt, rate,
+                        packet_us_ + s * spec.block_us + dt, spec.laser_us, spec.lasers_per_slot},
+                       done);
+        }
+    }
+}
+
+void VelodyneDecoder::add_firing(const Firing& f, std::vector<Frame>& done) {
+    const double az0 = std::fmod(f.azimuth_deg, 360.0);
+    const double relative = std::fmod(az0 - cut_angle_deg_ + 360.0, 360.0);
+    // A drop of more than half a turn in the angle past the cut means the head passed the cut angle.
+    if (previous_relative_deg_ >= 0.0 && previous_relative_deg_ - relative > 180.0) close_sweep(true, done);
+    previous_relative_deg_ = relative;
+    if (xyzi_.size() / 4 >= kMaxSweepPoints) close_sweep(false, done);
+    if (xyzi_.empty()) {
+        sweep_time_ = packet_capture_time_;
+        sweep_first_us_ = f.time_us;
+    }
+    for (int k = 0; k < f.lasers; ++k) {
+        const std::uint8_t* ch = f.channels + 3 * k;
+        const std::uint16_t raw = read_le<std::uint16_t>(ch);
+        if (raw == 0) continue;  // no return
+        const VelodyneLaser& L = calibration_.lasers[static_cast<std::size_t>(f.first_laser + k)];
+        const double fire_us = (k / f.lasers_per_slot) * f.laser_us;
+        const double azimuth = deg(f.azimuth_deg + f.azimuth_rate * fire_us) - L.rot_correction;
+        const double distance = raw * calibration_.distance_resolution_m + L.dist_correction;
+        const double cos_v = std::cos(L.vert_correction), sin_v = std::sin(L.vert_correction);
+        const double cos_a = std::cos(azimuth), sin_a = std::sin(azimuth);
+        const double xy = distance * cos_v - L.vert_offset_correction * sin_v;
+        // The manual's frame: y forward, x right; azimuth clockwise from y seen from above.
+        const double x_right = xy * sin_a - L.horiz_offset_correction * cos_a;
+        const double y_forward = xy * cos_a + L.horiz_offset_correction * sin_a;
+        const double z = distance * sin_v + L.vert_offset_correction * cos_v;
+        xyzi_.insert(xyzi_.end(), {static_cast<float>(y_forward), static_cast<float>(-x_right), static_cast<float>(z),
+                                   static_cast<float>(ch[2])});
+        times_.push_back(static_cast<float>(1e-6 * (f.time_us + fire_us - sweep_first_us_)));
+    }
+}
+
+void VelodyneDecoder::close_sweep(bool at_cut, std::vector<Frame>& done) {
+    if (!xyzi_.empty()) {
+        Frame f;
+        f.frame_id = sweeps_++;
+        f.timestamp = sweep_time_;
+        f.points = Eigen::Map<const PointMatrix>(xyzi_.data(), static_cast<Eigen::Index>(xyzi_.size() / 4), 4);
+        f.point_times = std::move(times_);
+        f.diagnostics.complete = started_at_cut_ && at_cut;
+        done.push_back(std::move(f));
+    }
+    xyzi_.clear();
+    times_.clear();
+    started_at_cut_ = at_cut;
+}
+
+std::optional<Frame> VelodyneDecoder::finish() {
+    std::vector<Frame> done;
+    close_sweep(false, done);
+    if (done.empty()) return std::nullopt;
+    return std::move(done.front());
+}
+
+}  // namespace roadpreview

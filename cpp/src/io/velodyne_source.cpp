@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A Velodyne pcap. The model comes from --sensor-model, else from the factory byte checked against the firing
+// timing (the time between the first two packets): some early VLP-16 firmware reports an HDL-32E.
+#include <cmath>
+#include <sstream>
+
+#include "roadpreview/io/velodyne.hpp"
+#include "pcap_source.hpp"
+
+namespace roadpreview {
+namespace {
+
+// The model whose packet period (in the packet's return mode) is within 10 % of the measured one.
+std::optional<VelodyneModel> model_by_timing(double period_us, bool dual) {
+    for (auto m : {VelodyneModel::Vlp16, VelodyneModel::Vlp32c, VelodyneModel::Hdl32e}) {
+        const double expected = velodyne_packet_period_us(m, dual);
+        if (std::abs(period_us - expected) < 0.1 * expected) return m;
+    }
+    return std::nullopt;
+}
+
+class VelodynePcapSource : public PcapSource {
+public:
+    VelodynePcapSource(const std::string& path, const SourceOptions& o)
+        : PcapSource(path, kVelodynePacketBytes, o.lidar_port, "option", o.skip_bad_packets), options_(o) {
+        info_.format = "velodyne pcap";
+        if (!o.sensor_model.empty()) forced_ = velodyne_model_from_name(o.sensor_model);
+        if (forced_ == VelodyneModel::Hdl64e && o.calibration.empty())
+            fail("an HDL-64E needs its calibration file (--calibration)");
+    }
+
+private:
+    void on_lidar(const UdpDatagram& d, std::deque<Frame>& ready) override {
+        if (d.payload.size() != kVelodynePacketBytes)
+            throw std::invalid_argument("Velodyne data packet of " + std::to_string(d.payload.size()) +
+                                        " bytes, expected 1206");
+        if (!decoder_) {
+            if (first_.payload.empty()) {  // the model needs two packets' timing
+                first_ = d;
+                return;
+            }
+            start(&d);
+            feed(first_, ready);
+        }
+        feed(d, ready);
+    }
+
+    void on_end(std::deque<Frame>& ready) override {
+        if (!decoder_ && !first_.payload.empty()) {
+            start(nullptr);
+            feed(first_, ready);
+        }
+        if (!decoder_) return;
+        if (auto f = decoder_->finish()) ready.push_back(std::move(*f));
+    }
+
+    void feed(const UdpDatagram& d, std::deque<Frame>& ready) {
+        done_.clear();
+        decoder_->add_packet(d.payload.data(), d.payload.size(), d.timestamp, done_);
+        for (Frame& f : done_) ready.push_back(std::move(f));
+    }
+
+    void start(const UdpDatagram* second) {
+        const VelodyneFactory factory = velodyne_factory(first_.payload.data());
+        info_.profile = factory.return_mode;
+        VelodyneModel model;
+        if (forced_) {
+            model = *forced_;
+            info_.notes.push_back(std::string("model given: ") + to_string(model));
+        } else {
+            model = choose_model(factory, second);
+        }
+        info_.sensor_model = to_string(model);
+        VelodyneCalibration calibration = options_.calibration.empty() ? default_velodyne_calibration(model)
+                                                                       : read_velodyne_calibration(options_.calibration);
+        info_.metadata = calibration.source;
+        info_.frame_rate_hz = 0.0;
+        decoder_.emplace(model, std::move(calibration), options_.cut_angle_deg);
+    }
+
+    VelodyneModel choose_model(const VelodyneFactory& factory, const UdpDatagram* second) {
+        std::optional<VelodyneModel> timed;
+        double period = 0.0;
+        if (second) {
+            const double t0 = velodyne_packet_time_us(first_.payload.data());
+            const double t1 = velodyne_packet_time_us(second->payload.data());
+            period = std::fmod(t1 - t0 + 3600e6, 3600e6);
+            timed = model_by_timing(period, factory.dual);
+        }
+        std::ostringstream note;
+        note << "factory byte 0x" << std::hex << factory.product_id << std::dec << " ("
+             << (factory.model ? to_string(*factory.model) : "unknown") << ")";
+        if (second) note << ", packets " << period << " µs apart (" << (timed ? to_string(*timed) : "no known model") << ")";
+        const auto model = timed ? timed : factory.model;
+        if (!model) fail("cannot tell the Velodyne model: " + note.str() + "; pass --sensor-model");
+        note << ": decoded as " << to_string(*model);
+        info_.notes.push_back(note.str());
+        return *model;
+    }
+
+    SourceOptions options_;
+    std::optional<VelodyneModel> forced_;
+    std::optional<VelodyneDecoder> decoder_;
+    UdpDatagram first_;
+    std::vector<Frame> done_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> open_velodyne_pcap(const std::string& path, const SourceOptions& options) {
+    return std::make_unique<VelodynePcapSource>(path, options);
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Recordings from Python: rp.io.open(...) iterates frames decoded in C++; a frame's arrays are read-only
+// numpy views of its buffers, kept alive by the frame.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "roadpreview/roadpreview.hpp"
+
+namespace py = pybind11;
+namespace rp = roadpreview;
+
+namespace {
+
+py::array read_only(py::array a) {
+    a.attr("setflags")(false);
+    return a;
+}
+
+py::dict info_dict(const rp::SourceInfo& s) {
+    py::dict d;
+    d["format"] = s.format;
+    d["sensor_model"] = s.sensor_model;
+    d["profile"] = s.profile;
+    d["metadata"] = s.metadata;
+    d["lidar_port"] = s.lidar_port;
+    d["lidar_port_origin"] = s.lidar_port_origin;
+    d["frame_rate_hz"] = s.frame_rate_hz;
+    d["notes"] = s.notes;
+    return d;
+}
+
+// Three doubles per IMU sample, from `member`.
+py::array imu_vectors(const rp::Frame& f, std::array<double, 3> rp::ImuSample::*member) {
+    py::array_t<double> out({static_cast<py::ssize_t>(f.imu.size()), py::ssize_t(3)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < f.imu.size(); ++i)
+        for (int k = 0; k < 3; ++k) o(static_cast<py::ssize_t>(i), k) = (f.imu[i].*member)[static_cast<std::size_t>(k)];
+    return out;
+}
+
+}  // namespace
+
+void bind_io(py::module_& m) {
+    py::class_<rp::Frame>(m, "Frame", "One frame of a recording, decoded in C++")
+        .def_property_readonly("points", [](py::object self) {
+            const auto& f = self.cast<const rp::Frame&>();
+            return read_only(py::array(py::dtype::of<float>(), {f.points.rows(), Eigen::Index(4)},
+                                       {Eigen::Index(4 * sizeof(float)), Eigen::Index(sizeof(float))}, f.points.data(), self));
+        }, "(N, 4) float32: x, y, z (m, sensor frame) and intensity (reflectivity; 0 when none)")
+        .def_readonly("source", &rp::Frame::source)
+        .def_readonly("timestamp", &rp::Frame::timestamp, "s (pcaps: capture time of the first packet, UNIX epoch), or None")
+        .def_readonly("frame_id", &rp::Frame::frame_id, "Ouster frame id, Velodyne sweep count, or index of the file")
+        .def_property_readonly("point_times", [](py::object self) {
+            const auto& t = self.cast<const rp::Frame&>().point_times;
+            return read_only(py::array(py::dtype::of<float>(), {static_cast<py::ssize_t>(t.size())},
+                                       {py::ssize_t(sizeof(float))}, t.data(), self));
+        }, "float32 s after .timestamp per point; empty when unknown")
+        .def_property_readonly("imu_timestamps", [](const rp::Frame& f) {
+            std::vector<double> t;
+            for (const auto& s : f.imu) t.push_back(s.timestamp);
+            return py::array_t<double>(static_cast<py::ssize_t>(t.size()), t.data());
+        })
+        .def_property_readonly("imu_angular_velocity", [](const rp::Frame& f) {
+            return imu_vectors(f, &rp::ImuSample::angular_velocity);
+        }, "(K, 3) rad/s in the sensor frame")
+        .def_property_readonly("imu_linear_acceleration", [](const rp::Frame& f) {
+            return imu_vectors(f, &rp::ImuSample::linear_acceleration);
+        }, "(K, 3) m/s² in the sensor frame")
+        .def_property_readonly("diagnostics", [](const rp::Frame& f) {
+            py::dict d;
+            d["missing_columns"] = f.diagnostics.missing_columns;
+            d["invalid_columns"] = f.diagnostics.invalid_columns;
+            d["skipped_packets"] = f.diagnostics.skipped_packets;
+            d["complete"] = f.diagnostics.complete;
+            return d;
+        })
+        .def("__repr__", [](const rp::Frame& f) {
+            return "<roadpreview.Frame " + std::to_string(f.frame_id) + " of " + f.source + ": " +
+                   std::to_string(f.points.rows()) + " points>";
+        });
+
+    py::class_<rp::FrameSource>(m, "FrameSource", "Iterates the frames of a recording, one at a time")
+        .def("__iter__", [](py::object self) { return self; })
+        .def("__next__", [](rp::FrameSource& s) {
+            std::optional<rp::Frame> f;
+            {
+                py::gil_scoped_release release;
+                f = s.next();
+            }
+            if (!f) throw py::stop_iteration();
+            return std::move(*f);
+        })
+        .def_property_readonly("info", [](const rp::FrameSource& s) { return info_dict(s.info()); });
+
+    m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
+                            const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets) {
+        rp::SourceOptions o{meta, sensor_model, calibration, cut_angle_deg, lidar_port, skip_bad_packets};
+        return rp::open_frames(inputs, o);
+    });
+    m.def("imu_yaw_rate", [](const rp::Frame& f, const std::string& config_json) {
+        return rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(rp::config_from_json(config_json, "config")));
+    });
+}
