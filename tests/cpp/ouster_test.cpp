@@ -1,0 +1,285 @@
+// Ouster: every bundled recording decodes to the frame and point counts verified in the shared data README;
+// metadata layouts, mismatches, missing and invalid columns, and XYZ on hand-made packets.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include <roadpreview/io.hpp>
+#include <roadpreview/io/ouster.hpp>
+
+namespace rp = roadpreview;
+using nlohmann::json;
+
+namespace {
+
+const std::string kOuster = std::string(ROADPREVIEW_TEST_DATA) + "/ouster/";
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::vector<rp::Frame> all_frames(const std::string& pcap, const rp::SourceOptions& o = {}) {
+    auto source = rp::open_frames({pcap}, o);
+    std::vector<rp::Frame> frames;
+    while (auto f = source->next()) frames.push_back(std::move(*f));
+    return frames;
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+struct Recording {
+    std::string pcap, meta, profile, model;
+    std::vector<Eigen::Index> points;  // per frame, from the shared data README
+    std::vector<std::int64_t> ids;
+};
+
+}  // namespace
+
+TEST(Ouster, EveryBundledRecordingDecodesToTheVerifiedCounts) {
+    const std::vector<Recording> recordings = {
+        {"OS-1-128_v2.3.0_1024x10_lb_n3.pcap", "", "RNG15_RFL8_NIR8", "OS-1-128", {107647, 107357, 107532}, {1795, 1796, 1797}},
+        {"OS-1-128_767798045_1024x10_20230712_120049.pcap", "", "FUSA_RNG15_RFL8_NIR8_DUAL", "OS-1-128", {16373}, {229}},
+        {"OS-0-128-U1_v2.3.0_1024x10.pcap", "", "RNG15_RFL8_NIR8", "OS-0-128", {97299}, {1491}},
+        {"OS-2-128-U1_v2.3.0_1024x10.pcap", "", "RNG19_RFL8_SIG16_NIR16", "OS-2-128", {119682}, {1259}},
+        {"OS-0-32-U1_v2.2.0_1024x10.pcap", "", "RNG19_RFL8_SIG16_NIR16_DUAL", "OS-0-32-U1", {21631}, {1453}},
+        {"OS-1-32-G_v2.1.1_1024x10.pcap", "", "LEGACY", "OS-1-32-G", {27310}, {638}},
+        {"OS-2-32-U0_v2.0.0_1024x10.pcap", "", "LEGACY", "OS-2-32-U0", {28541}, {5424}},
+        {"OS-1-64_1024x10_fw20.pcap", "OS-1-64_sensor_config_reduced.json", "LEGACY", "", {16749}, {189}},
+        {"rust-lidar-utils/ouster_example.pcap", "", "LEGACY", "", {12783, 58797, 20690}, {12072, 12073, 12074}},
+    };
+    for (const Recording& r : recordings) {
+        SCOPED_TRACE(r.pcap);
+        rp::SourceOptions o;
+        if (!r.meta.empty()) o.meta = kOuster + r.meta;
+        auto source = rp::open_frames({kOuster + r.pcap}, o);
+        std::vector<Eigen::Index> points;
+        std::vector<std::int64_t> ids;
+        while (auto f = source->next()) {
+            points.push_back(f->points.rows());
+            ids.push_back(f->frame_id);
+            EXPECT_EQ(f->point_times.size(), static_cast<std::size_t>(f->points.rows()));
+            EXPECT_TRUE(f->timestamp.has_value());
+        }
+        EXPECT_EQ(points, r.points);
+        EXPECT_EQ(ids, r.ids);
+        EXPECT_EQ(source->info().profile, r.profile);
+        if (!r.model.empty()) {
+            EXPECT_EQ(source->info().sensor_model, r.model);
+        }
+        EXPECT_EQ(source->info().lidar_port, 7502);
+    }
+}
+
+TEST(Ouster, MissingColumnsAreCountedAndTheFrameIsStillEmitted) {
+    // ouster_example.pcap starts and ends inside frames: 224 and 352 of 1024 columns arrive.
+    const auto frames = all_frames(kOuster + "rust-lidar-utils/ouster_example.pcap");
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_EQ(frames[0].diagnostics.missing_columns, 1024 - 224);
+    EXPECT_EQ(frames[1].diagnostics.missing_columns, 0);
+    EXPECT_EQ(frames[2].diagnostics.missing_columns, 1024 - 352);
+    EXPECT_FALSE(frames[0].diagnostics.complete);
+    EXPECT_TRUE(frames[1].diagnostics.complete);
+}
+
+TEST(Ouster, ImuPacketsTravelWithTheirFrame) {
+    const auto frames = all_frames(kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap");
+    std::size_t samples = 0;
+    double a[3] = {0, 0, 0};
+    for (const auto& f : frames) {
+        samples += f.imu.size();
+        for (const auto& s : f.imu)
+            for (int k = 0; k < 3; ++k) a[k] += s.linear_acceleration[static_cast<std::size_t>(k)] / 30;
+    }
+    EXPECT_EQ(samples, 30u);  // the README's 30 IMU packets
+    // Over 0.3 s of steady driving the accelerometer measures mostly gravity, pointing up the sensor's z axis.
+    const double g = std::hypot(a[0], a[1], a[2]);
+    EXPECT_GT(g, 9.0);
+    EXPECT_LT(g, 12.0);
+    EXPECT_GT(a[2], 0.9 * g);
+}
+
+TEST(Ouster, MetadataIsFoundNextToThePcapByName) {
+    EXPECT_EQ(rp::find_ouster_metadata(kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"), kOuster + "OS-1-128_v2.3.0_1024x10.json");
+    EXPECT_EQ(rp::find_ouster_metadata(kOuster + "OS-1-64_1024x10_fw20.pcap"), "");
+    const std::string err = error_of([] { rp::open_frames({kOuster + "OS-1-64_1024x10_fw20.pcap"}); });
+    EXPECT_NE(err.find("OS-1-64_1024x10_fw20.pcap"), std::string::npos) << err;
+    EXPECT_NE(err.find("--meta"), std::string::npos) << err;
+    rp::SourceOptions o;
+    o.meta = kOuster + "missing.json";
+    EXPECT_NE(error_of([&] { rp::open_frames({kOuster + "x.pcap"}, o); }).find("no such file"), std::string::npos);
+    EXPECT_NE(error_of([&] { rp::open_frames({kOuster + "OS-1-64_1024x10_fw20.pcap"}, o); }).find("missing.json"),
+              std::string::npos);
+}
+
+TEST(Ouster, NestedAndFlatLayoutsGiveTheSameMetadata) {
+    const json flat = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+    json nested;
+    nested["sensor_info"] = {{"prod_line", flat["prod_line"]}, {"prod_sn", flat["prod_sn"]},
+                             {"initialization_id", flat["initialization_id"]}};
+    nested["beam_intrinsics"] = {{"beam_altitude_angles", flat["beam_altitude_angles"]},
+                                 {"beam_azimuth_angles", flat["beam_azimuth_angles"]},
+                                 {"lidar_origin_to_beam_origin_mm", flat["lidar_origin_to_beam_origin_mm"]}};
+    nested["lidar_intrinsics"] = {{"lidar_to_sensor_transform", flat["lidar_to_sensor_transform"]}};
+    nested["imu_intrinsics"] = {{"imu_to_sensor_transform", flat["imu_to_sensor_transform"]}};
+    nested["lidar_data_format"] = flat["data_format"];
+    nested["config_params"] = {{"lidar_mode", flat["lidar_mode"]}, {"udp_port_lidar", flat["udp_port_lidar"]},
+                               {"udp_port_imu", flat["udp_port_imu"]}};
+    const rp::OusterMetadata a = rp::parse_ouster_metadata(flat.dump(), "flat.json");
+    const rp::OusterMetadata b = rp::parse_ouster_metadata(nested.dump(), "nested.json");
+    EXPECT_EQ(a.prod_sn, "122201000998");
+    EXPECT_EQ(a.init_id, 7109750u);
+    for (const auto* m : {&a, &b}) {
+        EXPECT_EQ(m->prod_line, "OS-1-128");
+        EXPECT_EQ(m->profile, rp::OusterProfile::Rng15Rfl8Nir8);
+        EXPECT_EQ(m->columns_per_frame, 1024);
+        EXPECT_EQ(m->pixels_per_column, 128);
+        EXPECT_EQ(m->lidar_packet_bytes(), 8448u);
+        EXPECT_DOUBLE_EQ(m->beam_to_lidar[3], 15.806);
+        EXPECT_DOUBLE_EQ(m->lidar_to_sensor[11], 36.18);
+        EXPECT_EQ(m->udp_port_lidar, 7502);
+    }
+    EXPECT_EQ(a.beam_altitude_deg, b.beam_altitude_deg);
+    EXPECT_EQ(a.pixel_shift_by_row, b.pixel_shift_by_row);
+    EXPECT_EQ(a.prod_sn, b.prod_sn);
+    // The vendor's own nested file (firmware 3.1) with an explicit beam_to_lidar_transform.
+    const auto fusa = rp::read_ouster_metadata(kOuster + "OS-1-128_767798045_1024x10_20230712_120049.json");
+    EXPECT_EQ(fusa.profile, rp::OusterProfile::FusaRng15Rfl8Nir8Dual);
+    EXPECT_EQ(fusa.lidar_packet_bytes(), 16640u);
+    EXPECT_DOUBLE_EQ(fusa.beam_to_lidar[3], 16.721);
+}
+
+TEST(Ouster, BadMetadataNamesTheFileAndTheField) {
+    json j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+    j.erase("lidar_mode");
+    std::string err = error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); });
+    EXPECT_NE(err.find("m.json"), std::string::npos);
+    EXPECT_NE(err.find("lidar_mode"), std::string::npos) << err;
+    j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+    j["beam_altitude_angles"].erase(0);
+    err = error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); });
+    EXPECT_NE(err.find("beam_altitude_angles"), std::string::npos) << err;
+    j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+    j["data_format"]["udp_profile_lidar"] = "FIVE_WORD_PIXEL";
+    EXPECT_NE(error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); }).find("not supported"), std::string::npos);
+    EXPECT_NE(error_of([&] { rp::parse_ouster_metadata("{not json", "m.json"); }).find("m.json"), std::string::npos);
+}
+
+namespace {
+
+// The OS1-128 recording decoded with an altered copy of its metadata.
+std::string error_with_metadata(const std::function<void(json&)>& alter, const std::string& name) {
+    json j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+    alter(j);
+    const std::string path = testing::TempDir() + name;
+    std::ofstream(path) << j.dump();
+    rp::SourceOptions o;
+    o.meta = path;
+    return error_of([&] { all_frames(kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap", o); });
+}
+
+}  // namespace
+
+TEST(Ouster, MetadataThatDoesNotMatchThePacketsIsAnError) {
+    std::string err = error_with_metadata([](json& j) { j["data_format"]["udp_profile_lidar"] = "RNG19_RFL8_SIG16_NIR16"; },
+                                          "profile.json");
+    EXPECT_NE(err.find("OS-1-128_v2.3.0_1024x10_lb_n3.pcap"), std::string::npos) << err;
+    EXPECT_NE(err.find("8448 bytes"), std::string::npos) << err;
+    EXPECT_NE(err.find("does not match"), std::string::npos) << err;
+
+    err = error_with_metadata([](json& j) {
+        j["lidar_mode"] = "2048x10";
+        j["data_format"]["columns_per_frame"] = 2048;
+        j["data_format"]["column_window"] = {0, 2047};
+    }, "columns2048.json");
+    EXPECT_NE(err.find("column count"), std::string::npos) << err;
+
+    err = error_with_metadata([](json& j) {
+        j["lidar_mode"] = "512x10";
+        j["data_format"]["columns_per_frame"] = 512;
+        j["data_format"]["column_window"] = {0, 511};
+    }, "columns512.json");
+    EXPECT_NE(err.find("column"), std::string::npos) << err;
+
+    err = error_with_metadata([](json& j) { j["prod_sn"] = "122201000999"; }, "serial.json");
+    EXPECT_NE(err.find("another sensor"), std::string::npos) << err;
+}
+
+namespace {
+
+// A one-packet-per-column RNG19 single-return sensor with 4 beams, for hand-made packets.
+rp::OusterMetadata tiny_metadata() {
+    json j = {{"lidar_mode", "512x10"},
+              {"beam_altitude_angles", {30.0, 0.0, -10.0, -30.0}},
+              {"beam_azimuth_angles", {0.0, 0.0, 2.0, 0.0}},
+              {"lidar_origin_to_beam_origin_mm", 0.0},
+              {"lidar_to_sensor_transform", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
+              {"data_format", {{"pixels_per_column", 4}, {"columns_per_packet", 1}, {"columns_per_frame", 512},
+                               {"udp_profile_lidar", "RNG19_RFL8_SIG16_NIR16"}}}};
+    return rp::parse_ouster_metadata(j.dump(), "tiny.json");
+}
+
+std::vector<std::uint8_t> tiny_packet(std::uint16_t frame_id, std::uint16_t column, std::uint32_t range_mm,
+                                      std::uint16_t status = 1) {
+    std::vector<std::uint8_t> p(32 + 12 + 4 * 12 + 32, 0);
+    std::memcpy(&p[2], &frame_id, 2);
+    const std::uint64_t ts = 1'000'000'000ull + column * 195'312ull;  // 512 columns in 0.1 s
+    std::memcpy(&p[32], &ts, 8);
+    std::memcpy(&p[40], &column, 2);
+    std::memcpy(&p[42], &status, 2);
+    for (int beam = 0; beam < 4; ++beam) std::memcpy(&p[44 + 12 * beam], &range_mm, 4);
+    return p;
+}
+
+}  // namespace
+
+TEST(Ouster, XyzFollowsTheBeamAnglesAndTheEncoderAngle) {
+    rp::OusterDecoder d(tiny_metadata());
+    const std::uint16_t column = 128;  // a quarter turn: encoder angle 2π − π/2
+    const auto p = tiny_packet(7, column, 10000);
+    d.add_packet(p.data(), p.size(), 0.0);
+    const auto f = d.finish();
+    ASSERT_TRUE(f);
+    ASSERT_EQ(f->points.rows(), 4);
+    const double pi = 3.14159265358979323846;
+    const double altitudes[4] = {30.0, 0.0, -10.0, -30.0};
+    const double azimuths[4] = {0.0, 0.0, 2.0, 0.0};
+    for (int beam = 0; beam < 4; ++beam) {
+        const double phi = altitudes[beam] * pi / 180, theta = 2 * pi * (1 - 128.0 / 512) - azimuths[beam] * pi / 180;
+        EXPECT_NEAR(f->points(beam, 0), 10.0 * std::cos(theta) * std::cos(phi), 1e-5);
+        EXPECT_NEAR(f->points(beam, 1), 10.0 * std::sin(theta) * std::cos(phi), 1e-5);
+        EXPECT_NEAR(f->points(beam, 2), 10.0 * std::sin(phi), 1e-5);
+    }
+    EXPECT_EQ(f->frame_id, 7);
+    EXPECT_EQ(f->diagnostics.missing_columns, 511);
+}
+
+TEST(Ouster, InvalidColumnsAndZeroRangesAreSkippedAndFramesSplitByFrameId) {
+    rp::OusterDecoder d(tiny_metadata());
+    const auto add = [&](const std::vector<std::uint8_t>& p) { return d.add_packet(p.data(), p.size(), 0.0); };
+    EXPECT_FALSE(add(tiny_packet(1, 0, 5000)));
+    EXPECT_FALSE(add(tiny_packet(1, 1, 5000, 0)));  // status bit clear
+    EXPECT_FALSE(add(tiny_packet(1, 2, 0)));        // no returns
+    const auto first = add(tiny_packet(2, 0, 5000));  // the next frame begins
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->points.rows(), 4);
+    EXPECT_EQ(first->diagnostics.invalid_columns, 1);
+    EXPECT_EQ(first->diagnostics.missing_columns, 512 - 3);
+    EXPECT_EQ(d.finish()->frame_id, 2);
+    EXPECT_THROW(d.add_packet(tiny_packet(2, 0, 5000).data(), 123, 0.0), std::invalid_argument);
+    EXPECT_THROW(add(tiny_packet(2, 600, 5000)), std::invalid_argument);  // beyond 512 columns
+}
