@@ -17,3 +17,8 @@ def cli() -> str:
     found = str(beside) if beside.exists() else shutil.which("roadpreview")
     assert found, "the roadpreview CLI is not installed (pip install .)"
     return found
+OUSTER = DATA / "ouster"
+VELODYNE = DATA / "velodyne"
+OS1_128_PCAP = OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"  # 3 frames; its metadata is found by name
+OS1_128_META = OUSTER / "OS-1-128_v2.3.0_1024x10.json"
+OS1_128_HEIGHT = 1.97  # m, estimated from the ground in the first frame (shared data field notes)

@@ -40,7 +40,7 @@ def test_cli_line_equals_python_to_dict(tmp_path):
         "--frame-rate", 10, "-o", out)
     line = lines(out.read_text())[0]
     res = rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)).process(
-        rp.io.read(KITTI_FRAMES[1]), 7.0, -0.2, source=str(KITTI_FRAMES[1]), timestamp=0.0)
+        rp.io.read(KITTI_FRAMES[1]), 7.0, -0.2, source=str(KITTI_FRAMES[1]), timestamp=0.0, yaw_rate_source="option")
     expected = res.to_dict()
     for d in (line, expected):
         d.pop("timing_ms")

@@ -1,0 +1,113 @@
+"""`roadpreview run` and `roadpreview info` on pcap recordings, as a user runs them."""
+
+import json
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, VELODYNE
+from test_cli import lines, one_line_error, run
+
+OS1 = ("--sensor-height", OS1_128_HEIGHT)
+
+
+def test_run_on_the_os1_128_recording_uses_its_imu_yaw_rate(tmp_path):
+    proc = run("run", OS1_128_PCAP, "--speed", 2.5, *OS1)
+    out = lines(proc.stdout)
+    assert len(out) == 3
+    frames = list(rp.io.open(OS1_128_PCAP))
+    assert [o["timestamp"] for o in out] == [f.timestamp for f in frames]
+    assert [o["points"]["input"] for o in out] == [107647, 107357, 107532]
+    for o, f in zip(out, frames):
+        assert o["path"]["yaw_rate_source"] == "imu"
+        assert o["motion"]["yaw_rate"] == pytest.approx(rp.io.imu_yaw_rate(f, rp.Config(sensor_height=OS1_128_HEIGHT)))
+        assert o["ground"]["plane"] is not None and o["source"] == str(OS1_128_PCAP)
+    err = proc.stderr.splitlines()
+    assert "OS-1-128" in err[0] and "RNG15_RFL8_NIR8" in err[0] and "7502 (metadata)" in err[0]
+    assert "#1795" in err[1] and "3 frame(s)" in err[-1]
+
+
+def test_cli_line_equals_python_for_a_pcap_frame():
+    line = lines(run("run", OS1_128_PCAP, "--speed", 2.5, "--yaw-rate", 0.1, "--frames", "1:2", "-q", *OS1).stdout)
+    assert len(line) == 1
+    frame = list(rp.io.open(OS1_128_PCAP))[1]
+    res = rp.Estimator(rp.Config(sensor_height=OS1_128_HEIGHT)).process(
+        frame.points, 2.5, 0.1, source=frame.source, timestamp=frame.timestamp, yaw_rate_source="option")
+    expected = res.to_dict()
+    for d in (line[0], expected):
+        d.pop("timing_ms")
+    assert line[0] == expected and expected["path"]["yaw_rate_source"] == "option"
+
+
+def test_frames_range_selects_frames_by_index():
+    all_ts = [o["timestamp"] for o in lines(run("run", OS1_128_PCAP, "--speed", 2.5, "-q", *OS1).stdout)]
+    assert [o["timestamp"] for o in lines(run("run", OS1_128_PCAP, "--speed", 2.5, "--frames", "1:", "-q").stdout)] == all_ts[1:]
+    assert [o["timestamp"] for o in lines(run("run", OS1_128_PCAP, "--speed", 2.5, "--frames", ":1", "-q").stdout)] == all_ts[:1]
+    one_line_error(run("run", OS1_128_PCAP, "--speed", 2.5, "--frames", "5:9", "-q", check=False), "no frames from index 5")
+    one_line_error(run("run", OS1_128_PCAP, "--speed", 2.5, "--frames", "2:1", "-q", check=False), "--frames")
+
+
+def test_motion_file_is_interpolated_at_each_frame_time(tmp_path):
+    t = [f.timestamp for f in rp.io.open(OS1_128_PCAP)]
+    csv = tmp_path / "motion.csv"
+    csv.write_text(f"t,speed,yaw_rate\n{t[0] - 1},1.0,0.0\n{t[0] + 1},3.0,0.2\n")
+    out = lines(run("run", OS1_128_PCAP, "--motion", csv, "-q", *OS1).stdout)
+    for o, ti in zip(out, t):
+        w = (ti - (t[0] - 1)) / 2
+        assert o["motion"]["speed"] == pytest.approx(1.0 + 2.0 * w)
+        assert o["motion"]["yaw_rate"] == pytest.approx(0.2 * w)
+        assert o["path"]["yaw_rate_source"] == "motion"
+    short = tmp_path / "short.csv"
+    short.write_text(f"t,speed,yaw_rate\n{t[0]},1,0\n{t[0] + 0.05},1,0\n")
+    one_line_error(run("run", OS1_128_PCAP, "--motion", short, "-q", check=False), "short.csv", "outside")
+    proc = run("run", OS1_128_PCAP, "--motion", csv, "--speed", 3, check=False)
+    assert proc.returncode != 0 and "excludes" in proc.stderr
+
+
+def test_info_describes_the_recording():
+    out = run("info", OS1_128_PCAP).stdout
+    for expected in ("sensor model: OS-1-128", "packet profile: RNG15_RFL8_NIR8", "frames: 3 (3 complete)",
+                     "lidar UDP port: 7502 (metadata)", "duration: 0.300 s", "IMU samples: 30",
+                     f"metadata: {OS1_128_META}"):
+        assert expected in out, out
+    out = run("info", VELODYNE / "velodyne_vlp16.pcap").stdout
+    assert "sensor model: VLP-16" in out and "packet profile: strongest" in out and "decoded as VLP-16" in out
+    out = run("info", VELODYNE / "velodyne_vlp16.pcap", "--sensor-model", "HDL-32E").stdout
+    assert "sensor model: HDL-32E" in out
+
+
+def test_velodyne_run_and_legacy_ouster_with_meta():
+    out = lines(run("run", VELODYNE / "hdl32_example.pcap", "--speed", 5, "--sensor-height", 1.8, "-q").stdout)
+    assert len(out) == 7 and all(o["path"]["yaw_rate_source"] == "default" for o in out)
+    out = lines(run("run", OUSTER / "OS-1-64_1024x10_fw20.pcap", "--meta", OUSTER / "OS-1-64_sensor_config_reduced.json",
+                    "--speed", 5, "-q").stdout)
+    assert [o["points"]["input"] for o in out] == [16749]
+
+
+def test_pcap_errors_are_one_line_naming_the_file(tmp_path):
+    lonely = tmp_path / "lonely.pcap"
+    lonely.write_bytes(OS1_128_PCAP.read_bytes())
+    one_line_error(run("run", lonely, "--speed", 2, check=False), "lonely.pcap", "--meta")
+    cut = tmp_path / "cut.pcap"
+    cut.write_bytes(OS1_128_PCAP.read_bytes()[:1_000_000])
+    proc = run("run", cut, "--meta", OS1_128_META, "--speed", 2, check=False)
+    assert proc.returncode != 0 and len(lines(proc.stdout)) == 1  # the frame before the cut is written
+    assert "cut.pcap: record" in proc.stderr.splitlines()[-1] and "truncated" in proc.stderr.splitlines()[-1]
+    bad_meta = tmp_path / "meta.json"
+    meta = json.loads(OS1_128_META.read_text())
+    meta["data_format"]["udp_profile_lidar"] = "RNG19_RFL8_SIG16_NIR16_DUAL"
+    bad_meta.write_text(json.dumps(meta))
+    one_line_error(run("run", OS1_128_PCAP, "--meta", bad_meta, "--speed", 2, "-q", check=False),
+                   "OS-1-128_v2.3.0_1024x10_lb_n3.pcap", "meta.json", "does not match")
+    one_line_error(run("run", OS1_128_PCAP, "--speed", 2, "--sensor-model", "HDL-64E", "-q", check=False),
+                   "calibration")
+    proc = run("run", OS1_128_PCAP, "-q", check=False)
+    assert proc.returncode != 0 and "--motion" in proc.stderr
+
+
+def test_pcap_results_are_finite_and_use_the_ground():
+    out = lines(run("run", OUSTER / "OS-2-128-U1_v2.3.0_1024x10.pcap", "--speed", 5, "--sensor-height", 1.77, "-q").stdout)
+    assert out[0]["points"]["ground"] > 1000
+    z = np.array([v for v in out[0]["profiles"]["left"]["z"] if v is not None])
+    assert len(z) > 20 and np.all(np.abs(z) < 1.0)
