@@ -201,19 +201,17 @@ TEST(Ouster, MetadataThatDoesNotMatchThePacketsIsAnError) {
     EXPECT_NE(err.find("8448 bytes"), std::string::npos) << err;
     EXPECT_NE(err.find("does not match"), std::string::npos) << err;
 
-    err = error_with_metadata([](json& j) {
-        j["lidar_mode"] = "2048x10";
-        j["data_format"]["columns_per_frame"] = 2048;
-        j["data_format"]["column_window"] = {0, 2047};
-    }, "columns2048.json");
-    EXPECT_NE(err.find("column count"), std::string::npos) << err;
-
-    err = error_with_metadata([](json& j) {
-        j["lidar_mode"] = "512x10";
-        j["data_format"]["columns_per_frame"] = 512;
-        j["data_format"]["column_window"] = {0, 511};
-    }, "columns512.json");
-    EXPECT_NE(err.find("column"), std::string::npos) << err;
+    const auto columns = [](int n) {
+        return [n](json& j) {
+            j["lidar_mode"] = std::to_string(n) + "x10";
+            j["data_format"]["columns_per_frame"] = n;
+            j["data_format"]["column_window"] = {0, n - 1};
+        };
+    };
+    for (int n : {512, 2048}) {  // both caught by the time between columns
+        err = error_with_metadata(columns(n), "columns" + std::to_string(n) + ".json");
+        EXPECT_NE(err.find("column count"), std::string::npos) << err;
+    }
 
     err = error_with_metadata([](json& j) { j["prod_sn"] = "122201000999"; }, "serial.json");
     EXPECT_NE(err.find("another sensor"), std::string::npos) << err;

@@ -1,6 +1,7 @@
 """Locations shared by the Python tests."""
 
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -22,3 +23,11 @@ VELODYNE = DATA / "velodyne"
 OS1_128_PCAP = OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"  # 3 frames; its metadata is found by name
 OS1_128_META = OUSTER / "OS-1-128_v2.3.0_1024x10.json"
 OS1_128_HEIGHT = 1.97  # m, estimated from the ground in the first frame (shared data field notes)
+
+
+def run_bench(script: str, *args: str, timeout: int = 300) -> str:
+    """stdout of ``python bench/<script> args`` run from the repository, which must succeed."""
+    run = subprocess.run([sys.executable, str(REPO / "bench" / script), *args], cwd=REPO, capture_output=True,
+                         text=True, timeout=timeout)
+    assert run.returncode == 0, run.stderr
+    return run.stdout

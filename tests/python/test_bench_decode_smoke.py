@@ -1,20 +1,15 @@
 """Smoke test of ``bench/decode.py --quick``: a row with numbers for every recording, and the target line."""
 
 import re
-import subprocess
-import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
+from paths import DATA, run_bench
+
 CELL = r"\d+\.\d+ \(\d+\.\d+–\d+\.\d+\)"  # "median (min–max)"
 
 
 def test_decode_bench_prints_a_row_per_recording_and_the_target():
-    run = subprocess.run([sys.executable, str(REPO / "bench" / "decode.py"), "--quick"], cwd=REPO,
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stderr
-    out = run.stdout
-    recordings = list((REPO / "tests" / "data").rglob("*.pcap"))
+    out = run_bench("decode.py", "--quick")
+    recordings = list(DATA.rglob("*.pcap"))
     assert len(recordings) == 13
     for pcap in recordings:
         row = re.search(rf"\| {re.escape(pcap.name)} \| [^|]+ \| [^|]+ \| (\d+) \| (\d+) \| [\d.]+ \| {CELL} \| {CELL} "
