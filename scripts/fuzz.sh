@@ -25,4 +25,4 @@ for pick, name in seeds.items():
             (out / f"seed_{pick}_{n}").write_bytes(bytes([pick, 1]) + payload)
             n += 1
 PY
-build/fuzz/packet_decoders_fuzz -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 -jobs=1 build/fuzz/corpus 2>&1 | tail -25
+build/fuzz/packet_decoders_fuzz -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 build/fuzz/corpus 2>&1 | tail -25

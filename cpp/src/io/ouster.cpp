@@ -360,32 +360,31 @@ Frame OusterDecoder::build_frame() {
     f.diagnostics.complete = f.diagnostics.missing_columns == 0;
 
     // Destaggered order: pixel (u, v_d) of the image holds staggered column v = v_d − shift[u] (mod W).
-    const auto staggered = [&](int u, int vd) {
-        const int v = (vd - meta_.pixel_shift_by_row[static_cast<std::size_t>(u)]) % W;
+    const auto first_column = [&](int u) {
+        const int v = -meta_.pixel_shift_by_row[static_cast<std::size_t>(u)] % W;
         return v < 0 ? v + W : v;
+    };
+    const auto returned = [&](int u, int v) {
+        return column_state_[static_cast<std::size_t>(v)] == 1 && range_mm_[static_cast<std::size_t>(u) * W + v] != 0;
     };
     Eigen::Index n = 0;
     for (int u = 0; u < H; ++u)
-        for (int vd = 0; vd < W; ++vd) {
-            const int v = staggered(u, vd);
-            n += column_state_[static_cast<std::size_t>(v)] == 1 && range_mm_[static_cast<std::size_t>(u) * W + v] != 0;
-        }
+        for (int v = 0; v < W; ++v) n += returned(u, v);  // the order does not matter for the count
     f.points.resize(n, 4);
     f.point_times.resize(static_cast<std::size_t>(n));
     Eigen::Index k = 0;
-    for (int u = 0; u < H; ++u)
-        for (int vd = 0; vd < W; ++vd) {
-            const int v = staggered(u, vd);
+    for (int u = 0; u < H; ++u) {
+        for (int vd = 0, v = first_column(u); vd < W; ++vd, v = v + 1 == W ? 0 : v + 1) {
+            if (!returned(u, v)) continue;
             const std::size_t i = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v);
-            if (column_state_[static_cast<std::size_t>(v)] != 1 || range_mm_[i] == 0) continue;
             const float r = static_cast<float>(range_mm_[i]);
             for (int c = 0; c < 3; ++c) f.points(k, c) = lut_.direction[3 * i + c] * r + lut_.offset[3 * i + c];
             f.points(k, 3) = static_cast<float>(reflectivity_[i]);
-            f.point_times[static_cast<std::size_t>(k)] =
-                static_cast<float>(1e-9 * static_cast<double>(static_cast<std::int64_t>(
-                    column_ns_[static_cast<std::size_t>(v)] - first_column_ns_)));
+            f.point_times[static_cast<std::size_t>(k)] = static_cast<float>(
+                1e-9 * static_cast<double>(static_cast<std::int64_t>(column_ns_[static_cast<std::size_t>(v)] - first_column_ns_)));
             ++k;
         }
+    }
     open_ = false;
     return f;
 }

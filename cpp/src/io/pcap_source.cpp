@@ -34,7 +34,8 @@ void PcapSource::read_until_frame() {
                                              info_.lidar_port_origin
                                        : std::string()) +
                      ") in " + std::to_string(reader_.counts().records) + " records; the largest datagram is " +
-                     std::to_string(largest_) + " bytes on port " + std::to_string(largest_port_));
+                     std::to_string(largest_) + " bytes on port " + std::to_string(largest_port_) +
+                     " (--lidar-port chooses the port)");
             }
             try {
                 on_end(ready_);
