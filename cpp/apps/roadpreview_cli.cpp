@@ -251,8 +251,8 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--track-width", o.track_width, "Track width, m (default 1.6)");
     run_cmd->add_option("--tire-width", o.tire_width, "Tire width, m (default 0.3)");
     run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
-    run_cmd->add_option("--frame-rate", o.frame_rate, "Frames per second; adds timestamps frame/rate")
-        ->check(CLI::PositiveNumber);  // pcaps carry their own timestamps
+    run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
+        ->check(CLI::PositiveNumber);  // pcap frames carry their own timestamps
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");
