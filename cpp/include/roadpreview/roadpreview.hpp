@@ -6,6 +6,7 @@
 #include "roadpreview/frames.hpp"
 #include "roadpreview/ground.hpp"
 #include "roadpreview/io.hpp"
+#include "roadpreview/obstacles.hpp"
 #include "roadpreview/path.hpp"
 #include "roadpreview/pipeline.hpp"
 #include "roadpreview/profile.hpp"
