@@ -13,7 +13,8 @@ from pathlib import Path
 
 from . import reference
 from ._native import native_available
-from .config import Config, Extrinsics, GroundConfig, PathConfig, ProfileConfig, RoughnessConfig
+from .config import (Config, Extrinsics, GroundConfig, ObstaclesConfig, PathConfig, ProfileConfig,
+                     RoughnessConfig)
 from .estimator import Estimator
 
 if native_available():
@@ -29,6 +30,6 @@ def cmake_dir() -> str:
 
 
 __all__ = [
-    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
+    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig", "ObstaclesConfig",
     "Estimator", "Result", "Profile", "Roughness", "io", "reference", "cmake_dir", "__version__",
 ]
