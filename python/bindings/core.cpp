@@ -246,24 +246,26 @@ void bind_obstacle_stages(py::module_& m) {
         const std::vector<std::int32_t> labels = rp::cluster_labels(view, config_from(config_json).obstacles);
         return py::array_t<std::int32_t>(static_cast<py::ssize_t>(labels.size()), labels.data());
     }, "Euclidean cluster id of every point (-1: none)");
-    m.def("find_obstacles", [](py::handle base_points, const std::vector<bool>& ground_mask, std::array<double, 4> plane,
-                               const std::string& config_json) {
+    m.def("find_obstacles", [](py::handle base_points, py::array_t<bool, py::array::c_style | py::array::forcecast> ground_mask,
+                               std::array<double, 4> plane, const std::string& config_json) {
         py::object holder;
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
-        const std::vector<std::uint8_t> mask(ground_mask.begin(), ground_mask.end());
+        const std::vector<std::uint8_t> mask(ground_mask.data(), ground_mask.data() + ground_mask.size());
         auto clustering = std::make_unique<rp::Clustering>(rp::find_obstacles(view, mask, plane, cfg.ground, cfg.obstacles));
         const rp::Clustering& c = *clustering;
         py::object owner = owner_of(std::move(clustering));
         return py::make_tuple(ClustersRef{&c.clusters, owner}, view_of(c.label, owner));
     }, "(Obstacles, cluster id per point) of the non-ground ROI points among base-frame points");
-    m.def("wheel_obstacles", [](py::handle base_points, const std::vector<std::int32_t>& labels, const ClustersRef& obstacles,
+    m.def("wheel_obstacles", [](py::handle base_points, py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> label_array,
+                                const ClustersRef& obstacles,
                                 std::array<double, 4> plane, double speed, double yaw_rate, const std::string& wheel,
                                 const std::string& config_json) {
         if (wheel != "left" && wheel != "right") throw py::value_error("wheel must be 'left' or 'right', got '" + wheel + "'");
         py::object holder;
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
+        const std::vector<std::int32_t> labels(label_array.data(), label_array.data() + label_array.size());
         if (labels.size() != static_cast<std::size_t>(view.rows())) throw py::value_error("labels and base_points differ in length");
         const rp::Clustering clustering{*obstacles.items, labels};
         const rp::Levelling L = rp::levelling_for(cfg.profile.level ? &plane : nullptr);
