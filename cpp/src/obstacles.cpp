@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
@@ -38,34 +39,63 @@ std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, 
     return clusters;
 }
 
-// The candidates grouped by voxel: the centroid of each occupied voxel and the points it stands for.
+// The candidates grouped by voxel: the centroid of each occupied voxel, and its points in
+// members[start[v] … start[v + 1]), ascending.
 struct Voxels {
     Cloud::Ptr centroids = pcl::make_shared<Cloud>();
-    Groups members;
+    pcl::Indices members;
+    std::vector<std::size_t> start{0};
 };
 
-Voxels voxelize(PointsView pts, const pcl::Indices& candidates, double edge) {
-    using Key = std::array<std::int64_t, 3>;
-    std::vector<std::pair<Key, pcl::index_t>> keyed;
-    keyed.reserve(candidates.size());
+struct VoxelEntry {
+    std::int64_t x, y, z;  // voxel indices
+    pcl::index_t point;
+    bool operator<(const VoxelEntry& o) const { return std::tie(x, y, z, point) < std::tie(o.x, o.y, o.z, o.point); }
+    bool same_voxel(const VoxelEntry& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index.
+std::int64_t voxel_index(float v, double edge) {
+    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / edge), -1e15, 1e15));
+}
+
+// Entries ordered by voxel, then point: a counting sort by the x index (the ROI bounds it), then small sorts.
+std::vector<VoxelEntry> sorted_by_voxel(PointsView pts, const pcl::Indices& candidates, double edge) {
+    std::vector<VoxelEntry> entries;
+    entries.reserve(candidates.size());
+    std::int64_t x_min = std::numeric_limits<std::int64_t>::max(), x_max = std::numeric_limits<std::int64_t>::min();
     for (const auto i : candidates) {
-        Key key;
-        for (int a = 0; a < 3; ++a) key[a] = static_cast<std::int64_t>(std::floor(static_cast<double>(pts(i, a)) / edge));
-        keyed.emplace_back(key, i);
+        entries.push_back({voxel_index(pts(i, 0), edge), voxel_index(pts(i, 1), edge), voxel_index(pts(i, 2), edge), i});
+        x_min = std::min(x_min, entries.back().x), x_max = std::max(x_max, entries.back().x);
     }
-    std::sort(keyed.begin(), keyed.end());  // by voxel, then by point index
+    if (entries.empty()) return entries;
+    const auto span = static_cast<std::uint64_t>(x_max - x_min);
+    const std::size_t slabs = span < 4 * entries.size() + 1024 ? static_cast<std::size_t>(span) + 1 : 1;
+    const auto slab = [&](const VoxelEntry& e) { return slabs == 1 ? 0 : static_cast<std::size_t>(e.x - x_min); };
+    std::vector<std::size_t> first(slabs + 1, 0);
+    for (const auto& e : entries) ++first[slab(e) + 1];
+    for (std::size_t k = 0; k < slabs; ++k) first[k + 1] += first[k];
+    std::vector<VoxelEntry> sorted(entries.size());
+    std::vector<std::size_t> next(first.begin(), first.end() - 1);
+    for (const auto& e : entries) sorted[next[slab(e)]++] = e;
+    for (std::size_t k = 0; k < slabs; ++k) std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
+    return sorted;
+}
+
+Voxels voxelize(PointsView pts, const pcl::Indices& candidates, double edge) {
+    const std::vector<VoxelEntry> sorted = sorted_by_voxel(pts, candidates, edge);
     Voxels v;
-    for (std::size_t first = 0, last = 0; first < keyed.size(); first = last) {
+    v.members.reserve(sorted.size());
+    for (std::size_t first = 0, last = 0; first < sorted.size(); first = last) {
         Vec3 sum{};
-        pcl::Indices members;
-        for (last = first; last < keyed.size() && keyed[last].first == keyed[first].first; ++last) {
-            for (int a = 0; a < 3; ++a) sum[a] += pts(keyed[last].second, a);
-            members.push_back(keyed[last].second);
+        for (last = first; last < sorted.size() && sorted[last].same_voxel(sorted[first]); ++last) {
+            for (int a = 0; a < 3; ++a) sum[a] += pts(sorted[last].point, a);
+            v.members.push_back(sorted[last].point);
         }
-        const double n = static_cast<double>(members.size());
+        const double n = static_cast<double>(last - first);
         v.centroids->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
                                              static_cast<float>(sum[2] / n)));
-        v.members.push_back(std::move(members));
+        v.start.push_back(last);
     }
     return v;
 }
@@ -78,12 +108,14 @@ Groups point_clusters(const Cloud::ConstPtr& cloud, PointsView pts, const pcl::I
     if (cfg.voxel_m <= 0.0) {
         for (auto& c : euclidean_clusters(cloud, candidates, cfg.cluster_tolerance_m)) groups.push_back(std::move(c.indices));
     } else {
-        Voxels v = voxelize(pts, *candidates, cfg.voxel_m);
-        auto all = pcl::make_shared<pcl::Indices>(v.members.size());
+        const Voxels v = voxelize(pts, *candidates, cfg.voxel_m);
+        auto all = pcl::make_shared<pcl::Indices>(v.centroids->size());
         for (std::size_t k = 0; k < all->size(); ++k) (*all)[k] = static_cast<pcl::index_t>(k);
         for (const auto& c : euclidean_clusters(v.centroids, all, cfg.cluster_tolerance_m)) {
             pcl::Indices points;
-            for (const auto k : c.indices) points.insert(points.end(), v.members[k].begin(), v.members[k].end());
+            for (const auto k : c.indices)
+                points.insert(points.end(), v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k]),
+                              v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k + 1]));
             std::sort(points.begin(), points.end());
             groups.push_back(std::move(points));
         }
