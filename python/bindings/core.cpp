@@ -110,11 +110,19 @@ std::vector<double> as_vector(const py::array_t<double, py::array::c_style | py:
     return std::vector<double>(a.data(), a.data() + a.size());
 }
 
+template <typename Record>
+py::class_<RecordsRef<Record>> bind_records(py::module_& m, const char* name, const char* doc) {
+    py::class_<RecordsRef<Record>> cls(m, name, doc);
+    cls.def("__len__", [](const RecordsRef<Record>& r) { return r.items->size(); })
+        .def("__repr__", [prefix = "<roadpreview." + std::string(name) + ": "](const RecordsRef<Record>& r) {
+            return prefix + std::to_string(r.items->size()) + ">";
+        });
+    return cls;
+}
+
 void bind_obstacles(py::module_& m) {
-    py::class_<ClustersRef> clusters(m, "Obstacles",
-                                     "Every cluster of the frame, one row per id (nearest first); arrays are read-only views");
-    clusters.def("__len__", [](const ClustersRef& r) { return r.items->size(); })
-        .def("__repr__", [](const ClustersRef& r) { return "<roadpreview.Obstacles: " + std::to_string(r.items->size()) + " clusters>"; });
+    auto clusters = bind_records<rp::Cluster>(
+        m, "Obstacles", "Every cluster of the frame, one row per id (nearest first); arrays are read-only views");
     using C = rp::Cluster;
     add_field(clusters, "id", [](const C& c) -> const auto& { return c.id; }, "cluster id");
     add_field(clusters, "count", [](const C& c) -> const auto& { return c.count; }, "points per cluster");
@@ -129,9 +137,7 @@ void bind_obstacles(py::module_& m) {
               "local ground level above the frame's ground plane, m");
     add_field(clusters, "height", [](const C& c) -> const auto& { return c.height; }, "highest point above the local ground, m");
 
-    py::class_<PathObstaclesRef> in_path(m, "PathObstacles", "The clusters in one wheel's path, ordered by s_start");
-    in_path.def("__len__", [](const PathObstaclesRef& r) { return r.items->size(); })
-        .def("__repr__", [](const PathObstaclesRef& r) { return "<roadpreview.PathObstacles: " + std::to_string(r.items->size()) + ">"; });
+    auto in_path = bind_records<rp::PathObstacle>(m, "PathObstacles", "The clusters in one wheel's path, ordered by s_start");
     using P = rp::PathObstacle;
     add_field(in_path, "id", [](const P& o) -> const auto& { return o.id; }, "cluster id (index into Result.obstacles)");
     add_field(in_path, "s_start", [](const P& o) -> const auto& { return o.s_start; }, "arc length of its nearest point in the corridor, m");

@@ -19,7 +19,7 @@ from .estimator import Estimator
 
 if native_available():
     from . import io
-    from ._core import Profile, Result, Roughness, __version__
+    from ._core import Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
 
@@ -31,5 +31,6 @@ def cmake_dir() -> str:
 
 __all__ = [
     "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig", "ObstaclesConfig",
-    "Estimator", "Result", "Profile", "Roughness", "io", "reference", "cmake_dir", "__version__",
+    "Estimator", "Result", "Profile", "Roughness", "Obstacles", "PathObstacles", "io", "reference", "cmake_dir",
+    "__version__",
 ]

@@ -1,6 +1,7 @@
 """Locations shared by the Python tests."""
 
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -17,3 +18,19 @@ def cli() -> str:
     found = str(beside) if beside.exists() else shutil.which("roadpreview")
     assert found, "the roadpreview CLI is not installed (pip install .)"
     return found
+
+
+def run_cli(*args, check=True) -> subprocess.CompletedProcess:
+    """Runs the CLI with the given arguments; with `check`, asserts it succeeded."""
+    proc = subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=120)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def run_quick_bench(script: str) -> str:
+    """stdout of ``bench/<script> --quick``, run by this interpreter; asserts it succeeded."""
+    proc = subprocess.run([sys.executable, str(REPO / "bench" / script), "--quick"], cwd=REPO, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout

@@ -1,19 +1,14 @@
 """Smoke test of ``bench/obstacles.py --quick``: it runs and prints the paper's metrics and the timing tables."""
 
 import re
-import subprocess
-import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
+from paths import run_quick_bench
+
 NUMBER_CELL = r"\d+\.\d+ \(\d+\.\d+–\d+\.\d+\)"  # "median (min–max)"
 
 
 def test_obstacle_bench_quick_prints_the_papers_metrics_and_timing():
-    run = subprocess.run([sys.executable, str(REPO / "bench" / "obstacles.py"), "--quick"], cwd=REPO,
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stderr
-    out = run.stdout
+    out = run_quick_bench("obstacles.py")
     for heading in ("## The paper's metrics", "## Time per frame", "## Clustering variants"):
         assert heading in out
     metrics = out.split("## The paper's metrics")[1].split("## Time per frame")[0]

@@ -1,19 +1,14 @@
 """Smoke test of the benchmark script: ``bench/bench.py --quick`` runs and prints its tables with numbers."""
 
 import re
-import subprocess
-import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
+from paths import run_quick_bench
+
 NUMBER_CELL = r"\|\s*\d+\.\d+ \(\d+\.\d+–\d+\.\d+\)\s*\|"  # "median (min–max)"
 
 
 def test_bench_quick_prints_timing_and_ground_quality_tables():
-    run = subprocess.run([sys.executable, str(REPO / "bench" / "bench.py"), "--quick"], cwd=REPO,
-                         capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stderr
-    out = run.stdout
+    out = run_quick_bench("bench.py")
     for heading in ("## Timing: C++ pipeline", "## Timing: numpy reference", "## Ground quality", "## Point counts"):
         assert heading in out
     timing = out.split("## Timing: C++ pipeline")[1].split("## Timing: numpy reference")[0]

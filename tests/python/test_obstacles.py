@@ -4,7 +4,6 @@ random scenes and real KITTI frames, the Python API, the output line and the CLI
 import dataclasses
 import json
 import math
-import subprocess
 
 import numpy as np
 import pytest
@@ -12,7 +11,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import roadpreview as rp
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, cli
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, run_cli
 from roadpreview.config import Config
 
 SENSOR_HEIGHT = 1.8
@@ -301,13 +300,6 @@ def test_stage_functions_take_numpy_and_name_bad_inputs():
 
 
 # ---------------------------------------------------------------------------------------------- CLI
-def run_cli(*args, check=True):
-    proc = subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=120)
-    if check:
-        assert proc.returncode == 0, proc.stderr
-    return proc
-
-
 def test_cli_cluster_flags(tmp_path):
     frame = KITTI_FRAMES[0]
     common = ["run", frame, "--speed", 6, "--yaw-rate", -0.4, "--sensor-height", KITTI_SENSOR_HEIGHT, "-q"]
