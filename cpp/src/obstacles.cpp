@@ -315,11 +315,16 @@ std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfi
 std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
                                           const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
                                           double preview_length_m, const ObstaclesConfig& cfg) {
+    if (clustering.label.size() != static_cast<std::size_t>(points.rows()))
+        throw std::invalid_argument("wheel_obstacles: " + std::to_string(clustering.label.size()) + " labels for " +
+                                    std::to_string(points.rows()) + " points");
     const double corridor = tire_width + 2.0 * cfg.safety_margin_m;
     std::vector<PathObstacle> spans(clustering.clusters.size(), PathObstacle{0, kInf, -kInf, -kInf});
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const std::int32_t id = clustering.label[static_cast<std::size_t>(i)];
         if (id < 0) continue;
+        if (static_cast<std::size_t>(id) >= spans.size())
+            throw std::invalid_argument("wheel_obstacles: label " + std::to_string(id) + " names no cluster");
         const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
         const auto p = L.apply(x, y, z);
         const auto s = arc_length(paths, w, p[0], p[1], corridor);
@@ -346,10 +351,11 @@ std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacle
     if (bins == 0) return blocked;
     const double last = static_cast<double>(bins - 1);
     for (const PathObstacle& o : obstacles) {
+        if (!(o.s_start <= o.s_end) || !std::isfinite(o.s_start) || !std::isfinite(o.s_end))
+            throw std::invalid_argument("blocked_bins: an obstacle needs finite s_start <= s_end");
         // Bin k = [k·ds, (k+1)·ds) overlaps [a, b] for floor(a/ds) ≤ k ≤ floor(b/ds).
-        const double first = std::clamp(std::floor((o.s_start - margin_m) / ds), 0.0, last);
-        const double final = std::clamp(std::floor((o.s_end + margin_m) / ds), 0.0, last);
-        std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(first), blocked.begin() + static_cast<std::ptrdiff_t>(final) + 1, 1);
+        const auto bin = [&](double s) { return static_cast<std::ptrdiff_t>(std::clamp(std::floor(s / ds), 0.0, last)); };
+        std::fill(blocked.begin() + bin(o.s_start - margin_m), blocked.begin() + bin(o.s_end + margin_m) + 1, 1);
     }
     return blocked;
 }

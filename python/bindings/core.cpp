@@ -272,7 +272,6 @@ void bind_obstacle_stages(py::module_& m) {
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
         const std::vector<std::int32_t> labels(label_array.data(), label_array.data() + label_array.size());
-        if (labels.size() != static_cast<std::size_t>(view.rows())) throw py::value_error("labels and base_points differ in length");
         const rp::Clustering clustering{*obstacles.items, labels};
         const rp::Levelling L = rp::levelling_for(cfg.profile.level ? &plane : nullptr);
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);

@@ -104,6 +104,12 @@ def test_blocked_bins(impl, s_start, s_end, expected):
     np.testing.assert_array_equal(blocked, want)
 
 
+@pytest.mark.parametrize("s_start, s_end", [([5.0], [4.0]), ([np.nan], [1.0]), ([1.0], [np.inf])])
+def test_blocked_bins_reject_bad_intervals(impl, s_start, s_end):
+    with pytest.raises(ValueError, match="s_start <= s_end"):
+        impl.blocked_bins(s_start, s_end, Config())
+
+
 def test_fill_gaps_with_blocked_bins(impl):
     z = [0.0, np.nan, 2.0, np.nan, np.nan, 5.0, 9.0, 7.0]
     blocked = [0, 0, 0, 0, 1, 0, 1, 0]
@@ -295,6 +301,8 @@ def test_stage_functions_take_numpy_and_name_bad_inputs():
         rp.native.find_obstacles(xyz, mask[:-1], [0, 0, 1, 0])
     with pytest.raises(ValueError, match="wheel"):
         rp.native.wheel_obstacles(xyz, labels, obstacles, [0, 0, 1, 0], None, "middle", 5.0, 0.0)
+    with pytest.raises(ValueError, match="names no cluster"):
+        rp.native.wheel_obstacles(xyz, labels + 3, obstacles, [0, 0, 1, 0], None, "left", 5.0, 0.0)
     with pytest.raises(ValueError, match="obstacles.cluster_tolerance_m"):
         rp.Estimator(rp.Config(obstacles={"cluster_tolerance_m": -1}))
 

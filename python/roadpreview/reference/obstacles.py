@@ -222,6 +222,8 @@ def wheel_obstacles(base_xyz, labels, obstacles: Obstacles, plane, path: dict, w
     if path["status"] == "stopped" or len(obstacles) == 0:
         return PathObstacles()
     labels = np.asarray(labels)
+    if len(labels) != len(base_xyz):
+        raise ValueError(f"wheel_obstacles: {len(labels)} labels for {len(base_xyz)} points")
     clustered = labels >= 0
     xyz = np.asarray(base_xyz, dtype=np.float64)[clustered, :3]
     ids = labels[clustered]
@@ -249,6 +251,8 @@ def blocked_bins(s_start, s_end, cfg: Config | None = None) -> np.ndarray:
     count, ds, margin = bin_count(cfg), cfg.profile.ds_m, cfg.obstacles.safety_margin_m
     blocked = np.zeros(count, dtype=bool)
     for start, end in zip(np.atleast_1d(s_start), np.atleast_1d(s_end)):
+        if not (np.isfinite(start) and np.isfinite(end) and start <= end):
+            raise ValueError("blocked_bins: an obstacle needs finite s_start <= s_end")
         first = int(np.clip(math.floor((start - margin) / ds), 0, count - 1))
         last = int(np.clip(math.floor((end + margin) / ds), 0, count - 1))
         blocked[first:last + 1] = True
