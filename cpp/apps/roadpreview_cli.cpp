@@ -26,6 +26,8 @@ struct RunOptions {
     double track_width = 0.0;
     double tire_width = 0.0;
     std::string ground;
+    std::string clusters;
+    double cluster_tolerance = 0.0;
     double frame_rate = 0.0;
     std::string config_file;
     std::string output;
@@ -50,11 +52,21 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
     if (run.count("--track-width")) cfg.track_width = o.track_width;
     if (run.count("--tire-width")) cfg.tire_width = o.tire_width;
     if (run.count("--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
+    if (run.count("--clusters")) cfg.obstacles.enabled = o.clusters == "on";
+    if (run.count("--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
     rp::validate(cfg);
     return cfg;
 }
 
 std::string class_of(const rp::Roughness& r) { return r.iso_class ? std::string(1, *r.iso_class) : "-"; }
+
+// ", 12 clusters (L 1, R 0 in the paths)" when clustering is on.
+std::string obstacles_of(const rp::Result& r) {
+    if (!r.obstacles) return "";
+    const auto in_path = [](const rp::Profile& p) { return p.obstacles ? p.obstacles->size() : 0; };
+    return ", " + std::to_string(r.obstacles->size()) + " clusters (L " + std::to_string(in_path(r.left)) + ", R " +
+           std::to_string(in_path(r.right)) + " in the paths)";
+}
 
 // Half-open range of frame indices [first, last) from "A:B", "A:" or ":B".
 std::pair<std::int64_t, std::int64_t> parse_frame_range(const std::string& text) {
@@ -88,9 +100,9 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
-    std::fprintf(stderr, "[%s] %s: %lld points, %lld ground, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
+    std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
                  counter.c_str(), frame_label(f).c_str(), static_cast<long long>(r.points.input),
-                 static_cast<long long>(r.points.ground), class_of(r.left.roughness).c_str(),
+                 static_cast<long long>(r.points.ground), obstacles_of(r).c_str(), class_of(r.left.roughness).c_str(),
                  class_of(r.right.roughness).c_str(), class_of(r.vehicle).c_str(), r.reason.empty() ? "" : " — ",
                  r.reason.c_str(), r.timing_ms.total, decode.c_str());
 }
@@ -251,6 +263,9 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--track-width", o.track_width, "Track width, m (default 1.6)");
     run_cmd->add_option("--tire-width", o.tire_width, "Tire width, m (default 0.3)");
     run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
+    run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
+    run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
+        ->check(CLI::PositiveNumber);
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
         ->check(CLI::PositiveNumber);  // pcap frames carry their own timestamps
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");

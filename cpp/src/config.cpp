@@ -20,6 +20,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, s
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
                                                 min_cycles, min_band_points)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
+                                                min_cluster_points, max_cluster_points, ground_search_m,
+                                                safety_margin_m, min_height_m)
 
 const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
 
@@ -46,7 +49,8 @@ void to_json(json& j, const Config& c) {
              {"ground", c.ground},
              {"path", c.path},
              {"profile", c.profile},
-             {"roughness", c.roughness}};
+             {"roughness", c.roughness},
+             {"obstacles", c.obstacles}};
 }
 
 void from_json(const json& j, Config& c) {
@@ -59,6 +63,7 @@ void from_json(const json& j, Config& c) {
     c.path = j.value("path", defaults.path);
     c.profile = j.value("profile", defaults.profile);
     c.roughness = j.value("roughness", defaults.roughness);
+    c.obstacles = j.value("obstacles", defaults.obstacles);
 }
 
 namespace {
@@ -120,6 +125,17 @@ void validate(const Config& c) {
     require(positive(r.min_length_m), "roughness.min_length_m must be > 0");
     require(std::isfinite(r.min_cycles) && r.min_cycles >= 1.0, "roughness.min_cycles must be >= 1");
     require(r.min_band_points >= 2, "roughness.min_band_points must be >= 2");
+
+    const ObstaclesConfig& o = c.obstacles;
+    require(std::isfinite(o.voxel_m) && (o.voxel_m == 0.0 || o.voxel_m >= 0.01),
+            "obstacles.voxel_m must be 0 (no voxels) or >= 0.01");
+    require(positive(o.cluster_tolerance_m), "obstacles.cluster_tolerance_m must be > 0");
+    require(o.min_cluster_points >= 1, "obstacles.min_cluster_points must be >= 1");
+    require(o.max_cluster_points >= o.min_cluster_points,
+            "obstacles.max_cluster_points must be >= obstacles.min_cluster_points");
+    require(std::isfinite(o.safety_margin_m) && o.safety_margin_m >= 0.0, "obstacles.safety_margin_m must be >= 0");
+    require(std::isfinite(o.ground_search_m) && o.ground_search_m >= 0.0, "obstacles.ground_search_m must be >= 0");
+    require(std::isfinite(o.min_height_m), "obstacles.min_height_m must be finite");
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

@@ -19,8 +19,46 @@ json numbers(const std::vector<double>& v) {
     return out;
 }
 
+// Obstacle geometry to 1 mm and yaw to 1 mrad keeps the lists short; both are far below the sensors' noise.
+double rounded(double v) { return std::round(v * 1e3) / 1e3; }
+
+json rounded3(const Vec3& v) { return {rounded(v[0]), rounded(v[1]), rounded(v[2])}; }
+
+json flags(const std::vector<std::uint8_t>& v) {
+    json out = json::array();
+    for (auto f : v) out.push_back(f != 0);
+    return out;
+}
+
+json path_obstacles_json(const std::optional<std::vector<PathObstacle>>& obstacles) {
+    if (!obstacles) return nullptr;
+    json out = json::array();
+    for (const PathObstacle& o : *obstacles)
+        out.push_back({{"id", o.id}, {"s_start", rounded(o.s_start)}, {"s_end", rounded(o.s_end)},
+                       {"height", rounded(o.height)}});
+    return out;
+}
+
+json clusters_json(const std::optional<std::vector<Cluster>>& clusters) {
+    if (!clusters) return nullptr;
+    json out = json::array();
+    for (const Cluster& c : *clusters)
+        out.push_back({{"id", c.id},
+                       {"count", c.count},
+                       {"centroid", rounded3(c.centroid)},
+                       {"aabb_min", rounded3(c.aabb_min)},
+                       {"aabb_max", rounded3(c.aabb_max)},
+                       {"obb", {{"center", rounded3(c.obb.center)}, {"size", rounded3(c.obb.size)},
+                                {"yaw", rounded(c.obb.yaw)}}},
+                       {"height", rounded(c.height)}});
+    return out;
+}
+
 json profile_json(const Profile& p) {
-    return {{"s0", p.s0}, {"ds", p.ds}, {"s", numbers(p.s)}, {"z", numbers(p.z)}, {"count", p.count}};
+    return {{"s0", p.s0},          {"ds", p.ds},
+            {"s", numbers(p.s)},   {"z", numbers(p.z)},
+            {"count", p.count},    {"blocked", flags(p.blocked)},
+            {"obstacles", path_obstacles_json(p.obstacles)}};
 }
 
 json roughness_json(const Roughness& r) {
@@ -62,13 +100,15 @@ std::string result_to_json(const Result& r) {
         {"ground", {{"method", to_string(r.ground_method)},
                     {"plane", r.plane ? json(*r.plane) : json(nullptr)}}},
         {"path", path_json(r.path, r.yaw_rate_source)},
+        {"obstacles", clusters_json(r.obstacles)},
         {"profiles", {{"left", profile_json(r.left)}, {"right", profile_json(r.right)}}},
         {"roughness", {{"left", roughness_json(r.left.roughness)},
                        {"right", roughness_json(r.right.roughness)},
                        {"vehicle", roughness_json(r.vehicle)}}},
         {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)},
         {"timing_ms", {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
-                       {"roughness", r.timing_ms.roughness}, {"total", r.timing_ms.total}}},
+                       {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},
+                       {"total", r.timing_ms.total}}},
     };
     return line.dump();
 }

@@ -7,6 +7,7 @@
 
 #include "roadpreview/frames.hpp"
 #include "ground_pcl.hpp"
+#include "obstacles_pcl.hpp"
 #include "roi_cloud.hpp"
 
 namespace roadpreview {
@@ -29,10 +30,40 @@ std::string blocking_reason(const Result& r) {
     return {};
 }
 
-void mark_empty(Profile& p, const ProfileConfig& cfg, const std::string& reason) {
-    p.ds = cfg.ds_m;
-    p.s0 = 0.5 * cfg.ds_m;
+void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
+    p.ds = cfg.profile.ds_m;
+    p.s0 = 0.5 * cfg.profile.ds_m;
     p.roughness.reason = reason;
+    if (cfg.obstacles.enabled) p.obstacles.emplace();
+}
+
+// Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
+Clustering cluster_frame(const RoiCloud& roi, const GroundFit& ground, const ObstaclesConfig& cfg, Result& r) {
+    Clustering clustering;
+    if (r.plane) clustering = find_obstacles(roi, ground.mask, *r.plane, cfg);
+    for (std::size_t i = 0; i < clustering.label.size(); ++i)
+        if (clustering.label[i] >= 0) r.cluster_labels[static_cast<std::size_t>(roi.input_index[i])] = clustering.label[i];
+    r.obstacles = clustering.clusters;
+    return clustering;
+}
+
+// The obstacles in each wheel's path and the profile bins they block.
+struct PathCrossings {
+    std::vector<PathObstacle> left, right;
+    BlockedBins blocked;
+};
+
+PathCrossings cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result& r, const Levelling& L,
+                          const Config& cfg) {
+    PathCrossings out;
+    auto cross = [&](Wheel w, std::vector<PathObstacle>& obstacles, std::vector<std::uint8_t>& blocked) {
+        obstacles = wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width,
+                                    cfg.profile.preview_length_m, cfg.obstacles);
+        blocked = blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m);
+    };
+    cross(Wheel::Left, out.left, out.blocked.left);
+    cross(Wheel::Right, out.right, out.blocked.right);
+    return out;
 }
 
 }  // namespace
@@ -81,17 +112,31 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
         if (ground.mask[i]) r.ground_mask[static_cast<std::size_t>(roi.input_index[i])] = 1;
     r.timing_ms.ground = ms_since(mark);
 
+    r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
+    Clustering clustering;
+    if (cfg.obstacles.enabled) clustering = cluster_frame(roi, ground, cfg.obstacles, r);
+    r.timing_ms.obstacles = ms_since(mark);
+
     r.reason = blocking_reason(r);
     if (!r.reason.empty()) {
-        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg.profile, r.reason);
+        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;
         r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
         return r;
     }
     const Levelling L = levelling_for(cfg.profile.level ? &*r.plane : nullptr);
-    WheelProfiles wheels = build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile);
+    std::optional<PathCrossings> crossings;
+    if (cfg.obstacles.enabled) crossings = cross_paths(roi, clustering, r, L, cfg);
+    r.timing_ms.obstacles += ms_since(mark);
+
+    WheelProfiles wheels = build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile,
+                                          crossings ? &crossings->blocked : nullptr);
     r.left = std::move(wheels.left);
     r.right = std::move(wheels.right);
+    if (crossings) {
+        r.left.obstacles = std::move(crossings->left);
+        r.right.obstacles = std::move(crossings->right);
+    }
     r.timing_ms.profile = ms_since(mark);
 
     r.left.roughness = analyze_roughness(r.left.z, cfg.profile.ds_m, cfg.roughness);

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+
+#include "median.hpp"
 
 namespace roadpreview {
 namespace {
@@ -15,18 +18,12 @@ struct Hit {
     double z;
 };
 
-// Median of the values (mean of the two middle ones for an even count); reorders them.
-double median(std::vector<double>::iterator first, std::vector<double>::iterator last) {
-    const auto n = last - first;
-    const auto upper = first + n / 2;
-    std::nth_element(first, upper, last);
-    if (n % 2 == 1) return *upper;
-    return 0.5 * (*std::max_element(first, upper) + *upper);
-}
-
-// Bins the hits of one wheel (counting sort by bin), takes per-bin medians, fills short gaps.
-Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg) {
+// Bins the hits of one wheel (counting sort by bin), takes per-bin medians outside blocked bins, fills short gaps.
+Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg,
+                    const std::vector<std::uint8_t>* blocked) {
     Profile p;
+    p.blocked = blocked ? *blocked : std::vector<std::uint8_t>(bins, 0);
+    if (p.blocked.size() != bins) throw std::invalid_argument("blocked bins do not match the profile's bins");
     p.ds = cfg.ds_m;
     p.s0 = 0.5 * cfg.ds_m;
     p.s.resize(bins);
@@ -42,8 +39,8 @@ Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const Profil
 
     p.z.assign(bins, kNaN);
     for (std::size_t k = 0; k < bins; ++k)
-        if (p.count[k] > 0) p.z[k] = median(sorted.begin() + start[k], sorted.begin() + start[k + 1]);
-    fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m);
+        if (p.count[k] > 0 && !p.blocked[k]) p.z[k] = median(sorted.begin() + start[k], sorted.begin() + start[k + 1]);
+    fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m, &p.blocked);
     return p;
 }
 
@@ -59,19 +56,20 @@ Levelling levelling_for(const Plane* plane) {
     return L;
 }
 
+std::size_t bin_count(const ProfileConfig& cfg) {
+    return static_cast<std::size_t>(std::ceil(cfg.preview_length_m / cfg.ds_m - 1e-9));
+}
+
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-                             const WheelPaths& paths, double tire_width, const ProfileConfig& cfg) {
+                             const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
+                             const BlockedBins* blocked) {
     WheelProfiles out;
     if (paths.status == PathStatus::Stopped) return out;
-    const auto bins = static_cast<std::size_t>(std::ceil(cfg.preview_length_m / cfg.ds_m - 1e-9));
+    const std::size_t bins = bin_count(cfg);
     std::vector<Hit> hits[2];
-    const auto& R = L.R;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         if (!mask[static_cast<std::size_t>(i)]) continue;
-        const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
-        const double xl = R[0][0] * x + R[0][1] * y + R[0][2] * z;
-        const double yl = R[1][0] * x + R[1][1] * y + R[1][2] * z;
-        const double zl = R[2][0] * x + R[2][1] * y + R[2][2] * z;
+        const auto [xl, yl, zl] = L.apply(points(i, 0), points(i, 1), points(i, 2));
         for (const Wheel w : {Wheel::Left, Wheel::Right}) {
             const auto s = arc_length(paths, w, xl, yl, tire_width);
             if (!s || *s >= cfg.preview_length_m) continue;
@@ -80,16 +78,22 @@ WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>&
             hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl});
         }
     }
-    out.left = bin_profile(hits[static_cast<int>(Wheel::Left)], bins, cfg);
-    out.right = bin_profile(hits[static_cast<int>(Wheel::Right)], bins, cfg);
+    out.left = bin_profile(hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr);
+    out.right = bin_profile(hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr);
     return out;
 }
 
-void fill_gaps(std::vector<double>& z, double ds, double max_gap_m) {
+void fill_gaps(std::vector<double>& z, double ds, double max_gap_m, const std::vector<std::uint8_t>* blocked) {
+    if (blocked && blocked->size() != z.size()) throw std::invalid_argument("fill_gaps: blocked and z differ in length");
     std::size_t last_valid = z.size();  // none yet
+    bool gap_blocked = false;           // the current run of missing bins holds a blocked one
     for (std::size_t k = 0; k < z.size(); ++k) {
-        if (std::isnan(z[k])) continue;
-        if (last_valid != z.size() && k - last_valid > 1) {
+        const bool is_blocked = blocked && (*blocked)[k];
+        if (std::isnan(z[k]) || is_blocked) {  // a blocked bin is never an end of an interpolation
+            gap_blocked = gap_blocked || is_blocked;
+            continue;
+        }
+        if (last_valid != z.size() && k - last_valid > 1 && !gap_blocked) {
             const std::size_t gap = k - last_valid - 1;
             if (static_cast<double>(gap) * ds <= max_gap_m + 1e-9) {
                 const double z0 = z[last_valid], z1 = z[k];
@@ -98,6 +102,7 @@ void fill_gaps(std::vector<double>& z, double ds, double max_gap_m) {
             }
         }
         last_valid = k;
+        gap_blocked = false;
     }
 }
 

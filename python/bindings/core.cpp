@@ -3,6 +3,8 @@
 // or a column slice of either); anything else is converted once. Result arrays are read-only numpy
 // views of the C++ result's buffers (no copy), kept alive by the result object.
 #include <cmath>
+#include <memory>
+#include <type_traits>
 
 #include <pybind11/pybind11.h>
 #include <pybind11/numpy.h>
@@ -22,6 +24,44 @@ py::array view_of(const std::vector<T>& v, py::handle owner, py::dtype dtype = p
     py::array a(dtype, {static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner);
     a.attr("setflags")(false);  // writing would change the C++ result behind the user's back
     return a;
+}
+
+// A list of obstacle records inside a C++ object that `owner` keeps alive.
+template <typename Record>
+struct RecordsRef {
+    const std::vector<Record>* items;
+    py::object owner;
+};
+using ClustersRef = RecordsRef<rp::Cluster>;
+using PathObstaclesRef = RecordsRef<rp::PathObstacle>;
+
+// Read-only strided numpy view of one field of every record, (K,) or (K, 3) (no copy).
+template <typename Record, typename Get>
+py::array field_view(const RecordsRef<Record>& ref, Get get) {
+    using Field = std::decay_t<decltype(get(std::declval<const Record&>()))>;
+    const auto k = static_cast<py::ssize_t>(ref.items->size());
+    const void* first = ref.items->empty() ? nullptr : &get(ref.items->front());
+    py::array a;
+    if constexpr (std::is_arithmetic_v<Field>) {
+        a = py::array(py::dtype::of<Field>(), {k}, {py::ssize_t(sizeof(Record))}, first, ref.owner);
+    } else {  // std::array<double, 3>
+        using Scalar = typename Field::value_type;
+        a = py::array(py::dtype::of<Scalar>(), {k, static_cast<py::ssize_t>(std::tuple_size_v<Field>)},
+                      {py::ssize_t(sizeof(Record)), py::ssize_t(sizeof(Scalar))}, first, ref.owner);
+    }
+    a.attr("setflags")(false);
+    return a;
+}
+
+template <typename Record, typename Get>
+void add_field(py::class_<RecordsRef<Record>>& cls, const char* name, Get get, const char* doc) {
+    cls.def_property_readonly(name, [get](const RecordsRef<Record>& ref) { return field_view(ref, get); }, doc);
+}
+
+// A Python object that owns `value` (for C++ results handed out as views).
+template <typename T>
+py::object owner_of(std::unique_ptr<T> value) {
+    return py::capsule(value.release(), [](void* p) { delete static_cast<T*>(p); });
 }
 
 // Points as a view; `holder` keeps a converted copy alive when one is needed.
@@ -72,6 +112,46 @@ std::vector<double> as_vector(const py::array_t<double, py::array::c_style | py:
     return std::vector<double>(a.data(), a.data() + a.size());
 }
 
+template <typename Record>
+py::class_<RecordsRef<Record>> bind_records(py::module_& m, const char* name, const char* doc) {
+    py::class_<RecordsRef<Record>> cls(m, name, doc);
+    cls.def("__len__", [](const RecordsRef<Record>& r) { return r.items->size(); })
+        .def("__repr__", [prefix = "<roadpreview." + std::string(name) + ": "](const RecordsRef<Record>& r) {
+            return prefix + std::to_string(r.items->size()) + ">";
+        });
+    return cls;
+}
+
+void bind_obstacles(py::module_& m) {
+    auto clusters = bind_records<rp::Cluster>(
+        m, "Obstacles", "Every cluster of the frame, one row per id (nearest first); arrays are read-only views");
+    using C = rp::Cluster;
+    add_field(clusters, "id", [](const C& c) -> const auto& { return c.id; }, "cluster id");
+    add_field(clusters, "count", [](const C& c) -> const auto& { return c.count; }, "points per cluster");
+    add_field(clusters, "centroid", [](const C& c) -> const auto& { return c.centroid; }, "(K, 3) mean point, m");
+    add_field(clusters, "aabb_min", [](const C& c) -> const auto& { return c.aabb_min; }, "(K, 3) axis-aligned lower bounds, m");
+    add_field(clusters, "aabb_max", [](const C& c) -> const auto& { return c.aabb_max; }, "(K, 3) axis-aligned upper bounds, m");
+    add_field(clusters, "obb_center", [](const C& c) -> const auto& { return c.obb.center; }, "(K, 3) oriented box centre, m");
+    add_field(clusters, "obb_size", [](const C& c) -> const auto& { return c.obb.size; },
+              "(K, 3) oriented box length (along yaw), width, height, m");
+    add_field(clusters, "obb_yaw", [](const C& c) -> const auto& { return c.obb.yaw; }, "oriented box yaw, rad in (−π/2, π/2]");
+    add_field(clusters, "ground_offset", [](const C& c) -> const auto& { return c.ground_offset; },
+              "local ground level above the frame's ground plane, m");
+    add_field(clusters, "height", [](const C& c) -> const auto& { return c.height; }, "highest point above the local ground, m");
+
+    auto in_path = bind_records<rp::PathObstacle>(m, "PathObstacles", "The clusters in one wheel's path, ordered by s_start");
+    using P = rp::PathObstacle;
+    add_field(in_path, "id", [](const P& o) -> const auto& { return o.id; }, "cluster id (index into Result.obstacles)");
+    add_field(in_path, "s_start", [](const P& o) -> const auto& { return o.s_start; }, "arc length of its nearest point in the corridor, m");
+    add_field(in_path, "s_end", [](const P& o) -> const auto& { return o.s_end; }, "arc length of its farthest point in the corridor, m");
+    add_field(in_path, "height", [](const P& o) -> const auto& { return o.height; }, "highest of those points above the local ground, m");
+}
+
+template <typename Record>
+py::object records_or_none(const std::optional<std::vector<Record>>& items, py::object owner) {
+    return items ? py::cast(RecordsRef<Record>{&*items, std::move(owner)}) : py::object(py::none());
+}
+
 void bind_results(py::module_& m) {
     py::class_<rp::Roughness>(m, "Roughness", "ISO 8608 roughness of one profile (or of the vehicle)")
         .def_property_readonly("iso_class", [](const rp::Roughness& r) -> py::object {
@@ -105,7 +185,13 @@ void bind_results(py::module_& m) {
                                "levelled height per bin, m; NaN where missing")
         .def_property_readonly("count", [](py::object self) { return view_of(self.cast<const rp::Profile&>().count, self); },
                                "points per bin (0 where interpolated or missing)")
-        .def_readonly("roughness", &rp::Profile::roughness);
+        .def_readonly("roughness", &rp::Profile::roughness)
+        .def_property_readonly("blocked", [](py::object self) {
+            return view_of(self.cast<const rp::Profile&>().blocked, self, py::dtype("bool"));
+        }, "bool per bin: covered by an obstacle (z is NaN there)")
+        .def_property_readonly("obstacles", [](py::object self) {
+            return records_or_none(self.cast<const rp::Profile&>().obstacles, self);
+        }, "PathObstacles in this wheel's path, or None when clustering is off");
 
     py::class_<rp::Result>(m, "Result", "Everything one frame yields")
         .def_readonly("frame", &rp::Result::frame)
@@ -124,10 +210,16 @@ void bind_results(py::module_& m) {
         .def_readonly("left", &rp::Result::left)
         .def_readonly("right", &rp::Result::right)
         .def_readonly("vehicle", &rp::Result::vehicle)
+        .def_property_readonly("obstacles", [](py::object self) {
+            return records_or_none(self.cast<const rp::Result&>().obstacles, self);
+        }, "Obstacles: every cluster of the frame, or None when clustering is off")
+        .def_property_readonly("cluster_labels", [](py::object self) {
+            return view_of(self.cast<const rp::Result&>().cluster_labels, self);
+        }, "int32 per input row: the id of its cluster, -1 for none")
         .def_property_readonly("timing_ms", [](const rp::Result& r) {
             py::dict d;
             d["ground"] = r.timing_ms.ground, d["path"] = r.timing_ms.path, d["profile"] = r.timing_ms.profile;
-            d["roughness"] = r.timing_ms.roughness, d["total"] = r.timing_ms.total;
+            d["roughness"] = r.timing_ms.roughness, d["obstacles"] = r.timing_ms.obstacles, d["total"] = r.timing_ms.total;
             return d;
         })
         .def_property_readonly("reason", [](const rp::Result& r) -> py::object {
@@ -155,6 +247,55 @@ void bind_estimator(py::module_& m) {
             return r;
         }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
            py::arg("yaw_rate_source") = "");
+}
+
+void bind_obstacle_stages(py::module_& m) {
+    m.def("cluster_labels", [](py::handle points, const std::string& config_json) {
+        py::object holder;
+        const rp::PointsView view = points_from(points, holder);
+        const std::vector<std::int32_t> labels = rp::cluster_labels(view, config_from(config_json).obstacles);
+        return py::array_t<std::int32_t>(static_cast<py::ssize_t>(labels.size()), labels.data());
+    }, "Euclidean cluster id of every point (-1: none)");
+    m.def("find_obstacles", [](py::handle base_points, py::array_t<bool, py::array::c_style | py::array::forcecast> ground_mask,
+                               std::array<double, 4> plane, const std::string& config_json) {
+        py::object holder;
+        const rp::Config cfg = config_from(config_json);
+        const rp::PointsView view = points_from(base_points, holder, "base_points");
+        const std::vector<std::uint8_t> mask(ground_mask.data(), ground_mask.data() + ground_mask.size());
+        auto clustering = std::make_unique<rp::Clustering>(rp::find_obstacles(view, mask, plane, cfg.ground, cfg.obstacles));
+        const rp::Clustering& c = *clustering;
+        py::object owner = owner_of(std::move(clustering));
+        return py::make_tuple(ClustersRef{&c.clusters, owner}, view_of(c.label, owner));
+    }, "(Obstacles, cluster id per point) of the non-ground ROI points among base-frame points");
+    m.def("wheel_obstacles", [](py::handle base_points, py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> label_array,
+                                const ClustersRef& obstacles,
+                                std::array<double, 4> plane, double speed, double yaw_rate, const std::string& wheel,
+                                const std::string& config_json) {
+        if (wheel != "left" && wheel != "right") throw py::value_error("wheel must be 'left' or 'right', got '" + wheel + "'");
+        py::object holder;
+        const rp::Config cfg = config_from(config_json);
+        const rp::PointsView view = points_from(base_points, holder, "base_points");
+        const std::vector<std::int32_t> labels(label_array.data(), label_array.data() + label_array.size());
+        const rp::Clustering clustering{*obstacles.items, labels};
+        const rp::Levelling L = rp::levelling_for(cfg.profile.level ? &plane : nullptr);
+        const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
+        auto found = std::make_unique<std::vector<rp::PathObstacle>>(rp::wheel_obstacles(
+            view, clustering, plane, L, paths, wheel == "left" ? rp::Wheel::Left : rp::Wheel::Right, cfg.tire_width,
+            cfg.profile.preview_length_m, cfg.obstacles));
+        const auto* items = found.get();
+        return PathObstaclesRef{items, owner_of(std::move(found))};
+    }, "The clusters in one wheel's widened corridor");
+    m.def("blocked_bins", [](const std::vector<double>& s_start, const std::vector<double>& s_end, const std::string& config_json) {
+        if (s_start.size() != s_end.size()) throw py::value_error("s_start and s_end differ in length");
+        const rp::Config cfg = config_from(config_json);
+        std::vector<rp::PathObstacle> obstacles;
+        for (std::size_t i = 0; i < s_start.size(); ++i) obstacles.push_back({0, s_start[i], s_end[i], 0.0});
+        const std::vector<std::uint8_t> blocked =
+            rp::blocked_bins(obstacles, rp::bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m);
+        py::array_t<bool> out(static_cast<py::ssize_t>(blocked.size()));
+        std::copy(blocked.begin(), blocked.end(), out.mutable_data());
+        return out;
+    });
 }
 
 void bind_stages(py::module_& m) {
@@ -221,11 +362,14 @@ void bind_stages(py::module_& m) {
             for (int r = 0; r < 3; ++r) o(i, r) = L.R[r][0] * v(i, 0) + L.R[r][1] * v(i, 1) + L.R[r][2] * v(i, 2);
         return out;
     });
-    m.def("fill_gaps", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds, double max_gap_m) {
+    m.def("fill_gaps", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds, double max_gap_m,
+                          std::optional<std::vector<bool>> blocked) {
         std::vector<double> v = as_vector(z);
-        rp::fill_gaps(v, ds, max_gap_m);
+        std::vector<std::uint8_t> flags;
+        if (blocked) flags.assign(blocked->begin(), blocked->end());
+        rp::fill_gaps(v, ds, max_gap_m, blocked ? &flags : nullptr);
         return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
-    });
+    }, py::arg("z"), py::arg("ds"), py::arg("max_gap_m"), py::arg("blocked") = py::none());
     m.def("longest_valid_stretch", [](py::array_t<double, py::array::c_style | py::array::forcecast> z) {
         return rp::longest_valid_stretch(as_vector(z));
     });
@@ -246,6 +390,7 @@ void bind_stages(py::module_& m) {
         return rp::vehicle_roughness(as_vector(zl), as_vector(zr), ds, config_from(config_json).roughness);
     });
     m.def("iso_class", [](double gd) { return std::string(1, rp::iso_class(gd)); });
+    bind_obstacle_stages(m);
 }
 
 }  // namespace
@@ -260,6 +405,7 @@ PYBIND11_MODULE(_core, m) {
             PyErr_SetString(PyExc_ValueError, e.what());
         }
     });
+    bind_obstacles(m);
     bind_results(m);
     bind_estimator(m);
     bind_stages(m);

@@ -13,12 +13,13 @@ from pathlib import Path
 
 from . import reference
 from ._native import native_available
-from .config import Config, Extrinsics, GroundConfig, PathConfig, ProfileConfig, RoughnessConfig
+from .config import (Config, Extrinsics, GroundConfig, ObstaclesConfig, PathConfig, ProfileConfig,
+                     RoughnessConfig)
 from .estimator import Estimator
 
 if native_available():
     from . import io
-    from ._core import Profile, Result, Roughness, __version__
+    from ._core import Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
 
@@ -29,6 +30,7 @@ def cmake_dir() -> str:
 
 
 __all__ = [
-    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
-    "Estimator", "Result", "Profile", "Roughness", "io", "reference", "cmake_dir", "__version__",
+    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig", "ObstaclesConfig",
+    "Estimator", "Result", "Profile", "Roughness", "Obstacles", "PathObstacles", "io", "reference", "cmake_dir",
+    "__version__",
 ]

@@ -64,12 +64,27 @@ class RoughnessConfig:
     min_band_points: int = 5  #: fewest PSD ordinates in the band for a class
 
 
+@dataclass
+class ObstaclesConfig:
+    """Euclidean clusters of the non-ground ROI points and where they cross the wheel paths (method.md §5)."""
+
+    enabled: bool = True
+    voxel_m: float = 0.25  #: points are clustered by the centroids of voxels this wide; 0: every point
+    cluster_tolerance_m: float = 0.5  #: centroids closer than this are in the same cluster
+    min_cluster_points: int = 5  #: smaller clusters are dropped (isolated returns, noise)
+    max_cluster_points: int = 1000000  #: larger clusters are dropped; the default keeps every one
+    ground_search_m: float = 1.0  #: ground points this far around a cluster give its local ground
+    safety_margin_m: float = 0.1  #: widens each wheel corridor sideways and each obstacle along s
+    min_height_m: float = 0.1  #: lower clusters do not block a wheel path (ground the fit missed)
+
+
 _STAGES = {
     "extrinsics": Extrinsics,
     "ground": GroundConfig,
     "path": PathConfig,
     "profile": ProfileConfig,
     "roughness": RoughnessConfig,
+    "obstacles": ObstaclesConfig,
 }
 
 
@@ -90,6 +105,7 @@ class Config:
     path: PathConfig = field(default_factory=PathConfig)
     profile: ProfileConfig = field(default_factory=ProfileConfig)
     roughness: RoughnessConfig = field(default_factory=RoughnessConfig)
+    obstacles: ObstaclesConfig = field(default_factory=ObstaclesConfig)
 
     def __post_init__(self) -> None:
         for name, cls in _STAGES.items():

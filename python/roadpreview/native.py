@@ -56,8 +56,9 @@ def level_points(xyz, plane):
     return core().level_points(np.asarray(xyz), [float(v) for v in plane])
 
 
-def fill_gaps(z, ds, max_gap_m):
-    return core().fill_gaps(np.asarray(z, dtype=float), float(ds), float(max_gap_m))
+def fill_gaps(z, ds, max_gap_m, blocked=None):
+    flags = None if blocked is None else np.asarray(blocked, dtype=bool).tolist()
+    return core().fill_gaps(np.asarray(z, dtype=float), float(ds), float(max_gap_m), flags)
 
 
 def longest_valid_stretch(z):
@@ -78,3 +79,23 @@ def vehicle_roughness(z_left, z_right, ds, cfg: Config | None = None):
 
 def iso_class(gd_n0):
     return core().iso_class(float(gd_n0))
+
+
+def cluster_labels(xyz, cfg: Config | None = None):
+    return core().cluster_labels(np.asarray(xyz), _cfg(cfg))
+
+
+def find_obstacles(base_xyz, ground_mask, plane, cfg: Config | None = None):
+    return core().find_obstacles(np.asarray(base_xyz), np.asarray(ground_mask, dtype=bool), [float(v) for v in plane],
+                                 _cfg(cfg))
+
+
+def wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config | None = None):
+    """``path`` is accepted for call-shape parity; the C++ side plans it again from speed and yaw rate."""
+    return core().wheel_obstacles(np.asarray(base_xyz), np.asarray(labels, dtype=np.int32), obstacles,
+                                  [float(v) for v in plane], float(speed), float(yaw_rate), wheel, _cfg(cfg))
+
+
+def blocked_bins(s_start, s_end, cfg: Config | None = None):
+    return core().blocked_bins(np.atleast_1d(np.asarray(s_start, dtype=float)).tolist(),
+                               np.atleast_1d(np.asarray(s_end, dtype=float)).tolist(), _cfg(cfg))

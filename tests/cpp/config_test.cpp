@@ -26,10 +26,14 @@ TEST(Config, JsonRoundTripKeepsEveryField) {
     c.ground.ransac_seed = 42;
     c.profile.level = false;
     c.roughness.min_band_points = 9;
+    c.obstacles.enabled = false;
+    c.obstacles.cluster_tolerance_m = 0.3;
     const rp::Config back = rp::config_from_json(rp::config_to_json(c));
     EXPECT_EQ(rp::config_to_json(back), rp::config_to_json(c));
     EXPECT_DOUBLE_EQ(back.extrinsics->pitch_rad, -0.02);
     EXPECT_EQ(back.ground.method, rp::GroundMethod::Ransac);
+    EXPECT_FALSE(back.obstacles.enabled);
+    EXPECT_DOUBLE_EQ(back.obstacles.cluster_tolerance_m, 0.3);
 }
 
 TEST(Config, MissingFieldsKeepDefaults) {
@@ -70,6 +74,11 @@ TEST(Config, BadFilesAreRejectedWithTheFieldNamed) {
     expect_rejected(R"({"sensor_height": 1.7, "extrinsics": {"z_m": 1.7}})", "not both");
     expect_rejected(R"({"profile": {"ds_m": 0}})", "profile.ds_m");
     expect_rejected(R"({"roughness": {"band_min_cpm": 5, "band_max_cpm": 4}})", "band_min_cpm");
+    expect_rejected(R"({"obstacles": {"cluster_tolerance_m": 0}})", "obstacles.cluster_tolerance_m");
+    expect_rejected(R"({"obstacles": {"voxel_m": 0.001}})", "obstacles.voxel_m");
+    expect_rejected(R"({"obstacles": {"min_cluster_points": 10, "max_cluster_points": 5}})", "obstacles.max_cluster_points");
+    expect_rejected(R"({"obstacles": {"safety_margin_m": -0.1}})", "obstacles.safety_margin_m");
+    expect_rejected(R"({"obstacles": {"tolerance": 0.5}})", "obstacles.tolerance");
     expect_rejected(R"([1, 2])", "object");
     expect_rejected(R"({"track_width": )", "parse");
 }

@@ -31,6 +31,32 @@ inline Cloud concat(const Cloud& a, const Cloud& b) {
     return out;
 }
 
+/// Points on the top and the four sides of a box standing on z = z0, turned by `yaw` about its centre (cx, cy),
+/// `step` apart on each face (no bottom face: it lies on the ground).
+inline Cloud box(double cx, double cy, double length, double width, double height, double z0 = 0.0, double yaw = 0.0,
+                 double step = 0.05) {
+    std::vector<Eigen::Vector3d> local;  // box frame: centre of the footprint at the origin
+    const auto span = [step](double extent) { return std::max(1, static_cast<int>(std::ceil(extent / step))); };
+    const int nl = span(length), nw = span(width), nh = span(height);
+    for (int i = 0; i <= nl; ++i)
+        for (int j = 0; j <= nw; ++j) local.emplace_back(length * i / nl - length / 2, width * j / nw - width / 2, height);
+    for (int k = 0; k < nh; ++k) {
+        const double z = height * k / nh;
+        for (int i = 0; i <= nl; ++i)
+            for (double side : {-width / 2, width / 2}) local.emplace_back(length * i / nl - length / 2, side, z);
+        for (int j = 1; j < nw; ++j)
+            for (double end : {-length / 2, length / 2}) local.emplace_back(end, width * j / nw - width / 2, z);
+    }
+    Cloud pts(static_cast<Eigen::Index>(local.size()), 3);
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    for (std::size_t n = 0; n < local.size(); ++n) {
+        const Eigen::Vector3d& p = local[n];
+        pts.row(static_cast<Eigen::Index>(n)) << float(cx + c * p.x() - s * p.y()), float(cy + s * p.x() + c * p.y()),
+            float(z0 + p.z());
+    }
+    return pts;
+}
+
 /// A Gaussian random profile with the one-sided PSD G(n) = gd_n0 (n/0.1)^-2 (ISO 8608, w = 2).
 inline std::vector<double> iso_profile(double gd_n0, std::size_t samples, double ds, unsigned seed) {
     std::mt19937 rng(seed);

@@ -18,6 +18,8 @@ def cli() -> str:
     found = str(beside) if beside.exists() else shutil.which("roadpreview")
     assert found, "the roadpreview CLI is not installed (pip install .)"
     return found
+
+
 OUSTER = DATA / "ouster"
 VELODYNE = DATA / "velodyne"
 OS1_128_PCAP = OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"  # 3 frames; its metadata is found by name
@@ -31,3 +33,11 @@ def run_bench(script: str, *args: str, timeout: int = 300) -> str:
                          text=True, timeout=timeout)
     assert run.returncode == 0, run.stderr
     return run.stdout
+
+
+def run_cli(*args, check=True) -> subprocess.CompletedProcess:
+    """Runs the CLI with the given arguments; with `check`, asserts it succeeded."""
+    proc = subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=120)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc

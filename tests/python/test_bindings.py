@@ -32,7 +32,7 @@ def test_result_carries_every_documented_field(est, kitti):
         assert wheel.roughness.band[0] >= 0.1 and wheel.roughness.band[1] <= 4.0
         assert wheel.roughness.n.shape == wheel.roughness.psd.shape
     assert res.vehicle.gd_n0 > 0
-    assert set(res.timing_ms) == {"ground", "path", "profile", "roughness", "total"}
+    assert set(res.timing_ms) == {"ground", "path", "profile", "roughness", "obstacles", "total"}
 
 
 def test_arrays_are_read_only_views_that_outlive_the_result(est, kitti):

@@ -1,19 +1,12 @@
 """The `roadpreview` command-line tool, run as a user would."""
 
 import json
-import subprocess
 
 import pytest
 
 import roadpreview as rp
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, PCD_FILE, cli
-
-
-def run(*args, check=True):
-    proc = subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=120)
-    if check:
-        assert proc.returncode == 0, proc.stderr
-    return proc
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, PCD_FILE
+from paths import run_cli as run
 
 
 def lines(text):

@@ -592,7 +592,8 @@ def test_process_straight_road(impl, method):
     assert result.path["status"] == "straight"
     for profile in (result.left, result.right):
         assert len(profile.s) == 400
-        np.testing.assert_allclose(profile.z[profile.count > 0], 0.0, atol=0.01)
+        np.testing.assert_allclose(profile.z[(profile.count > 0) & ~profile.blocked], 0.0, atol=0.01)
+        assert profile.blocked[(profile.s > 20.5) & (profile.s < 21.5)].all()  # the raised patch stops the profile
         assert profile.roughness.iso_class is not None
     assert result.vehicle.iso_class is not None
 

@@ -54,6 +54,19 @@ struct RoughnessConfig {
     int min_band_points = 5;    ///< fewest PSD ordinates in the band for a class
 };
 
+/// Obstacles (docs/method.md §5): Euclidean clusters of the non-ground ROI points, and where they cross
+/// the wheel paths.
+struct ObstaclesConfig {
+    bool enabled = true;
+    double voxel_m = 0.25;             ///< points are clustered by the centroids of voxels this wide; 0: every point
+    double cluster_tolerance_m = 0.5;  ///< centroids closer than this are in the same cluster
+    int min_cluster_points = 5;        ///< smaller clusters are dropped (isolated returns, noise)
+    int max_cluster_points = 1000000;  ///< larger clusters are dropped; the default keeps every one
+    double ground_search_m = 1.0;      ///< ground points this far around a cluster give its local ground
+    double safety_margin_m = 0.1;      ///< widens each wheel corridor sideways and each obstacle along s
+    double min_height_m = 0.1;         ///< lower clusters do not block a wheel path (ground the fit missed)
+};
+
 struct Config {
     std::optional<double> sensor_height;   ///< m; shortcut for extrinsics (0, 0, h, 0, 0, 0)
     std::optional<Extrinsics> extrinsics;  ///< neither set: points are already in the base frame
@@ -63,6 +76,7 @@ struct Config {
     PathConfig path;
     ProfileConfig profile;
     RoughnessConfig roughness;
+    ObstaclesConfig obstacles;
 };
 
 /// Throws std::invalid_argument naming the first offending field.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The pipeline: points → ground → wheel paths → profiles → roughness, one frame per process() call.
+// The pipeline: points → ground → wheel paths → obstacles → profiles → roughness, one frame per process() call.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,7 @@
 
 #include "roadpreview/config.hpp"
 #include "roadpreview/ground.hpp"
+#include "roadpreview/obstacles.hpp"
 #include "roadpreview/path.hpp"
 #include "roadpreview/points.hpp"
 #include "roadpreview/profile.hpp"
@@ -31,6 +32,7 @@ struct TimingMs {
     double path = 0.0;
     double profile = 0.0;
     double roughness = 0.0;
+    double obstacles = 0.0;  ///< clustering and the wheel-path crossings
     double total = 0.0;
 };
 
@@ -47,6 +49,8 @@ struct Result {
     WheelPaths path;
     Profile left, right;
     Roughness vehicle;
+    std::optional<std::vector<Cluster>> obstacles;  ///< every cluster (base frame); nullopt: clustering is off
+    std::vector<std::int32_t> cluster_labels;        ///< one entry per input row: its cluster's id, −1 for none
     TimingMs timing_ms;
     std::string reason;  ///< why profiles are empty ("vehicle stopped", "no ground", ...); empty otherwise
     /// Where the yaw rate came from ("option", "motion", "imu", "default"), set by the caller; when set, the

@@ -10,6 +10,7 @@
 #include "roadpreview/io/pcap.hpp"
 #include "roadpreview/io/velodyne.hpp"
 #include "roadpreview/motion.hpp"
+#include "roadpreview/obstacles.hpp"
 #include "roadpreview/path.hpp"
 #include "roadpreview/pipeline.hpp"
 #include "roadpreview/profile.hpp"

@@ -7,6 +7,7 @@ import numpy as _np
 
 from .frames import to_base_frame
 from .ground import fit_ground, fit_plane
+from .obstacles import Obstacles, PathObstacles, blocked_bins, cluster_labels, find_obstacles, wheel_obstacles
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
@@ -27,12 +28,17 @@ __all__ = [
     "POINT_DTYPE",
     "ISO_CLASSES",
     "ISO_GEOMETRIC_MEANS",
+    "Obstacles",
+    "PathObstacles",
     "Profile",
     "Result",
     "Roughness",
     "analyze_roughness",
+    "blocked_bins",
+    "cluster_labels",
     "displacement_psd",
     "fill_gaps",
+    "find_obstacles",
     "fit_ground",
     "fit_plane",
     "iso_class",
@@ -42,4 +48,5 @@ __all__ = [
     "process",
     "to_base_frame",
     "vehicle_roughness",
+    "wheel_obstacles",
 ]

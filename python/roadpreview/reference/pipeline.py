@@ -1,4 +1,4 @@
-"""The whole pipeline, points → ground → wheel paths → profiles → roughness (docs/method.md §0–§4)."""
+"""The whole pipeline, points → ground → wheel paths → obstacles → profiles → roughness (docs/method.md §0–§5)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import numpy as np
 from ..config import Config
 from .frames import check_points, to_base_frame
 from .ground import fit_ground, roi_mask
+from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
 from .roughness import Roughness, vehicle_roughness
@@ -25,11 +26,24 @@ class Result:
     right: Profile = field(default_factory=Profile)
     vehicle: Roughness = field(default_factory=Roughness)
     reason: Optional[str] = None
+    obstacles: Optional[Obstacles] = None  #: every cluster; None when clustering is off
+    cluster_labels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))  #: per input row
 
 
-def _without_profiles(ground_mask, plane, counts, path, reason: str) -> Result:
-    return Result(ground_mask, plane, counts, path, empty_profile(reason), empty_profile(reason),
-                  Roughness(reason=reason), reason)
+def _without_profiles(ground_mask, plane, counts, path, reason: str, cfg: Config, obstacles, labels) -> Result:
+    profiles = [empty_profile(reason) for _ in range(2)]
+    for profile in profiles:
+        profile.obstacles = PathObstacles() if cfg.obstacles.enabled else None
+    return Result(ground_mask, plane, counts, path, *profiles, Roughness(reason=reason), reason, obstacles, labels)
+
+
+def _clusters(base_xyz, ground, plane, cfg: Config):
+    """(obstacles, cluster id per point): None when clustering is off, no cluster without a ground plane."""
+    if not cfg.obstacles.enabled:
+        return None, np.full(len(base_xyz), -1, dtype=np.int32)
+    if plane is None:
+        return Obstacles(), np.full(len(base_xyz), -1, dtype=np.int32)
+    return find_obstacles(base_xyz, ground, plane, cfg)
 
 
 def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
@@ -42,17 +56,32 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
     base_xyz, finite = to_base_frame(points, cfg)
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)
+    labels = np.full(len(points), -1, dtype=np.int32)
     if len(base_xyz) == 0:
-        return _without_profiles(ground_mask, None, counts, path, "no finite points")
+        obstacles = Obstacles() if cfg.obstacles.enabled else None
+        return _without_profiles(ground_mask, None, counts, path, "no finite points", cfg, obstacles, labels)
     counts["roi"] = int(np.count_nonzero(roi_mask(base_xyz, cfg)))
     ground, plane = fit_ground(base_xyz, cfg)
     ground_mask[np.flatnonzero(finite)[ground]] = True
     counts["ground"] = int(np.count_nonzero(ground))
+    obstacles, finite_labels = _clusters(base_xyz, ground, plane, cfg)
+    labels[finite] = finite_labels
     if plane is None:
-        return _without_profiles(ground_mask, None, counts, path, "no ground")
+        return _without_profiles(ground_mask, None, counts, path, "no ground", cfg, obstacles, labels)
     if path["status"] == "stopped":
-        return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped")
-    left, right = (wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg)
+        return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped", cfg, obstacles, labels)
+    left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
                    for wheel in ("left", "right"))
     vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg)
-    return Result(ground_mask, plane, counts, path, left, right, vehicle)
+    return Result(ground_mask, plane, counts, path, left, right, vehicle, None, obstacles, labels)
+
+
+def _wheel(base_xyz, ground, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config):
+    """One wheel's profile, stopping at the obstacles in its path when clustering is on."""
+    if not cfg.obstacles.enabled:
+        return wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg)
+    in_path = wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
+    blocked = blocked_bins(in_path.s_start, in_path.s_end, cfg)
+    profile = wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg, blocked)
+    profile.obstacles = in_path
+    return profile

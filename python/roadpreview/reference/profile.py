@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any, Optional
 
 import numpy as np
 
@@ -22,6 +23,8 @@ class Profile:
     z: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: median height per bin, NaN = missing
     count: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  #: points per bin
     roughness: Roughness = field(default_factory=Roughness)
+    blocked: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  #: bin covered by an obstacle
+    obstacles: Optional[Any] = None  #: obstacles.PathObstacles in this wheel's path; None: clustering is off
 
 
 def level_points(xyz, plane) -> np.ndarray:
@@ -75,12 +78,18 @@ def bin_medians(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, 
     return median, count
 
 
-def fill_gaps(z, ds: float, max_gap_m: float) -> np.ndarray:
-    """Linearly interpolate interior NaN runs no longer than max_gap_m; leading/trailing runs stay NaN."""
+def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
+    """Linearly interpolate interior NaN runs no longer than max_gap_m; leading/trailing runs stay NaN.
+
+    A ``blocked`` bin (obstacle) counts as missing, and a run holding one is left as it is.
+    """
     z = np.array(z, dtype=np.float64)
-    for start, stop in true_runs(np.isnan(z)):
+    blocked = np.zeros(len(z), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
+    if blocked.shape != z.shape:
+        raise ValueError(f"blocked has shape {blocked.shape}, z has {z.shape}")
+    for start, stop in true_runs(np.isnan(z) | blocked):
         interior = start > 0 and stop < len(z)
-        if interior and (stop - start) * ds <= max_gap_m + _GAP_LENGTH_TOLERANCE:
+        if interior and not blocked[start:stop].any() and (stop - start) * ds <= max_gap_m + _GAP_LENGTH_TOLERANCE:
             left, right = z[start - 1], z[stop]
             fraction = np.arange(1, stop - start + 1) / (stop - start + 1)
             z[start:stop] = left + (right - left) * fraction
@@ -92,9 +101,10 @@ def empty_profile(reason: str) -> Profile:
 
 
 def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
-                  cfg: Config | None = None) -> Profile:
+                  cfg: Config | None = None, blocked=None) -> Profile:
     """Height profile along one wheel's path from ground points (levelled by ``plane`` unless it is None),
-    with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped"."""
+    with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped".
+    ``blocked`` bins (obstacles, method.md §5) get no height and are not interpolated across."""
     cfg = cfg or Config()
     if path["status"] == "stopped":
         return empty_profile("vehicle stopped")
@@ -103,7 +113,9 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
         xyz = level_points(xyz, plane)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
     median, count = bin_medians(s[in_corridor], xyz[in_corridor, 2], cfg)
+    blocked = np.zeros(len(median), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
+    median[blocked] = np.nan
     ds = cfg.profile.ds_m
-    z = fill_gaps(median, ds, cfg.profile.max_gap_m)
+    z = fill_gaps(median, ds, cfg.profile.max_gap_m, blocked)
     centres = (np.arange(len(z)) + 0.5) * ds
-    return Profile(s=centres, z=z, count=count, roughness=analyze_roughness(z, ds, cfg))
+    return Profile(s=centres, z=z, count=count, roughness=analyze_roughness(z, ds, cfg), blocked=blocked)

@@ -1,0 +1,363 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/obstacles.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include "median.hpp"
+#include "obstacles_pcl.hpp"
+#include "roadpreview/profile.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using Groups = std::vector<pcl::Indices>;  // clusters as ascending point indices
+
+// PCL's Euclidean cluster extraction (KD-tree radius search) over the cloud points picked by `indices`, in place.
+std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, const pcl::IndicesConstPtr& indices,
+                                                  double tolerance) {
+    std::vector<pcl::PointIndices> clusters;
+    if (indices->empty()) return clusters;
+    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+    // Unsorted radius searches: the extraction only needs the neighbours, not their order.
+    extraction.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>(false));
+    extraction.setClusterTolerance(tolerance);
+    extraction.setMinClusterSize(1);  // the size limits count points, applied after voxels are expanded
+    extraction.setMaxClusterSize(std::numeric_limits<pcl::uindex_t>::max());
+    extraction.setInputCloud(cloud);
+    extraction.setIndices(indices);
+    extraction.extract(clusters);
+    return clusters;
+}
+
+// The candidates grouped by voxel: the centroid of each occupied voxel, and its points in
+// members[start[v] … start[v + 1]), ascending.
+struct Voxels {
+    Cloud::Ptr centroids = pcl::make_shared<Cloud>();
+    pcl::Indices members;
+    std::vector<std::size_t> start{0};
+};
+
+struct VoxelEntry {
+    std::int64_t x, y, z;  // voxel indices
+    pcl::index_t point;
+    bool operator<(const VoxelEntry& o) const { return std::tie(x, y, z, point) < std::tie(o.x, o.y, o.z, o.point); }
+    bool same_voxel(const VoxelEntry& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index.
+std::int64_t voxel_index(float v, double edge) {
+    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / edge), -1e15, 1e15));
+}
+
+// Entries ordered by voxel, then point: a counting sort by the x index (the ROI bounds it), then small sorts.
+std::vector<VoxelEntry> sorted_by_voxel(PointsView pts, const pcl::Indices& candidates, double edge) {
+    std::vector<VoxelEntry> entries;
+    entries.reserve(candidates.size());
+    std::int64_t x_min = std::numeric_limits<std::int64_t>::max(), x_max = std::numeric_limits<std::int64_t>::min();
+    for (const auto i : candidates) {
+        entries.push_back({voxel_index(pts(i, 0), edge), voxel_index(pts(i, 1), edge), voxel_index(pts(i, 2), edge), i});
+        x_min = std::min(x_min, entries.back().x), x_max = std::max(x_max, entries.back().x);
+    }
+    if (entries.empty()) return entries;
+    const auto span = static_cast<std::uint64_t>(x_max - x_min);
+    const std::size_t slabs = span < 4 * entries.size() + 1024 ? static_cast<std::size_t>(span) + 1 : 1;
+    const auto slab = [&](const VoxelEntry& e) { return slabs == 1 ? 0 : static_cast<std::size_t>(e.x - x_min); };
+    std::vector<std::size_t> first(slabs + 1, 0);
+    for (const auto& e : entries) ++first[slab(e) + 1];
+    for (std::size_t k = 0; k < slabs; ++k) first[k + 1] += first[k];
+    std::vector<VoxelEntry> sorted(entries.size());
+    std::vector<std::size_t> next(first.begin(), first.end() - 1);
+    for (const auto& e : entries) sorted[next[slab(e)]++] = e;
+    for (std::size_t k = 0; k < slabs; ++k) std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
+    return sorted;
+}
+
+Voxels voxelize(PointsView pts, const pcl::Indices& candidates, double edge) {
+    const std::vector<VoxelEntry> sorted = sorted_by_voxel(pts, candidates, edge);
+    Voxels v;
+    v.members.reserve(sorted.size());
+    for (std::size_t first = 0, last = 0; first < sorted.size(); first = last) {
+        Vec3 sum{};
+        for (last = first; last < sorted.size() && sorted[last].same_voxel(sorted[first]); ++last) {
+            for (int a = 0; a < 3; ++a) sum[a] += pts(sorted[last].point, a);
+            v.members.push_back(sorted[last].point);
+        }
+        const double n = static_cast<double>(last - first);
+        v.centroids->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
+                                             static_cast<float>(sum[2] / n)));
+        v.start.push_back(last);
+    }
+    return v;
+}
+
+// Clusters of the candidates: PCL's Euclidean clustering of the points themselves (voxel_m = 0, in place), or
+// of the voxel centroids, each point joining its voxel's cluster; then the size limits, in points.
+Groups point_clusters(const Cloud::ConstPtr& cloud, PointsView pts, const pcl::IndicesConstPtr& candidates,
+                      const ObstaclesConfig& cfg) {
+    Groups groups;
+    if (cfg.voxel_m <= 0.0) {
+        for (auto& c : euclidean_clusters(cloud, candidates, cfg.cluster_tolerance_m)) groups.push_back(std::move(c.indices));
+    } else {
+        const Voxels v = voxelize(pts, *candidates, cfg.voxel_m);
+        auto all = pcl::make_shared<pcl::Indices>(v.centroids->size());
+        for (std::size_t k = 0; k < all->size(); ++k) (*all)[k] = static_cast<pcl::index_t>(k);
+        for (const auto& c : euclidean_clusters(v.centroids, all, cfg.cluster_tolerance_m)) {
+            pcl::Indices points;
+            for (const auto k : c.indices)
+                points.insert(points.end(), v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k]),
+                              v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k + 1]));
+            std::sort(points.begin(), points.end());
+            groups.push_back(std::move(points));
+        }
+    }
+    const auto outside = [&](const pcl::Indices& g) {
+        const auto n = static_cast<std::int64_t>(g.size());
+        return n < cfg.min_cluster_points || n > cfg.max_cluster_points;
+    };
+    groups.erase(std::remove_if(groups.begin(), groups.end(), outside), groups.end());
+    return groups;
+}
+
+// Nearest first (smallest x), ties by the lowest point index.
+void sort_nearest_first(Groups& groups, PointsView pts) {
+    std::vector<std::pair<float, pcl::index_t>> keys(groups.size());
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        float x_min = std::numeric_limits<float>::infinity();
+        for (const auto i : groups[g]) x_min = std::min(x_min, pts(i, 0));
+        keys[g] = {x_min, groups[g].front()};
+    }
+    std::vector<std::size_t> order(groups.size());
+    for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+    Groups sorted(groups.size());
+    for (std::size_t g = 0; g < order.size(); ++g) sorted[g] = std::move(groups[order[g]]);
+    groups = std::move(sorted);
+}
+
+std::vector<std::int32_t> labels_of(const Groups& groups, std::size_t points) {
+    std::vector<std::int32_t> label(points, -1);
+    for (std::size_t g = 0; g < groups.size(); ++g)
+        for (const auto i : groups[g]) label[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(g);
+    return label;
+}
+
+// The box about the vertical axis along the principal horizontal directions: yaw = ½·atan2(2c_xy, c_xx − c_yy).
+OrientedBox oriented_box(PointsView pts, const pcl::Indices& members, const Vec3& mean) {
+    double cxx = 0.0, cyy = 0.0, cxy = 0.0;
+    for (const auto i : members) {
+        const double dx = pts(i, 0) - mean[0], dy = pts(i, 1) - mean[1];
+        cxx += dx * dx, cyy += dy * dy, cxy += dx * dy;
+    }
+    OrientedBox box;
+    box.yaw = 0.5 * std::atan2(2.0 * cxy + 0.0, cxx - cyy);  // + 0.0: −0 would give −π/2
+    const double c = std::cos(box.yaw), s = std::sin(box.yaw);
+    double u_lo = kInf, u_hi = -kInf, v_lo = kInf, v_hi = -kInf, z_lo = kInf, z_hi = -kInf;
+    for (const auto i : members) {
+        const double dx = pts(i, 0) - mean[0], dy = pts(i, 1) - mean[1], z = pts(i, 2);
+        const double u = c * dx + s * dy, v = -s * dx + c * dy;
+        u_lo = std::min(u_lo, u), u_hi = std::max(u_hi, u);
+        v_lo = std::min(v_lo, v), v_hi = std::max(v_hi, v);
+        z_lo = std::min(z_lo, z), z_hi = std::max(z_hi, z);
+    }
+    const double u_mid = 0.5 * (u_lo + u_hi), v_mid = 0.5 * (v_lo + v_hi);
+    box.center = {mean[0] + c * u_mid - s * v_mid, mean[1] + s * u_mid + c * v_mid, 0.5 * (z_lo + z_hi)};
+    box.size = {u_hi - u_lo, v_hi - v_lo, z_hi - z_lo};
+    return box;
+}
+
+// Count, centroid, axis-aligned and oriented boxes of one group.
+Cluster describe(PointsView pts, const pcl::Indices& members) {
+    Cluster c;
+    c.count = static_cast<std::int32_t>(members.size());
+    c.aabb_min = {kInf, kInf, kInf};
+    c.aabb_max = {-kInf, -kInf, -kInf};
+    Vec3 sum{};
+    for (const auto i : members) {
+        for (int a = 0; a < 3; ++a) {
+            const double v = pts(i, a);
+            sum[a] += v;
+            c.aabb_min[a] = std::min(c.aabb_min[a], v);
+            c.aabb_max[a] = std::max(c.aabb_max[a], v);
+        }
+    }
+    for (int a = 0; a < 3; ++a) c.centroid[a] = sum[a] / static_cast<double>(members.size());
+    c.obb = oriented_box(pts, members, c.centroid);
+    return c;
+}
+
+// Ground points bucketed by square cells (counting sort), to find those around a cluster in O(nearby).
+class GroundGrid {
+public:
+    GroundGrid(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane) {
+        double x1 = -kInf, y1 = -kInf;
+        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+            if (!ground[static_cast<std::size_t>(i)]) continue;
+            x0_ = std::min<double>(x0_, pts(i, 0)), x1 = std::max<double>(x1, pts(i, 0));
+            y0_ = std::min<double>(y0_, pts(i, 1)), y1 = std::max<double>(y1, pts(i, 1));
+        }
+        if (x1 < x0_) return;  // no ground point
+        cell_ = std::max({1.0, (x1 - x0_) / 512.0, (y1 - y0_) / 512.0});  // at most 513² cells
+        nx_ = cell_index(x1, x0_) + 1, ny_ = cell_index(y1, y0_) + 1;
+        start_.assign(nx_ * ny_ + 1, 0);
+        for (Eigen::Index i = 0; i < pts.rows(); ++i)
+            if (ground[static_cast<std::size_t>(i)]) ++start_[cell_of(pts(i, 0), pts(i, 1)) + 1];
+        for (std::size_t k = 0; k < nx_ * ny_; ++k) start_[k + 1] += start_[k];
+        points_.resize(start_.back());
+        std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
+        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+            if (!ground[static_cast<std::size_t>(i)]) continue;
+            const double x = pts(i, 0), y = pts(i, 1);
+            points_[next[cell_of(x, y)]++] = {x, y, height_above(plane, x, y, pts(i, 2))};
+        }
+    }
+
+    /// Heights above the plane of the ground points with x in [x_lo, x_hi] and y in [y_lo, y_hi].
+    std::vector<double> heights_in(double x_lo, double x_hi, double y_lo, double y_hi) const {
+        std::vector<double> out;
+        if (points_.empty() || x_hi < x0_ || y_hi < y0_) return out;
+        const std::size_t ix1 = std::min(cell_index(x_hi, x0_), nx_ - 1), iy1 = std::min(cell_index(y_hi, y0_), ny_ - 1);
+        for (std::size_t ix = cell_index(std::max(x_lo, x0_), x0_); ix <= ix1; ++ix) {
+            for (std::size_t iy = cell_index(std::max(y_lo, y0_), y0_); iy <= iy1; ++iy) {
+                const std::size_t k = ix * ny_ + iy;
+                for (std::size_t j = start_[k]; j < start_[k + 1]; ++j) {
+                    const auto& q = points_[j];
+                    if (q[0] >= x_lo && q[0] <= x_hi && q[1] >= y_lo && q[1] <= y_hi) out.push_back(q[2]);
+                }
+            }
+        }
+        return out;
+    }
+
+private:
+    std::size_t cell_index(double v, double origin) const { return static_cast<std::size_t>((v - origin) / cell_); }
+    std::size_t cell_of(double x, double y) const { return cell_index(x, x0_) * ny_ + cell_index(y, y0_); }
+
+    double x0_ = kInf, y0_ = kInf, cell_ = 1.0;
+    std::size_t nx_ = 0, ny_ = 0;
+    std::vector<std::size_t> start_;
+    std::vector<std::array<double, 3>> points_;  // x, y, height above the plane
+};
+
+// Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
+double local_ground(const GroundGrid& grid, const Cluster& c, double reach) {
+    std::vector<double> h = grid.heights_in(c.aabb_min[0] - reach, c.aabb_max[0] + reach, c.aabb_min[1] - reach,
+                                            c.aabb_max[1] + reach);
+    return h.empty() ? 0.0 : median(h.begin(), h.end());
+}
+
+Clustering describe_all(PointsView pts, Groups groups, const std::vector<std::uint8_t>& ground, const Plane& plane,
+                        const ObstaclesConfig& cfg) {
+    sort_nearest_first(groups, pts);
+    Clustering out;
+    out.label = labels_of(groups, static_cast<std::size_t>(pts.rows()));
+    const GroundGrid grid(pts, ground, plane);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        Cluster c = describe(pts, groups[g]);
+        c.id = static_cast<std::int32_t>(g);
+        c.ground_offset = local_ground(grid, c, cfg.ground_search_m);
+        double top = -kInf;
+        for (const auto i : groups[g]) top = std::max(top, height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2)));
+        c.height = top - c.ground_offset;
+        out.clusters.push_back(c);
+    }
+    return out;
+}
+
+}  // namespace
+
+Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
+                          const ObstaclesConfig& cfg) {
+    auto candidates = pcl::make_shared<pcl::Indices>();
+    for (std::size_t i = 0; i < ground_mask.size(); ++i)
+        if (!ground_mask[i]) candidates->push_back(static_cast<pcl::index_t>(i));
+    return describe_all(roi.view(), point_clusters(roi.cloud, roi.view(), candidates, cfg), ground_mask, plane, cfg);
+}
+
+Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
+                          const GroundConfig& roi_cfg, const ObstaclesConfig& cfg) {
+    if (ground_mask.size() != static_cast<std::size_t>(points.rows()))
+        throw std::invalid_argument("ground_mask has " + std::to_string(ground_mask.size()) + " entries for " +
+                                    std::to_string(points.rows()) + " points");
+    RoiCloud roi;
+    crop_roi(points, to_rigid_transform(Extrinsics{}), roi_cfg, roi);  // the points are in the base frame already
+    std::vector<std::uint8_t> roi_ground(static_cast<std::size_t>(roi.size()));
+    for (std::size_t i = 0; i < roi_ground.size(); ++i) roi_ground[i] = ground_mask[static_cast<std::size_t>(roi.input_index[i])];
+    Clustering in_roi = find_obstacles(roi, roi_ground, plane, cfg);
+    Clustering out;
+    out.clusters = std::move(in_roi.clusters);
+    out.label.assign(ground_mask.size(), -1);
+    for (std::size_t i = 0; i < in_roi.label.size(); ++i) out.label[static_cast<std::size_t>(roi.input_index[i])] = in_roi.label[i];
+    return out;
+}
+
+std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfig& cfg) {
+    auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+    auto finite = pcl::make_shared<pcl::Indices>();
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        cloud->push_back({points(i, 0), points(i, 1), points(i, 2)});
+        if (points.row(i).allFinite()) finite->push_back(static_cast<pcl::index_t>(i));
+    }
+    Groups groups = point_clusters(cloud, points, finite, cfg);
+    sort_nearest_first(groups, points);
+    return labels_of(groups, static_cast<std::size_t>(points.rows()));
+}
+
+std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
+                                          const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
+                                          double preview_length_m, const ObstaclesConfig& cfg) {
+    if (clustering.label.size() != static_cast<std::size_t>(points.rows()))
+        throw std::invalid_argument("wheel_obstacles: " + std::to_string(clustering.label.size()) + " labels for " +
+                                    std::to_string(points.rows()) + " points");
+    const double corridor = tire_width + 2.0 * cfg.safety_margin_m;
+    std::vector<PathObstacle> spans(clustering.clusters.size(), PathObstacle{0, kInf, -kInf, -kInf});
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const std::int32_t id = clustering.label[static_cast<std::size_t>(i)];
+        if (id < 0) continue;
+        if (static_cast<std::size_t>(id) >= spans.size())
+            throw std::invalid_argument("wheel_obstacles: label " + std::to_string(id) + " names no cluster");
+        const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+        const auto p = L.apply(x, y, z);
+        const auto s = arc_length(paths, w, p[0], p[1], corridor);
+        if (!s || *s >= preview_length_m) continue;
+        PathObstacle& span = spans[static_cast<std::size_t>(id)];
+        span.s_start = std::min(span.s_start, *s);
+        span.s_end = std::max(span.s_end, *s);
+        span.height = std::max(span.height, height_above(plane, x, y, z));
+    }
+    std::vector<PathObstacle> out;
+    for (std::size_t k = 0; k < spans.size(); ++k) {
+        if (spans[k].s_start > spans[k].s_end) continue;  // no point in the corridor
+        const double height = spans[k].height - clustering.clusters[k].ground_offset;
+        if (height < cfg.min_height_m) continue;  // ground the ground fit missed (a rising road, a ramp)
+        out.push_back({static_cast<std::int32_t>(k), spans[k].s_start, spans[k].s_end, height});
+    }
+    std::stable_sort(out.begin(), out.end(), [](const PathObstacle& a, const PathObstacle& b) { return a.s_start < b.s_start; });
+    return out;
+}
+
+std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds,
+                                       double margin_m) {
+    std::vector<std::uint8_t> blocked(bins, 0);
+    if (bins == 0) return blocked;
+    const double last = static_cast<double>(bins - 1);
+    for (const PathObstacle& o : obstacles) {
+        if (!(o.s_start <= o.s_end) || !std::isfinite(o.s_start) || !std::isfinite(o.s_end))
+            throw std::invalid_argument("blocked_bins: an obstacle needs finite s_start <= s_end");
+        // Bin k = [k·ds, (k+1)·ds) overlaps [a, b] for floor(a/ds) ≤ k ≤ floor(b/ds).
+        const auto bin = [&](double s) { return static_cast<std::ptrdiff_t>(std::clamp(std::floor(s / ds), 0.0, last)); };
+        std::fill(blocked.begin() + bin(o.s_start - margin_m), blocked.begin() + bin(o.s_end + margin_m) + 1, 1);
+    }
+    return blocked;
+}
+
+}  // namespace roadpreview
