@@ -19,7 +19,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
-                                                min_cycles, min_band_points)
+                                                min_cycles, min_band_points, noise_aware, min_resolved_fraction)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m)
 
 const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
 
@@ -46,7 +47,8 @@ void to_json(json& j, const Config& c) {
              {"ground", c.ground},
              {"path", c.path},
              {"profile", c.profile},
-             {"roughness", c.roughness}};
+             {"roughness", c.roughness},
+             {"iri", c.iri}};
 }
 
 void from_json(const json& j, Config& c) {
@@ -59,6 +61,7 @@ void from_json(const json& j, Config& c) {
     c.path = j.value("path", defaults.path);
     c.profile = j.value("profile", defaults.profile);
     c.roughness = j.value("roughness", defaults.roughness);
+    c.iri = j.value("iri", defaults.iri);
 }
 
 namespace {
@@ -120,6 +123,10 @@ void validate(const Config& c) {
     require(positive(r.min_length_m), "roughness.min_length_m must be > 0");
     require(std::isfinite(r.min_cycles) && r.min_cycles >= 1.0, "roughness.min_cycles must be >= 1");
     require(r.min_band_points >= 2, "roughness.min_band_points must be >= 2");
+    require(std::isfinite(r.min_resolved_fraction) && r.min_resolved_fraction > 0.0 && r.min_resolved_fraction <= 1.0,
+            "roughness.min_resolved_fraction must be in (0, 1]");
+
+    require(std::isfinite(c.iri.min_length_m) && c.iri.min_length_m >= 0.0, "iri.min_length_m must be >= 0");
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

@@ -15,6 +15,16 @@ struct Hit {
     double z;
 };
 
+// Sample standard deviation (n − 1 in the denominator) of at least two values.
+double sample_spread(std::vector<double>::const_iterator first, std::vector<double>::const_iterator last) {
+    const double n = static_cast<double>(last - first);
+    double mean = 0.0, squares = 0.0;
+    for (auto it = first; it != last; ++it) mean += *it;
+    mean /= n;
+    for (auto it = first; it != last; ++it) squares += (*it - mean) * (*it - mean);
+    return std::sqrt(squares / (n - 1.0));
+}
+
 // Median of the values (mean of the two middle ones for an even count); reorders them.
 double median(std::vector<double>::iterator first, std::vector<double>::iterator last) {
     const auto n = last - first;
@@ -24,7 +34,7 @@ double median(std::vector<double>::iterator first, std::vector<double>::iterator
     return 0.5 * (*std::max_element(first, upper) + *upper);
 }
 
-// Bins the hits of one wheel (counting sort by bin), takes per-bin medians, fills short gaps.
+// Bins the hits of one wheel (counting sort by bin), takes per-bin medians and spreads, fills short gaps.
 Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg) {
     Profile p;
     p.ds = cfg.ds_m;
@@ -41,8 +51,13 @@ Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const Profil
     for (const Hit& h : hits) sorted[next[static_cast<std::size_t>(h.bin)]++] = h.z;
 
     p.z.assign(bins, kNaN);
-    for (std::size_t k = 0; k < bins; ++k)
-        if (p.count[k] > 0) p.z[k] = median(sorted.begin() + start[k], sorted.begin() + start[k + 1]);
+    p.spread.assign(bins, kNaN);
+    for (std::size_t k = 0; k < bins; ++k) {
+        const auto first = sorted.begin() + static_cast<std::ptrdiff_t>(start[k]);
+        const auto last = sorted.begin() + static_cast<std::ptrdiff_t>(start[k + 1]);
+        if (p.count[k] > 1) p.spread[k] = sample_spread(first, last);
+        if (p.count[k] > 0) p.z[k] = median(first, last);
+    }
     fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m);
     return p;
 }

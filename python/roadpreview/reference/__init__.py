@@ -7,6 +7,7 @@ import numpy as _np
 
 from .frames import to_base_frame
 from .ground import fit_ground, fit_plane
+from .iri import Iri, profile_iri, rectified_slope
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
@@ -20,6 +21,7 @@ from .roughness import (
     longest_valid_stretch,
     vehicle_roughness,
 )
+from .support import noise_psd, resolved_fraction
 
 POINT_DTYPE = _np.float64  #: points are used in double precision
 
@@ -33,6 +35,11 @@ __all__ = [
     "analyze_roughness",
     "displacement_psd",
     "fill_gaps",
+    "Iri",
+    "noise_psd",
+    "profile_iri",
+    "rectified_slope",
+    "resolved_fraction",
     "fit_ground",
     "fit_plane",
     "iso_class",

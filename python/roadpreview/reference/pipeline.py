@@ -12,6 +12,7 @@ from .frames import check_points, to_base_frame
 from .ground import fit_ground, roi_mask
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
+from .iri import Iri, vehicle_iri
 from .roughness import Roughness, vehicle_roughness
 
 
@@ -29,7 +30,7 @@ class Result:
 
 def _without_profiles(ground_mask, plane, counts, path, reason: str) -> Result:
     return Result(ground_mask, plane, counts, path, empty_profile(reason), empty_profile(reason),
-                  Roughness(reason=reason), reason)
+                  Roughness(reason=reason, iri=Iri(reason=reason)), reason)
 
 
 def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
@@ -54,5 +55,7 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
         return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped")
     left, right = (wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg)
                    for wheel in ("left", "right"))
-    vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg)
+    vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
+                                spread_left=left.spread, count_right=right.count, spread_right=right.spread)
+    vehicle.iri = vehicle_iri(left.roughness.iri, right.roughness.iri)
     return Result(ground_mask, plane, counts, path, left, right, vehicle)
