@@ -190,3 +190,17 @@ def test_pipeline_reads_a_simulated_frame_with_the_lidars_extrinsics():
     assert backed.sum() > 30
     error = result.left.z[backed] - truth["left"][backed]
     assert np.abs(error - np.median(error)).max() < 0.01
+
+
+def test_beam_calibration_errors_tilt_each_ring_by_its_own_angle():
+    lidar = sim.vlp_16(range_noise_m=0.0, elevation_error_deg=0.05, calibration_seed=3)
+    frame = sim.drive(sim.Scene(sim.Road()), lidar, 0.0, frames=1)[0]
+    errors = np.random.default_rng(3).normal(0.0, 0.05, 16)
+    beam = np.repeat(np.arange(16), lidar.columns)
+    hit = frame.labels == sim.LABEL_ROAD
+    base = frame.points[:, :3].astype(np.float64) + [0, 0, 1.8]
+    # A point placed along the table's direction with the true range: height error = range · (sin θ − sin θ_true).
+    nominal = np.radians(np.asarray(lidar.elevations_deg))[beam]
+    expected = frame.ranges_m * (np.sin(nominal) - np.sin(nominal + np.radians(errors[beam])))
+    np.testing.assert_allclose(base[hit, 2], expected[hit], atol=2e-5)
+    assert np.abs(base[hit, 2]).max() > 0.005

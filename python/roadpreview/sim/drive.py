@@ -60,14 +60,16 @@ class Frame:
 
 
 def scan(scene: Scene, lidar: Lidar, pose: Pose, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(points, labels, exact ranges) of one sweep from the given pose (see Frame)."""
+    """(points, labels, exact ranges) of one sweep from the given pose (see Frame). Rays fly in their actual
+    directions; the points lie along the beam table's, as a sensor computes them."""
     d_sensor = lidar.directions()
+    d_actual = lidar.directions(actual=True)
     yaw = np.array([[math.cos(pose.yaw_rad), -math.sin(pose.yaw_rad), 0.0],
                     [math.sin(pose.yaw_rad), math.cos(pose.yaw_rad), 0.0], [0.0, 0.0, 1.0]])
     rotation = yaw @ lidar.mount_rotation()  # sensor → world
     ground_z = float(scene.road.plane_height(pose.x_m, pose.y_m))
     origin = np.array([pose.x_m, pose.y_m, ground_z + lidar.height_m])
-    exact, labels = cast(scene, origin, d_sensor @ rotation.T, lidar.max_range_m)
+    exact, labels = cast(scene, origin, d_actual @ rotation.T, lidar.max_range_m)
     measured = exact + rng.normal(0.0, lidar.range_noise_m, len(exact))
     returned = np.isfinite(exact) & (measured >= lidar.min_range_m) & (rng.random(len(exact)) >= lidar.dropout)
     labels = np.where(returned, labels, LABEL_NONE).astype(np.uint8)

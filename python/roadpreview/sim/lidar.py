@@ -31,6 +31,8 @@ class Lidar:
     height_m: float = 1.8  #: mounting height above the base origin (on the ground)
     pitch_deg: float = 0.0  #: mounting tilt, positive looks down (R = Ry(pitch)·Rx(roll))
     roll_deg: float = 0.0
+    elevation_error_deg: float = 0.0  #: 1σ of each beam's fixed calibration error: rays fly this far off the table
+    calibration_seed: int = 0  #: draws the beams' errors (the same unit in every frame)
 
     def __post_init__(self):
         if len(self.elevations_deg) != len(self.azimuth_offsets_deg) or not len(self.elevations_deg):
@@ -48,9 +50,15 @@ class Lidar:
         """A copy with some fields changed, e.g. ``lidar.with_(height_m=1.9, range_noise_m=0.03)``."""
         return dataclasses.replace(self, **changes)
 
-    def directions(self) -> np.ndarray:
-        """Unit ray directions in the sensor frame, (beams·columns, 3), beam-major like an organised cloud."""
-        elevation = np.radians(np.asarray(self.elevations_deg, float))[:, None]
+    def directions(self, actual: bool = False) -> np.ndarray:
+        """Unit ray directions in the sensor frame, (beams·columns, 3), beam-major like an organised cloud: as the
+        beam table says (where the sensor places its points), or as the rays actually fly (with the beams'
+        calibration errors)."""
+        elevations = np.asarray(self.elevations_deg, float)
+        if actual and self.elevation_error_deg:
+            elevations = elevations + np.random.default_rng(self.calibration_seed).normal(
+                0.0, self.elevation_error_deg, self.beams)
+        elevation = np.radians(elevations)[:, None]
         azimuth = (2 * np.pi * np.arange(self.columns)[None, :] / self.columns
                    - np.radians(np.asarray(self.azimuth_offsets_deg, float))[:, None])
         cos_el = np.cos(elevation)
