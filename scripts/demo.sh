@@ -14,10 +14,11 @@ import json
 for line in open("demo_output.jsonl"):
     r = json.loads(line)
     rough = r["roughness"]
-    gd = rough["vehicle"]["gd_n0"]
-    gd = f"{gd * 1e6:.0f}e-6 m³" if gd is not None else "n/a"
+    v = rough["vehicle"]
+    fit = f'G_d(n0) = {v["gd_n0"] * 1e6:.0f}e-6 m³, confidence {v["confidence"]:.2f}' if v["class"] else v["reason"]
+    iri = f'{v["iri"]["value"]:.1f} m/km' if v["iri"]["value"] is not None else v["iri"]["reason"]
     print(f'frame at t = {r["timestamp"]:.3f} s: yaw rate {r["motion"]["yaw_rate"]:+.4f} rad/s '
           f'({r["path"]["yaw_rate_source"]}), left {rough["left"]["class"]}, right {rough["right"]["class"]}, '
-          f'vehicle {rough["vehicle"]["class"]} (G_d(n0) = {gd}), {r["timing_ms"]["total"]:.2f} ms')
+          f'vehicle {v["class"]} ({fit}), IRI {iri}, {r["timing_ms"]["total"]:.2f} ms')
 PY
 echo "full output: demo_output.jsonl (schema: docs/output.md)"

@@ -19,10 +19,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
-                                                min_cycles, min_band_points)
+                                                min_cycles, min_band_points, noise_aware, min_resolved_fraction)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
                                                 min_cluster_points, max_cluster_points, ground_search_m,
                                                 safety_margin_m, min_height_m)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m)
 
 const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
 
@@ -50,7 +51,8 @@ void to_json(json& j, const Config& c) {
              {"path", c.path},
              {"profile", c.profile},
              {"roughness", c.roughness},
-             {"obstacles", c.obstacles}};
+             {"obstacles", c.obstacles},
+             {"iri", c.iri}};
 }
 
 void from_json(const json& j, Config& c) {
@@ -64,6 +66,7 @@ void from_json(const json& j, Config& c) {
     c.profile = j.value("profile", defaults.profile);
     c.roughness = j.value("roughness", defaults.roughness);
     c.obstacles = j.value("obstacles", defaults.obstacles);
+    c.iri = j.value("iri", defaults.iri);
 }
 
 namespace {
@@ -136,6 +139,11 @@ void validate(const Config& c) {
     require(std::isfinite(o.safety_margin_m) && o.safety_margin_m >= 0.0, "obstacles.safety_margin_m must be >= 0");
     require(std::isfinite(o.ground_search_m) && o.ground_search_m >= 0.0, "obstacles.ground_search_m must be >= 0");
     require(std::isfinite(o.min_height_m), "obstacles.min_height_m must be finite");
+
+    require(std::isfinite(r.min_resolved_fraction) && r.min_resolved_fraction > 0.0 && r.min_resolved_fraction <= 1.0,
+            "roughness.min_resolved_fraction must be in (0, 1]");
+
+    require(std::isfinite(c.iri.min_length_m) && c.iri.min_length_m >= 0.0, "iri.min_length_m must be >= 0");
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

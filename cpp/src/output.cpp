@@ -57,8 +57,15 @@ json clusters_json(const std::optional<std::vector<Cluster>>& clusters) {
 json profile_json(const Profile& p) {
     return {{"s0", p.s0},          {"ds", p.ds},
             {"s", numbers(p.s)},   {"z", numbers(p.z)},
-            {"count", p.count},    {"blocked", flags(p.blocked)},
-            {"obstacles", path_obstacles_json(p.obstacles)}};
+            {"count", p.count},    {"spread", numbers(p.spread)},
+            {"blocked", flags(p.blocked)}, {"obstacles", path_obstacles_json(p.obstacles)}};
+}
+
+json optional_number(const std::optional<double>& v) { return v ? number(*v) : json(nullptr); }
+
+json iri_json(const Iri& i) {
+    return {{"value", optional_number(i.value)}, {"length", i.length_m},
+            {"reason", i.reason.empty() ? json(nullptr) : json(i.reason)}};
 }
 
 json roughness_json(const Roughness& r) {
@@ -74,7 +81,13 @@ json roughness_json(const Roughness& r) {
             {"n", numbers(r.spectrum.n)},
             {"psd", numbers(r.spectrum.psd)},
             {"octave_bands", octaves},
-            {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)}};
+            {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)},
+            {"confidence", fitted ? number(r.confidence) : json(nullptr)},
+            {"band_limit", r.band_limit.empty() ? json(nullptr) : json(r.band_limit)},
+            {"backed_fraction", optional_number(r.backed_fraction)},
+            {"noise_floor", optional_number(r.noise_floor)},
+            {"noise_psd", numbers(r.noise_psd)},
+            {"iri", iri_json(r.iri)}};
 }
 
 json path_json(const WheelPaths& p, const std::string& yaw_rate_source) {

@@ -34,6 +34,7 @@ void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
     p.ds = cfg.profile.ds_m;
     p.s0 = 0.5 * cfg.profile.ds_m;
     p.roughness.reason = reason;
+    p.roughness.iri.reason = reason;
     if (cfg.obstacles.enabled) p.obstacles.emplace();
 }
 
@@ -121,6 +122,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     if (!r.reason.empty()) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;
+        r.vehicle.iri.reason = r.reason;
         r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
         return r;
     }
@@ -139,9 +141,12 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     }
     r.timing_ms.profile = ms_since(mark);
 
-    r.left.roughness = analyze_roughness(r.left.z, cfg.profile.ds_m, cfg.roughness);
-    r.right.roughness = analyze_roughness(r.right.z, cfg.profile.ds_m, cfg.roughness);
-    r.vehicle = vehicle_roughness(r.left.z, r.right.z, cfg.profile.ds_m, cfg.roughness);
+    for (Profile* p : {&r.left, &r.right}) {
+        p->roughness = analyze_roughness(*p, cfg.roughness);
+        p->roughness.iri = profile_iri(p->z, cfg.profile.ds_m, cfg.iri);
+    }
+    r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
+    r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);
     r.timing_ms.roughness = ms_since(mark);
     r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return r;

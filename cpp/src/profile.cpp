@@ -18,6 +18,16 @@ struct Hit {
     double z;
 };
 
+// Sample standard deviation (n − 1 in the denominator) of at least two values.
+double sample_spread(std::vector<double>::const_iterator first, std::vector<double>::const_iterator last) {
+    const double n = static_cast<double>(last - first);
+    double mean = 0.0, squares = 0.0;
+    for (auto it = first; it != last; ++it) mean += *it;
+    mean /= n;
+    for (auto it = first; it != last; ++it) squares += (*it - mean) * (*it - mean);
+    return std::sqrt(squares / (n - 1.0));
+}
+
 // Bins the hits of one wheel (counting sort by bin), takes per-bin medians outside blocked bins, fills short gaps.
 Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg,
                     const std::vector<std::uint8_t>* blocked) {
@@ -38,8 +48,14 @@ Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const Profil
     for (const Hit& h : hits) sorted[next[static_cast<std::size_t>(h.bin)]++] = h.z;
 
     p.z.assign(bins, kNaN);
-    for (std::size_t k = 0; k < bins; ++k)
-        if (p.count[k] > 0 && !p.blocked[k]) p.z[k] = median(sorted.begin() + start[k], sorted.begin() + start[k + 1]);
+    p.spread.assign(bins, kNaN);
+    for (std::size_t k = 0; k < bins; ++k) {
+        if (p.count[k] == 0 || p.blocked[k]) continue;  // an obstacle's points are not road
+        const auto first = sorted.begin() + static_cast<std::ptrdiff_t>(start[k]);
+        const auto last = sorted.begin() + static_cast<std::ptrdiff_t>(start[k + 1]);
+        if (p.count[k] > 1) p.spread[k] = sample_spread(first, last);
+        p.z[k] = median(first, last);
+    }
     fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m, &p.blocked);
     return p;
 }

@@ -152,7 +152,31 @@ py::object records_or_none(const std::optional<std::vector<Record>>& items, py::
     return items ? py::cast(RecordsRef<Record>{&*items, std::move(owner)}) : py::object(py::none());
 }
 
+// A profile of heights z with the count and spread of the points behind each bin (for the stage functions).
+rp::Profile profile_of(const py::array_t<double, py::array::c_style | py::array::forcecast>& z, double ds,
+                       const py::object& count, const py::object& spread) {
+    rp::Profile p;
+    p.ds = ds;
+    p.z = as_vector(z);
+    const auto c = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>::ensure(count);
+    if (!c || c.ndim() != 1) throw py::value_error("count must be a 1-D array of integers");
+    p.count.assign(c.data(), c.data() + c.size());
+    p.spread = as_vector(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(spread));
+    if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
+        throw py::value_error("z, count and spread must have one entry per bin");
+    return p;
+}
+
+py::object optional_value(const std::optional<double>& v) { return optional_number(v.has_value(), v.value_or(0.0)); }
+
 void bind_results(py::module_& m) {
+    py::class_<rp::Iri>(m, "Iri", "International Roughness Index of one profile (or the mean of both wheels)")
+        .def_property_readonly("value", [](const rp::Iri& i) { return optional_value(i.value); }, "m/km, or None with .reason")
+        .def_readonly("length", &rp::Iri::length_m, "m, the stretch it covers")
+        .def_property_readonly("reason", [](const rp::Iri& i) -> py::object {
+            return i.reason.empty() ? py::object(py::none()) : py::object(py::str(i.reason));
+        });
+
     py::class_<rp::Roughness>(m, "Roughness", "ISO 8608 roughness of one profile (or of the vehicle)")
         .def_property_readonly("iso_class", [](const rp::Roughness& r) -> py::object {
             return r.iso_class ? py::object(py::str(std::string(1, *r.iso_class))) : py::object(py::none());
@@ -175,7 +199,21 @@ void bind_results(py::module_& m) {
         .def_property_readonly("octave_gd", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().octave_gd, self); })
         .def_property_readonly("reason", [](const rp::Roughness& r) -> py::object {
             return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
-        });
+        })
+        .def_property_readonly("confidence", [](const rp::Roughness& r) { return optional_number(r.iso_class.has_value(), r.confidence); },
+                               "probability that the class is right, given the fit's spread")
+        .def_property_readonly("noise_psd", [](py::object self) -> py::object {
+            const auto& r = self.cast<const rp::Roughness&>();
+            return r.noise_psd.empty() ? py::object(py::none()) : py::object(view_of(r.noise_psd, self));
+        }, "m³, expected PSD of the bin errors on the grid n, or None when unknown")
+        .def_property_readonly("noise_floor", [](const rp::Roughness& r) { return optional_value(r.noise_floor); },
+                               "m³, mean of noise_psd over the analysis band")
+        .def_property_readonly("backed_fraction", [](const rp::Roughness& r) { return optional_value(r.backed_fraction); },
+                               "fraction of the stretch's bins that hold points")
+        .def_property_readonly("band_limit", [](const rp::Roughness& r) -> py::object {
+            return r.band_limit.empty() ? py::object(py::none()) : py::object(py::str(r.band_limit));
+        }, "what set the band's upper edge: requested, nyquist, sampling or noise")
+        .def_readonly("iri", &rp::Roughness::iri);
 
     py::class_<rp::Profile>(m, "Profile", "Height profile under one wheel, binned along its path")
         .def_readonly("s0", &rp::Profile::s0)
@@ -185,6 +223,8 @@ void bind_results(py::module_& m) {
                                "levelled height per bin, m; NaN where missing")
         .def_property_readonly("count", [](py::object self) { return view_of(self.cast<const rp::Profile&>().count, self); },
                                "points per bin (0 where interpolated or missing)")
+        .def_property_readonly("spread", [](py::object self) { return view_of(self.cast<const rp::Profile&>().spread, self); },
+                               "sample standard deviation of each bin's heights, m; NaN below 2 points")
         .def_readonly("roughness", &rp::Profile::roughness)
         .def_property_readonly("blocked", [](py::object self) {
             return view_of(self.cast<const rp::Profile&>().blocked, self, py::dtype("bool"));
@@ -349,9 +389,16 @@ void bind_stages(py::module_& m) {
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
         const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
         rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile);
-        for (rp::Profile* p : {&w.left, &w.right}) p->roughness = rp::analyze_roughness(p->z, cfg.profile.ds_m, cfg.roughness);
+        for (rp::Profile* p : {&w.left, &w.right}) {
+            if (paths.status == rp::PathStatus::Stopped) {
+                p->roughness.reason = p->roughness.iri.reason = "vehicle stopped";
+                continue;
+            }
+            p->roughness = rp::analyze_roughness(*p, cfg.roughness);
+            p->roughness.iri = rp::profile_iri(p->z, cfg.profile.ds_m, cfg.iri);
+        }
         return py::make_tuple(std::move(w.left), std::move(w.right));
-    }, "Profiles of both wheels, with their roughness, from ground points given in the base frame");
+    }, "Profiles of both wheels, with their roughness and IRI, from ground points given in the base frame");
     m.def("level_points", [](py::handle points, std::array<double, 4> plane) {
         py::object holder;
         const rp::PointsView v = points_from(points, holder);
@@ -381,13 +428,42 @@ void bind_stages(py::module_& m) {
                               py::array_t<double>(static_cast<py::ssize_t>(sp.psd.size()), sp.psd.data()));
     });
     m.def("analyze_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds,
-                                  const std::string& config_json) {
-        return rp::analyze_roughness(as_vector(z), ds, config_from(config_json).roughness);
-    });
+                                  const std::string& config_json, py::object count, py::object spread) {
+        const rp::RoughnessConfig cfg = config_from(config_json).roughness;
+        if (count.is_none() != spread.is_none()) throw py::value_error("give both count and spread, or neither");
+        if (count.is_none()) return rp::analyze_roughness(as_vector(z), ds, cfg);
+        return rp::analyze_roughness(profile_of(z, ds, count, spread), cfg);
+    }, py::arg("z"), py::arg("ds"), py::arg("config_json"), py::arg("count") = py::none(), py::arg("spread") = py::none());
     m.def("vehicle_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> zl,
                                   py::array_t<double, py::array::c_style | py::array::forcecast> zr, double ds,
-                                  const std::string& config_json) {
-        return rp::vehicle_roughness(as_vector(zl), as_vector(zr), ds, config_from(config_json).roughness);
+                                  const std::string& config_json, py::object count_left, py::object spread_left,
+                                  py::object count_right, py::object spread_right) {
+        const rp::RoughnessConfig cfg = config_from(config_json).roughness;
+        const bool supported = !count_left.is_none() && !spread_left.is_none() && !count_right.is_none() && !spread_right.is_none();
+        if (!supported) return rp::vehicle_roughness(as_vector(zl), as_vector(zr), ds, cfg);
+        return rp::vehicle_roughness(profile_of(zl, ds, count_left, spread_left), profile_of(zr, ds, count_right, spread_right), cfg);
+    }, py::arg("z_left"), py::arg("z_right"), py::arg("ds"), py::arg("config_json"), py::arg("count_left") = py::none(),
+       py::arg("spread_left") = py::none(), py::arg("count_right") = py::none(), py::arg("spread_right") = py::none());
+    m.def("noise_psd", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count,
+                          py::array_t<double, py::array::c_style | py::array::forcecast> spread, double ds) -> py::object {
+        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
+        const auto psd = rp::noise_psd(count.data(), spread.data(), static_cast<std::size_t>(count.size()), ds);
+        if (!psd) return py::none();
+        return py::array_t<double>(static_cast<py::ssize_t>(psd->size()), psd->data());
+    });
+    m.def("resolved_fraction", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count, double ds,
+                                  py::array_t<double, py::array::c_style | py::array::forcecast> n) {
+        const std::vector<double> phi = rp::resolved_fraction(count.data(), static_cast<std::size_t>(count.size()), ds, as_vector(n));
+        return py::array_t<double>(static_cast<py::ssize_t>(phi.size()), phi.data());
+    });
+    m.def("iri_rectified_slope", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds) {
+        const std::vector<double> v = as_vector(z);
+        const std::vector<double> rs = rp::iri_rectified_slope(v.data(), v.size(), ds);
+        return py::array_t<double>(static_cast<py::ssize_t>(rs.size()), rs.data());
+    });
+    m.def("profile_iri", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds,
+                            const std::string& config_json) {
+        return rp::profile_iri(as_vector(z), ds, config_from(config_json).iri);
     });
     m.def("iso_class", [](double gd) { return std::string(1, rp::iso_class(gd)); });
     bind_obstacle_stages(m);

@@ -11,15 +11,15 @@ Frames: base frame x forward, y left, z up, origin on the ground; metres, second
 
 from pathlib import Path
 
-from . import reference
+from . import reference, sim
 from ._native import native_available
-from .config import (Config, Extrinsics, GroundConfig, ObstaclesConfig, PathConfig, ProfileConfig,
+from .config import (Config, Extrinsics, GroundConfig, IriConfig, ObstaclesConfig, PathConfig, ProfileConfig,
                      RoughnessConfig)
 from .estimator import Estimator
 
 if native_available():
     from . import io
-    from ._core import Obstacles, PathObstacles, Profile, Result, Roughness, __version__
+    from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
 
@@ -30,7 +30,7 @@ def cmake_dir() -> str:
 
 
 __all__ = [
-    "Config", "Extrinsics", "GroundConfig", "PathConfig", "ProfileConfig", "RoughnessConfig", "ObstaclesConfig",
-    "Estimator", "Result", "Profile", "Roughness", "Obstacles", "PathObstacles", "io", "reference", "cmake_dir",
-    "__version__",
+    "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
+    "ObstaclesConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
+    "reference", "sim", "cmake_dir", "__version__",
 ]

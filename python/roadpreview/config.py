@@ -62,6 +62,13 @@ class RoughnessConfig:
     min_length_m: float = 5.0  #: shortest valid stretch that is analysed
     min_cycles: float = 2.0  #: the band starts no lower than min_cycles / stretch length
     min_band_points: int = 5  #: fewest PSD ordinates in the band for a class
+    noise_aware: bool = True  #: fit road + measurement noise; band limited by the sampling (docs/noise-aware-roughness.md)
+    min_resolved_fraction: float = 0.5  #: the band ends where the bins' spacing keeps less of the road's PSD
+
+
+@dataclass
+class IriConfig:
+    min_length_m: float = 11.0  #: shortest valid stretch whose IRI is computed (ASTM E1926's 11 m lead-in)
 
 
 @dataclass
@@ -85,6 +92,7 @@ _STAGES = {
     "profile": ProfileConfig,
     "roughness": RoughnessConfig,
     "obstacles": ObstaclesConfig,
+    "iri": IriConfig,
 }
 
 
@@ -106,6 +114,7 @@ class Config:
     profile: ProfileConfig = field(default_factory=ProfileConfig)
     roughness: RoughnessConfig = field(default_factory=RoughnessConfig)
     obstacles: ObstaclesConfig = field(default_factory=ObstaclesConfig)
+    iri: IriConfig = field(default_factory=IriConfig)
 
     def __post_init__(self) -> None:
         for name, cls in _STAGES.items():

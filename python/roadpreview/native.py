@@ -69,12 +69,30 @@ def displacement_psd(x, ds):
     return core().displacement_psd(np.asarray(x, dtype=float), float(ds))
 
 
-def analyze_roughness(z, ds, cfg: Config | None = None):
-    return core().analyze_roughness(np.asarray(z, dtype=float), float(ds), _cfg(cfg))
+def analyze_roughness(z, ds, cfg: Config | None = None, *, count=None, spread=None):
+    return core().analyze_roughness(np.asarray(z, dtype=float), float(ds), _cfg(cfg), count, spread)
 
 
-def vehicle_roughness(z_left, z_right, ds, cfg: Config | None = None):
-    return core().vehicle_roughness(np.asarray(z_left, dtype=float), np.asarray(z_right, dtype=float), float(ds), _cfg(cfg))
+def vehicle_roughness(z_left, z_right, ds, cfg: Config | None = None, *, count_left=None, spread_left=None,
+                      count_right=None, spread_right=None):
+    return core().vehicle_roughness(np.asarray(z_left, dtype=float), np.asarray(z_right, dtype=float), float(ds),
+                                    _cfg(cfg), count_left, spread_left, count_right, spread_right)
+
+
+def noise_psd(count, spread, ds):
+    return core().noise_psd(np.asarray(count), np.asarray(spread, dtype=float), float(ds))
+
+
+def resolved_fraction(count, ds, n):
+    return core().resolved_fraction(np.asarray(count), float(ds), np.asarray(n, dtype=float))
+
+
+def rectified_slope(z, ds):
+    return core().iri_rectified_slope(np.asarray(z, dtype=float), float(ds))
+
+
+def profile_iri(z, ds, cfg: Config | None = None):
+    return core().profile_iri(np.asarray(z, dtype=float), float(ds), _cfg(cfg))
 
 
 def iso_class(gd_n0):

@@ -54,6 +54,7 @@ def assert_profiles_agree(cpp, ref, ground_identical):
         np.testing.assert_array_equal(c.count, r.count)
         np.testing.assert_array_equal(np.isnan(c.z), np.isnan(r.z))
         np.testing.assert_allclose(c.z, r.z, atol=1e-5, equal_nan=True)
+        np.testing.assert_allclose(c.spread, r.spread, atol=1e-5, equal_nan=True)  # as z: float32 points
         assert_roughness_agrees(c.roughness, r.roughness)
     if ground_identical:
         assert_roughness_agrees(cpp.vehicle, ref.vehicle)
@@ -62,16 +63,41 @@ def assert_profiles_agree(cpp, ref, ground_identical):
 def assert_roughness_agrees(c, r):
     assert c.reason == r.reason
     assert c.iso_class == r.iso_class or _on_a_class_limit(r.gd_n0)
+    assert_support_agrees(c, r)
+    assert_iri_agrees(c.iri, r.iri)
     if r.gd_n0 is None:
         assert c.gd_n0 is None
         return
     np.testing.assert_allclose(c.n, r.n, rtol=1e-12)
-    np.testing.assert_allclose(c.psd, r.psd, rtol=1e-4, atol=1e-6 * np.max(r.psd))
+    psd_atol = 1e-6 * np.max(r.psd)  # float32 points: rounding-level ordinates differ in relative terms
+    np.testing.assert_allclose(c.psd, r.psd, rtol=1e-4, atol=psd_atol)
     assert c.gd_n0 == pytest.approx(r.gd_n0, rel=1e-4)
     assert c.band == pytest.approx(r.band, rel=1e-12)
-    np.testing.assert_allclose(c.octave_gd, r.octave_gd, rtol=1e-4)
+    assert c.band_limit == r.band_limit
+    assert c.confidence == pytest.approx(r.confidence, abs=1e-4)
+    np.testing.assert_allclose(c.octave_gd, r.octave_gd, rtol=1e-4, atol=psd_atol)  # means of psd ordinates
     if r.waviness is not None:
         assert c.waviness == pytest.approx(r.waviness, abs=1e-4)
+
+
+def assert_support_agrees(c, r):
+    """Backed fraction, noise PSD and noise floor of the analysed stretch (None when not known)."""
+    assert (c.backed_fraction is None) == (r.backed_fraction is None)
+    if r.backed_fraction is not None:
+        assert c.backed_fraction == pytest.approx(r.backed_fraction, rel=1e-12)
+    assert (c.noise_psd is None) == (r.noise_psd is None)
+    if r.noise_psd is not None:
+        # Spreads agree to float32 rounding of the points (1e-8 m of spreads down to 1e-5 m): 1e-3 relative.
+        np.testing.assert_allclose(c.noise_psd, r.noise_psd, rtol=1e-3, atol=1e-9 * np.max(r.noise_psd))
+        assert c.noise_floor == pytest.approx(r.noise_floor, rel=1e-3)
+
+
+def assert_iri_agrees(c, r):
+    assert c.reason == r.reason
+    assert c.length == pytest.approx(r.length, rel=1e-12)
+    assert (c.value is None) == (r.value is None)
+    if r.value is not None:
+        assert c.value == pytest.approx(r.value, rel=1e-6)
 
 
 def _on_a_class_limit(gd):
@@ -137,3 +163,36 @@ def test_roughness_stage_agrees_on_random_profiles(seed, count, ds, gap):
     np.testing.assert_allclose(filled_cpp, filled_ref, rtol=1e-14, atol=1e-15, equal_nan=True)  # rounding only
     assert rp.native.longest_valid_stretch(z) == rp.reference.longest_valid_stretch(z)
     assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg))
+
+
+def random_support(rng, count_bins):
+    """Point counts (with empty bins) and spreads as the profile stage makes them (NaN below 2 points)."""
+    count = rng.choice([0, 0, 1, 2, 3, 8, 20], size=count_bins).astype(np.int32)
+    count[[0, -1]] = np.maximum(count[[0, -1]], 1)  # a stretch starts and ends on points
+    spread = np.where(count >= 2, rng.uniform(0.0, 0.02, count_bins), np.nan)
+    return count, spread
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), count=st.integers(50, 500), gd_exponent=st.integers(0, 7),
+       noise_aware=st.booleans())
+def test_noise_aware_roughness_agrees_on_random_profiles(seed, count, gd_exponent, noise_aware):
+    rng = np.random.default_rng(seed)
+    n = np.arange(count // 2 + 1) / (count * 0.1)
+    psd = np.zeros_like(n)
+    psd[1:-1] = 16e-6 * 4.0**gd_exponent * (n[1:-1] / 0.1) ** -2
+    z = np.fft.irfft(np.sqrt(psd * count / 0.2) * (rng.standard_normal(len(n)) + 1j * rng.standard_normal(len(n))) / np.sqrt(2), n=count)
+    counts, spread = random_support(rng, count)
+    z = rp.reference.fill_gaps(np.where(counts > 0, z, np.nan), 0.1, 10.0)
+    cfg = rp.Config(roughness={"noise_aware": noise_aware})
+    support = {"count": counts, "spread": spread}
+    assert_roughness_agrees(rp.native.analyze_roughness(z, 0.1, cfg, **support),
+                            rp.reference.analyze_roughness(z, 0.1, cfg, **support))
+    np.testing.assert_allclose(rp.native.noise_psd(counts, spread, 0.1), rp.reference.noise_psd(counts, spread, 0.1),
+                               rtol=1e-9)
+    np.testing.assert_allclose(rp.native.resolved_fraction(counts, 0.1, n), rp.reference.resolved_fraction(counts, 0.1, n),
+                               rtol=1e-12, atol=1e-15)
+    other = np.roll(z, 7)
+    both = {"count_left": counts, "spread_left": spread, "count_right": counts[::-1].copy(), "spread_right": spread[::-1].copy()}
+    assert_roughness_agrees(rp.native.vehicle_roughness(z, other, 0.1, cfg, **both),
+                            rp.reference.vehicle_roughness(z, other, 0.1, cfg, **both))

@@ -52,6 +52,12 @@ struct RoughnessConfig {
     double min_length_m = 5.0;  ///< shortest valid stretch that is analysed
     double min_cycles = 2.0;    ///< the band starts no lower than min_cycles / stretch length
     int min_band_points = 5;    ///< fewest PSD ordinates in the band for a class
+    bool noise_aware = true;             ///< fit signal + measurement noise; band limited by the sampling
+    double min_resolved_fraction = 0.5;  ///< the band ends where the bins' spacing keeps less of the road's PSD
+};
+
+struct IriConfig {
+    double min_length_m = 11.0;  ///< shortest valid stretch whose IRI is computed (ASTM E1926's 11 m lead-in)
 };
 
 /// Obstacles (docs/method.md §5): Euclidean clusters of the non-ground ROI points, and where they cross
@@ -77,6 +83,7 @@ struct Config {
     ProfileConfig profile;
     RoughnessConfig roughness;
     ObstaclesConfig obstacles;
+    IriConfig iri;
 };
 
 /// Throws std::invalid_argument naming the first offending field.

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Stage 3 — wheel-path height profiles: ground points in each wheel's corridor, binned along arc length.
+// Stage 3 — wheel-path height profiles: ground points in each wheel's corridor, binned along arc length,
+// with the count and spread of the points behind each bin (for the noise-aware roughness).
 #pragma once
 
 #include <array>
@@ -23,6 +24,7 @@ struct Profile {
     std::vector<double> s;             ///< m, bin centres
     std::vector<double> z;             ///< m, median height per bin (levelled), NaN where missing
     std::vector<std::int32_t> count;   ///< points per bin (0 for interpolated bins)
+    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points
     Roughness roughness;
     std::vector<std::uint8_t> blocked;  ///< 1 where an obstacle covers the bin (z is NaN there), docs/method.md §5
     std::optional<std::vector<PathObstacle>> obstacles;  ///< in this wheel's path; nullopt: clustering is off

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Stage 4 — roughness: one-sided displacement PSD of a profile and its ISO 8608 class (docs/method.md §4).
+// Stage 4 — roughness: one-sided displacement PSD of a profile and its ISO 8608 class (docs/method.md §4);
+// noise-aware when the points behind the bins are known (docs/noise-aware-roughness.md); the IRI beside it.
 #pragma once
 
 #include <optional>
@@ -7,8 +8,12 @@
 #include <vector>
 
 #include "roadpreview/config.hpp"
+#include "roadpreview/iri.hpp"
+#include "roadpreview/support.hpp"
 
 namespace roadpreview {
+
+struct Profile;
 
 inline constexpr double kIsoN0 = 0.1;  ///< ISO 8608 reference spatial frequency, cycles/m
 inline constexpr char kIsoClasses[] = "ABCDEFGH";
@@ -33,20 +38,37 @@ struct Roughness {
     std::vector<double> octave_centers;   ///< cycles/m
     std::vector<double> octave_gd;        ///< m³, mean G_d in each ISO 8608 octave band
     std::string reason;                   ///< empty when classified
+    double confidence = 0.0;              ///< probability that the class is right, given the fit's spread
+    std::vector<double> noise_psd;        ///< m³, expected PSD of the bin errors on the grid n; empty: unknown
+    std::optional<double> noise_floor;    ///< m³, mean of noise_psd over the analysis band
+    std::optional<double> backed_fraction;  ///< bins of the stretch that hold points; nullopt: unknown
+    std::string band_limit;               ///< what set the band's upper edge: requested, nyquist, sampling, noise
+    Iri iri;                              ///< International Roughness Index of the same profile (§6)
 };
 
 /// ISO 8608 class of G_d(n0) in m³ (limits at the geometric midpoints; a limit belongs to the rougher class).
 char iso_class(double gd_n0_m3);
 
-/// Steps 6–9 of §4 on a spectrum of a stretch `length_m` long.
-Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg);
+/// Steps 6–9 of §4 on a spectrum of a stretch `length_m` long; with `support` (and cfg.noise_aware) the band
+/// and fit of docs/noise-aware-roughness.md.
+Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg,
+                            const StretchSupport* support = nullptr);
 
-/// The whole of §4 on a profile with NaN for missing bins.
+/// The whole of §4 on a profile with NaN for missing bins (no point statistics: not noise-aware).
 Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg);
 
-/// Both wheels over the longest stretch valid in both, PSDs averaged.
+/// The whole of §4 on a profile, noise-aware from its count and spread.
+Roughness analyze_roughness(const Profile& profile, const RoughnessConfig& cfg);
+
+/// Both wheels over the longest stretch valid in both, PSDs averaged (not noise-aware).
 Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
                             const RoughnessConfig& cfg);
+
+/// Both wheels, noise-aware with the mean of the two profiles' support.
+Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg);
+
+/// Probability that the true G_d(n0) lies in iso_class(gd_n0) for a normal error of ln G_d(n0) of this variance.
+double class_confidence(double gd_n0_m3, double log_variance);
 
 /// Half-open [first, last) of the longest run of finite values (the first on ties).
 std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z);

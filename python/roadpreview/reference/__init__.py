@@ -8,6 +8,7 @@ import numpy as _np
 from .frames import to_base_frame
 from .ground import fit_ground, fit_plane
 from .obstacles import Obstacles, PathObstacles, blocked_bins, cluster_labels, find_obstacles, wheel_obstacles
+from .iri import Iri, profile_iri, rectified_slope
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
@@ -21,6 +22,7 @@ from .roughness import (
     longest_valid_stretch,
     vehicle_roughness,
 )
+from .support import noise_psd, resolved_fraction
 
 POINT_DTYPE = _np.float64  #: points are used in double precision
 
@@ -39,6 +41,11 @@ __all__ = [
     "displacement_psd",
     "fill_gaps",
     "find_obstacles",
+    "Iri",
+    "noise_psd",
+    "profile_iri",
+    "rectified_slope",
+    "resolved_fraction",
     "fit_ground",
     "fit_plane",
     "iso_class",

@@ -13,6 +13,7 @@ from .ground import fit_ground, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
+from .iri import Iri, vehicle_iri
 from .roughness import Roughness, vehicle_roughness
 
 
@@ -34,7 +35,8 @@ def _without_profiles(ground_mask, plane, counts, path, reason: str, cfg: Config
     profiles = [empty_profile(reason) for _ in range(2)]
     for profile in profiles:
         profile.obstacles = PathObstacles() if cfg.obstacles.enabled else None
-    return Result(ground_mask, plane, counts, path, *profiles, Roughness(reason=reason), reason, obstacles, labels)
+    return Result(ground_mask, plane, counts, path, *profiles, Roughness(reason=reason, iri=Iri(reason=reason)), reason,
+                  obstacles, labels)
 
 
 def _clusters(base_xyz, ground, plane, cfg: Config):
@@ -72,7 +74,9 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
         return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped", cfg, obstacles, labels)
     left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
                    for wheel in ("left", "right"))
-    vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg)
+    vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
+                                spread_left=left.spread, count_right=right.count, spread_right=right.spread)
+    vehicle.iri = vehicle_iri(left.roughness.iri, right.roughness.iri)
     return Result(ground_mask, plane, counts, path, left, right, vehicle, None, obstacles, labels)
 
 

@@ -1,5 +1,5 @@
 """Wheel height profiles (docs/method.md §3 Profiles): levelling, wheel corridors and arc length,
-median binning and gap filling. `wheel_profile` also fills in the profile's roughness (§4)."""
+median binning and gap filling. `wheel_profile` also fills in the profile's roughness (§4) and IRI (§6)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,9 @@ import numpy as np
 
 from ..config import Config
 from .path import wheel_y
-from .roughness import Roughness, analyze_roughness, true_runs
+from .iri import Iri, profile_iri
+from .roughness import Roughness, analyze_roughness
+from .runs import true_runs
 
 # Tolerance on "run length ≤ max_gap_m", so that e.g. 3 bins × 0.1 m count as 0.3 m.
 _GAP_LENGTH_TOLERANCE = 1e-9
@@ -22,6 +24,7 @@ class Profile:
     s: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: bin centres, m
     z: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: median height per bin, NaN = missing
     count: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  #: points per bin
+    spread: np.ndarray = field(default_factory=lambda: np.zeros(0))  #: sample std of the bin's heights, NaN below 2
     roughness: Roughness = field(default_factory=Roughness)
     blocked: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  #: bin covered by an obstacle
     obstacles: Optional[Any] = None  #: obstacles.PathObstacles in this wheel's path; None: clustering is off
@@ -62,6 +65,13 @@ def bin_count(cfg: Config) -> int:
 
 def bin_medians(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
     """(median z, count) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m."""
+    median, count, _ = bin_statistics(s, z, cfg)
+    return median, count
+
+
+def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(median z, count, spread) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m; the spread is
+    the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points."""
     k_bins = bin_count(cfg)
     kept = (s >= 0) & (s < cfg.profile.preview_length_m)
     # s just below the preview length can round to bin K; it still belongs to the last bin.
@@ -75,7 +85,12 @@ def bin_medians(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, 
     upper = first[filled] + count[filled] // 2
     median = np.full(k_bins, np.nan)
     median[filled] = (z_sorted[lower] + z_sorted[upper]) / 2
-    return median, count
+    mean = np.bincount(k, weights=z_sorted, minlength=k_bins) / np.maximum(count, 1)
+    squares = np.bincount(k, weights=(z_sorted - mean[k]) ** 2, minlength=k_bins)
+    spread = np.full(k_bins, np.nan)
+    multi = count >= 2
+    spread[multi] = np.sqrt(squares[multi] / (count[multi] - 1))
+    return median, count, spread
 
 
 def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
@@ -97,7 +112,7 @@ def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
 
 
 def empty_profile(reason: str) -> Profile:
-    return Profile(roughness=Roughness(reason=reason))
+    return Profile(roughness=Roughness(reason=reason, iri=Iri(reason=reason)))
 
 
 def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
@@ -112,10 +127,13 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
     if cfg.profile.level and plane is not None:
         xyz = level_points(xyz, plane)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
-    median, count = bin_medians(s[in_corridor], xyz[in_corridor, 2], cfg)
+    median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg)
     blocked = np.zeros(len(median), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
-    median[blocked] = np.nan
+    median[blocked] = np.nan  # an obstacle's points are not road
+    spread[blocked] = np.nan
     ds = cfg.profile.ds_m
     z = fill_gaps(median, ds, cfg.profile.max_gap_m, blocked)
     centres = (np.arange(len(z)) + 0.5) * ds
-    return Profile(s=centres, z=z, count=count, roughness=analyze_roughness(z, ds, cfg), blocked=blocked)
+    roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
+    roughness.iri = profile_iri(z, ds, cfg)
+    return Profile(s=centres, z=z, count=count, spread=spread, roughness=roughness, blocked=blocked)

@@ -1,14 +1,19 @@
 """Roughness of a height profile (docs/method.md §4 Roughness): stretch, PSD, band, bias-corrected
-log fit, ISO 8608 class, octave bands, and the two-wheel vehicle result."""
+log fit, ISO 8608 class, octave bands, and the two-wheel vehicle result; noise-aware when the points behind
+each bin are known (docs/noise-aware-roughness.md)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
 
 from ..config import Config
+from .iri import Iri
+from .runs import NO_VALID_BIN, longest_run, longest_valid_stretch
+from .support import Support
 
 ISO_CLASSES = "ABCDEFGH"
 ISO_GEOMETRIC_MEANS = 1e-6 * 4.0 ** np.arange(2, 10)  # 16, 64, ..., 262144 (×10⁻⁶ m³)
@@ -16,10 +21,18 @@ ISO_CLASS_LIMITS = 2.0 * ISO_GEOMETRIC_MEANS[:-1]  # geometric midpoints 32, 128
 N0_CPM = 0.1  # ISO 8608 reference spatial frequency
 OCTAVE_CENTERS = 2.0 ** np.arange(-6, 3)  # ISO 8608 octave band centres, cycles/m
 
-NO_VALID_BIN = "no valid profile"
 TOO_SHORT = "valid stretch too short"
 TOO_FEW_ORDINATES = "too few PSD ordinates in band"
+NOISE_UNKNOWN = "noise floor unknown"
+NOISE_DOMINATES = "noise dominates the band"
 BAND_EDGE_TOLERANCE = 1e-9  # relative: an ordinate sitting on a band edge is inside
+WHITTLE_ITERATIONS = 60  # Fisher-scoring steps of the noise-aware fit
+MAX_WHITTLE_STEP = 1.0  # in ln G_d(n0): scoring overshoots when it starts far (a spectrum far from n^−2)
+# Variance of ln G_d(n0) from M ordinates of a Hann-windowed stretch is factor/M. Neighbouring ordinates are
+# correlated (DFT coefficients −2/3 at lag 1, 1/6 at lag 2, so periodogram ordinates 4/9 and 1/36):
+# log regression: (π²/6)·(1 + 2·[Li₂(4/9) + Li₂(1/36)]/ζ(2)); likelihood fit: 1 + 2·(4/9 + 1/36).
+LOG_FIT_VARIANCE_FACTOR = math.pi**2 / 6 * 1.6504918528873
+WHITTLE_VARIANCE_FACTOR = 1 + 2 * (4 / 9 + 1 / 36)
 
 
 def _empty() -> np.ndarray:
@@ -38,6 +51,12 @@ class Roughness:
     octave_centers: np.ndarray = field(default_factory=_empty)
     octave_gd: np.ndarray = field(default_factory=_empty)
     reason: Optional[str] = None  #: why there is no class (None when classified)
+    confidence: Optional[float] = None  #: probability that the class is right, given the fit's spread
+    noise_psd: Optional[np.ndarray] = None  #: m³, expected PSD of the bin errors on the grid n (None: unknown)
+    noise_floor: Optional[float] = None  #: m³, mean of noise_psd over the analysis band
+    backed_fraction: Optional[float] = None  #: bins of the stretch that hold points (None: unknown)
+    band_limit: Optional[str] = None  #: what set the band's upper edge: requested, nyquist, sampling or noise
+    iri: Iri = field(default_factory=Iri)  #: International Roughness Index of the same profile (§6)
 
 
 def iso_class(gd_n0: float) -> str:
@@ -45,26 +64,6 @@ def iso_class(gd_n0: float) -> str:
     if np.isnan(gd_n0):
         raise ValueError("gd_n0 is NaN")
     return ISO_CLASSES[int(np.count_nonzero(gd_n0 >= ISO_CLASS_LIMITS))]
-
-
-def true_runs(mask) -> list[tuple[int, int]]:
-    """Half-open (start, stop) of every run of consecutive True values, in order."""
-    padded = np.concatenate(([False], np.asarray(mask, dtype=bool), [False]))
-    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
-    return list(zip(edges[0::2].tolist(), edges[1::2].tolist()))
-
-
-def _longest_run(mask) -> tuple[int, int]:
-    runs = true_runs(mask)
-    if not runs:
-        return 0, 0
-    lengths = [stop - start for start, stop in runs]
-    return runs[int(np.argmax(lengths))]  # argmax picks the first on ties
-
-
-def longest_valid_stretch(z) -> tuple[int, int]:
-    """(start, stop) of the longest run of non-NaN bins, the first one on ties; (0, 0) when there is none."""
-    return _longest_run(~np.isnan(np.asarray(z, dtype=np.float64)))
 
 
 def detrend(x: np.ndarray) -> np.ndarray:
@@ -96,9 +95,16 @@ def displacement_psd(x, ds: float) -> tuple[np.ndarray, np.ndarray]:
     return np.arange(len(spectrum)) * freq_step, psd
 
 
-def analysis_band(length: float, ds: float, cfg: Config) -> tuple[float, float]:
+def analysis_band(length: float, ds: float, cfg: Config) -> tuple[float, float, str]:
+    """(lo, hi, what sets hi): the requested band clipped to what the stretch resolves (step 6)."""
     r = cfg.roughness
-    return max(r.band_min_cpm, r.min_cycles / length), min(r.band_max_cpm, 1.0 / (2 * ds))
+    lo = max(r.band_min_cpm, r.min_cycles / length)
+    nyquist = 1.0 / (2 * ds)
+    return (lo, r.band_max_cpm, "requested") if r.band_max_cpm <= nyquist else (lo, nyquist, "nyquist")
+
+
+def in_band(n: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    return (n > 0) & (n >= lo * (1 - BAND_EDGE_TOLERANCE)) & (n <= hi * (1 + BAND_EDGE_TOLERANCE))
 
 
 def octave_bands(n: np.ndarray, psd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,17 +118,21 @@ def octave_bands(n: np.ndarray, psd: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return np.array(centers), np.array(means)
 
 
-def _fit_w2(n: np.ndarray, psd: np.ndarray) -> float:
-    """G_d(n0) of ln G = ln G(n0) − 2 ln(n/n0), with the log-periodogram bias correction +γ."""
+def _log_psd(psd: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore"):  # a zero ordinate (perfectly flat profile) gives G_d(n0) = 0
-        return float(np.exp(np.mean(np.log(psd) + 2 * np.log(n / N0_CPM)) + np.euler_gamma))
+        return np.log(psd)
 
 
-def _fit_free(n: np.ndarray, psd: np.ndarray) -> tuple[Optional[float], Optional[float]]:
+def _fit_w2(n: np.ndarray, log_psd: np.ndarray) -> float:
+    """G_d(n0) of ln G = ln G(n0) − 2 ln(n/n0), with the log-periodogram bias correction +γ."""
+    return float(np.exp(np.mean(log_psd + 2 * np.log(n / N0_CPM)) + np.euler_gamma))
+
+
+def _fit_free(n: np.ndarray, log_psd: np.ndarray) -> tuple[Optional[float], Optional[float]]:
     """(waviness w, G_d(n0)) of the OLS fit ln G = A − w ln(n/n0); (None, None) if not finite."""
     t = np.log(n / N0_CPM)
     with np.errstate(divide="ignore", invalid="ignore"):
-        y = np.log(psd)
+        y = log_psd
         slope = ((t - t.mean()) @ (y - y.mean())) / ((t - t.mean()) @ (t - t.mean()))
         intercept = y.mean() - slope * t.mean()
     if not (np.isfinite(slope) and np.isfinite(intercept)):
@@ -130,19 +140,114 @@ def _fit_free(n: np.ndarray, psd: np.ndarray) -> tuple[Optional[float], Optional
     return float(-slope), float(np.exp(intercept + np.euler_gamma))
 
 
-def classify_psd(n: np.ndarray, psd: np.ndarray, length: float, ds: float, cfg: Config) -> Roughness:
-    """§4 steps 6–9 on a PSD of a stretch of the given length."""
-    lo, hi = analysis_band(length, ds, cfg)
+def _leading(indices: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """The indices from the first up to (not including) the first one where keep is False."""
+    failing = np.flatnonzero(~keep)
+    return indices[: failing[0] if len(failing) else len(indices)]
+
+
+@dataclass
+class _Fit:
+    gd_n0: float
+    variance: float  #: of ln gd_n0
+    free: tuple  #: (waviness, G_d(n0)) of the free fit, or (None, None)
+    reason: Optional[str] = None
+    noise_bound: bool = False  #: the noise dominates: gd_n0 is the upper bound of the fit without noise
+
+
+def _log_fit(n: np.ndarray, log_psd: np.ndarray, used: np.ndarray) -> _Fit:
+    """§4 step 7: log-periodogram regression with w = 2, and the free-w fit, over the ordinates used."""
+    return _Fit(_fit_w2(n[used], log_psd[used]), LOG_FIT_VARIANCE_FACTOR / len(used), _fit_free(n[used], log_psd[used]))
+
+
+def _whittle_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, resolved: np.ndarray, noise: np.ndarray):
+    """(G_d(n0), signal share w_k of each ordinate) maximising the Whittle likelihood of exponential ordinates
+    with E[G_k] = S_k + N_k, S_k = Φ_k·G_d(n0)·(n_k/n0)^−2: Fisher scoring in θ = ln G_d(n0) from the
+    log-regression estimate, θ ← θ + Σw_k(G_k/E[G_k] − 1) / Σw_k², w_k = S_k/E[G_k], each step at most ±1."""
+    shape = resolved[used] * (n[used] / N0_CPM) ** -2.0
+    g, floor = psd[used], noise[used]
+    theta = math.log(max(_fit_w2(n[used], _log_psd(g)), np.finfo(float).tiny))
+    for _ in range(WHITTLE_ITERATIONS):
+        expected = math.exp(theta) * shape + floor
+        share = math.exp(theta) * shape / expected
+        information = float(np.sum(share**2))
+        if information < 1e-12:  # the signal has vanished below the noise
+            break
+        step = float(np.sum(share * (g / expected - 1))) / information
+        theta += min(max(step, -MAX_WHITTLE_STEP), MAX_WHITTLE_STEP)
+    signal = math.exp(theta) * shape
+    return math.exp(theta), signal / (signal + floor)
+
+
+def _noise_aware_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, support: Support, cfg: Config) -> _Fit:
+    """docs/noise-aware-roughness.md §4–5: the likelihood fit with the noise PSD, valid when its effective number
+    of signal-dominated ordinates Σw_k² reaches min_band_points; the free-w fit on the noise-corrected logs of
+    the ordinates the signal dominates (w_k ≥ ½). Otherwise the fit without noise, an upper bound, gives class A
+    if it is below class A's limit, and no class else."""
+    if support.noise is None:
+        return _Fit(0.0, 0.0, (None, None), NOISE_UNKNOWN)
+    gd, share = _whittle_fit(n, psd, used, support.resolved, support.noise)
+    effective = float(np.sum(share**2))
+    if effective >= cfg.roughness.min_band_points:
+        strong = share >= 0.5
+        corrected = _log_psd(psd[used][strong]) - np.log(support.resolved[used][strong] / share[strong])
+        free = _fit_free(n[used][strong], corrected) if np.count_nonzero(strong) >= 2 else (None, None)
+        return _Fit(gd, WHITTLE_VARIANCE_FACTOR / effective, free)
+    upper, _ = _whittle_fit(n, psd, used, support.resolved, np.zeros(len(n)))
+    if iso_class(upper) != "A":
+        return _Fit(upper, 0.0, (None, None), NOISE_DOMINATES, noise_bound=True)
+    free = _fit_free(n[used], _log_psd(psd[used]))
+    return _Fit(upper, WHITTLE_VARIANCE_FACTOR / len(used), free, noise_bound=True)
+
+
+def class_confidence(gd_n0: float, variance: float) -> float:
+    """Probability that the true G_d(n0) lies in the class of the estimate, for a normal error of ln G_d(n0)
+    with this variance about the estimate."""
+    k = ISO_CLASSES.index(iso_class(gd_n0))
+    if gd_n0 <= 0:
+        return 1.0
+    sigma = math.sqrt(variance)
+
+    def below(limit):  # P(true value < limit)
+        return 0.5 * math.erfc((math.log(gd_n0) - math.log(limit)) / (sigma * math.sqrt(2)))
+
+    upper = below(ISO_CLASS_LIMITS[k]) if k < len(ISO_CLASS_LIMITS) else 1.0
+    lower = below(ISO_CLASS_LIMITS[k - 1]) if k > 0 else 0.0
+    return upper - lower
+
+
+def classify_psd(n: np.ndarray, psd: np.ndarray, length: float, ds: float, cfg: Config,
+                 support: Optional[Support] = None) -> Roughness:
+    """§4 steps 6–9 on a PSD of a stretch of the given length; with ``support`` (what the points behind the bins
+    support) and ``roughness.noise_aware``, the band and fit of docs/noise-aware-roughness.md."""
+    lo, hi, limit = analysis_band(length, ds, cfg)
     centers, octave_gd = octave_bands(n, psd)
-    result = Roughness(n=n, psd=psd, octave_centers=centers, octave_gd=octave_gd)
-    in_band = (n > 0) & (n >= lo * (1 - BAND_EDGE_TOLERANCE)) & (n <= hi * (1 + BAND_EDGE_TOLERANCE))
-    if lo >= hi or np.count_nonzero(in_band) < cfg.roughness.min_band_points:
+    result = Roughness(n=n, psd=psd, octave_centers=centers, octave_gd=octave_gd, band_limit=limit)
+    used = np.flatnonzero(in_band(n, lo, hi))
+    if support is not None:
+        result.backed_fraction, result.noise_psd = support.backed, support.noise
+        if support.noise is not None and len(used):
+            result.noise_floor = float(np.mean(support.noise[used]))
+    noise_aware = support is not None and cfg.roughness.noise_aware
+    if noise_aware and len(used):
+        resolved = _leading(used, support.resolved[used] >= cfg.roughness.min_resolved_fraction)
+        if len(resolved) < len(used):
+            hi = float(n[resolved[-1]]) if len(resolved) else lo
+            used, result.band_limit = resolved, "sampling"
+    if lo >= hi or len(used) < cfg.roughness.min_band_points:
         result.reason = TOO_FEW_ORDINATES
         return result
+    fit = _noise_aware_fit(n, psd, used, support, cfg) if noise_aware else _log_fit(n, _log_psd(psd), used)
+    if fit.noise_bound:
+        result.band_limit = "noise"
+    if fit.reason:
+        result.reason = fit.reason
+        return result
     result.band = (lo, hi)
-    result.gd_n0 = _fit_w2(n[in_band], psd[in_band])
-    result.waviness, result.gd_n0_free = _fit_free(n[in_band], psd[in_band])
-    result.iso_class = iso_class(result.gd_n0)
+    result.gd_n0 = fit.gd_n0
+    result.waviness, result.gd_n0_free = fit.free
+    result.iso_class = iso_class(fit.gd_n0)
+    result.confidence = class_confidence(fit.gd_n0, fit.variance)
     return result
 
 
@@ -154,8 +259,9 @@ def _stretch_problem(count: int, ds: float, cfg: Config) -> Optional[str]:
     return None
 
 
-def analyze_roughness(z, ds: float, cfg: Config | None = None) -> Roughness:
-    """The whole of §4 for one profile (NaN = missing bin)."""
+def analyze_roughness(z, ds: float, cfg: Config | None = None, *, count=None, spread=None) -> Roughness:
+    """The whole of §4 for one profile (NaN = missing bin); noise-aware when the bins' point counts and height
+    spreads (the profile's ``count`` and ``spread``) are given."""
     cfg = cfg or Config()
     z = np.asarray(z, dtype=np.float64)
     start, stop = longest_valid_stretch(z)
@@ -163,11 +269,13 @@ def analyze_roughness(z, ds: float, cfg: Config | None = None) -> Roughness:
     if problem:
         return Roughness(reason=problem)
     n, psd = displacement_psd(z[start:stop], ds)
-    return classify_psd(n, psd, (stop - start) * ds, ds, cfg)
+    return classify_psd(n, psd, (stop - start) * ds, ds, cfg, Support.of(count, spread, start, stop, ds, n))
 
 
-def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None) -> Roughness:
-    """§4 on the mean of both wheels' PSDs over the longest run of bins valid in both profiles."""
+def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, count_left=None, spread_left=None,
+                      count_right=None, spread_right=None) -> Roughness:
+    """§4 on the mean of both wheels' PSDs over the longest run of bins valid in both profiles; noise-aware
+    (the mean of the two wheels' support) when both profiles' counts and spreads are given."""
     cfg = cfg or Config()
     z_left = np.asarray(z_left, dtype=np.float64)
     z_right = np.asarray(z_right, dtype=np.float64)
@@ -175,10 +283,13 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None) -> 
         return Roughness(reason=NO_VALID_BIN)
     if z_left.shape != z_right.shape:
         raise ValueError(f"left and right profiles differ in shape: {z_left.shape} vs {z_right.shape}")
-    start, stop = _longest_run(~np.isnan(z_left) & ~np.isnan(z_right))
+    start, stop = longest_run(~np.isnan(z_left) & ~np.isnan(z_right))
     problem = _stretch_problem(stop - start, ds, cfg)
     if problem:
         return Roughness(reason=problem)
     n, psd_left = displacement_psd(z_left[start:stop], ds)
     _, psd_right = displacement_psd(z_right[start:stop], ds)
-    return classify_psd(n, (psd_left + psd_right) / 2, (stop - start) * ds, ds, cfg)
+    left = Support.of(count_left, spread_left, start, stop, ds, n)
+    right = Support.of(count_right, spread_right, start, stop, ds, n)
+    support = Support.mean(left, right) if left is not None and right is not None else None
+    return classify_psd(n, (psd_left + psd_right) / 2, (stop - start) * ds, ds, cfg, support)

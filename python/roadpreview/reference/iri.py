@@ -1,0 +1,94 @@
+"""International Roughness Index (docs/method.md §6): the ASTM E1926 golden quarter-car driven over a wheel's
+profile at 80 km/h, after the 250 mm moving average; IRI = mean rectified suspension slope, in m/km."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..config import Config
+from .runs import NO_VALID_BIN, longest_valid_stretch
+
+# Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
+K1, K2, C, MU = 653.0, 63.3, 6.0, 0.15
+SPEED_MPS = 80.0 / 3.6
+BASE_LENGTH_M = 0.25  # the moving average that stands in for the tyre's envelope
+INIT_LENGTH_M = 11.0  # the initial state takes the profile's mean slope over this length
+TOO_SHORT = "valid stretch too short for IRI"
+
+
+@dataclass
+class Iri:
+    value: Optional[float] = None  #: m/km; None with a reason
+    length: float = 0.0  #: m, the stretch it covers (0 without one)
+    reason: Optional[str] = None
+
+
+def golden_car() -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) of dx/dt = A·x + B·slope with x = (sprung, its rate, unsprung, its rate), in slope units."""
+    a = np.array([[0.0, 1.0, 0.0, 0.0],
+                  [-K2, -C, K2, C],
+                  [0.0, 0.0, 0.0, 1.0],
+                  [K2 / MU, C / MU, -(K1 + K2) / MU, -C / MU]])
+    b = np.array([0.0, 0.0, 0.0, K1 / MU])
+    return a, b
+
+
+def transition(ds: float) -> tuple[np.ndarray, np.ndarray]:
+    """(ST, PR): the exact discrete step over ds at 80 km/h for an input slope held constant over the step,
+    ST = exp(A·dt), PR = A⁻¹(ST − I)·B; the exponential from the eigen-decomposition of A."""
+    a, b = golden_car()
+    eigenvalues, vectors = np.linalg.eig(a * (ds / SPEED_MPS))
+    st = (vectors @ np.diag(np.exp(eigenvalues)) @ np.linalg.inv(vectors)).real
+    pr = np.linalg.solve(a, (st - np.eye(4)) @ b)
+    return st, pr
+
+
+def moving_average_samples(ds: float) -> int:
+    """Samples in the 250 mm moving average: max(1, nearest integer to 0.25/ds, halves rounded up)."""
+    return max(1, int(np.floor(BASE_LENGTH_M / ds + 0.5 + 1e-9)))
+
+
+def rectified_slope(z, ds: float) -> np.ndarray:
+    """|sprung − unsprung slope| (m/m) after each step of the smoothed profile. The smoothed profile's slopes
+    are (z[i+k] − z[i])/(k·ds) for the k-sample moving average; the car starts level with the profile's mean
+    slope over its first 11 m, (z[a] − z[0])/(a·ds), a = the sample nearest to 11 m (or the last one)."""
+    z = np.asarray(z, dtype=np.float64)
+    k = moving_average_samples(ds)
+    if len(z) <= k:
+        return np.zeros(0)
+    a = min(int(np.floor(INIT_LENGTH_M / ds + 0.5)), len(z) - 1)  # nearest sample, halves up
+    initial = (z[a] - z[0]) / (a * ds)
+    state = np.array([initial, 0.0, initial, 0.0])
+    st, pr = transition(ds)
+    out = np.empty(len(z) - k)
+    for i, slope in enumerate((z[k:] - z[:-k]) / (k * ds)):
+        state = st @ state + pr * slope
+        out[i] = abs(state[0] - state[2])
+    return out
+
+
+def iri(z, ds: float) -> float:
+    """IRI of an all-finite profile sampled every ds metres, m/km."""
+    return float(np.mean(rectified_slope(z, ds)) * 1000.0)
+
+
+def profile_iri(z, ds: float, cfg: Config | None = None) -> Iri:
+    """IRI over the longest valid stretch of a profile (NaN = missing), if it is at least iri.min_length_m."""
+    cfg = cfg or Config()
+    start, stop = longest_valid_stretch(z)
+    if stop == start:
+        return Iri(reason=NO_VALID_BIN)
+    length = (stop - start - 1) * ds
+    if length < cfg.iri.min_length_m - 1e-9 or stop - start <= moving_average_samples(ds):
+        return Iri(length=length, reason=TOO_SHORT)
+    return Iri(value=iri(np.asarray(z, dtype=np.float64)[start:stop], ds), length=length)
+
+
+def vehicle_iri(left: Iri, right: Iri) -> Iri:
+    """The mean of both wheels' IRI (the mean roughness index), when both have one."""
+    if left.value is None or right.value is None:
+        return Iri(reason=left.reason or right.reason)
+    return Iri(value=(left.value + right.value) / 2, length=min(left.length, right.length))

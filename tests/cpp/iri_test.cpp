@@ -1,0 +1,105 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <fstream>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <roadpreview/iri.hpp>
+
+namespace rp = roadpreview;
+
+namespace {
+
+constexpr double kDs = 0.1;
+
+std::vector<double> read_column(const std::string& path, int column, int columns) {
+    std::ifstream in(path);
+    std::vector<double> out;
+    double v;
+    for (int i = 0; in >> v; ++i)
+        if (i % columns == column) out.push_back(v);
+    return out;
+}
+
+std::vector<double> reference_iri(const std::string& name) {
+    std::ifstream in(std::string(ROADPREVIEW_TEST_DATA) + "/profiles/sroubek_iri/reference_iri_computed/" + name);
+    std::string header;
+    std::getline(in, header);
+    std::vector<double> iri;
+    double start, end, value, spread;
+    while (in >> start >> end >> value >> spread) iri.push_back(value);
+    return iri;
+}
+
+// |H(iω)| of the continuous golden car from input slope to (sprung − unsprung) slope.
+double golden_car_response(double wavelength_m) {
+    const double k1 = 653.0, k2 = 63.3, c = 6.0, mu = 0.15, v = 80.0 / 3.6;
+    Eigen::Matrix4cd a;
+    a << 0, 1, 0, 0, -k2, -c, k2, c, 0, 0, 0, 1, k2 / mu, c / mu, -(k1 + k2) / mu, -c / mu;
+    const Eigen::Vector4cd b(0, 0, 0, k1 / mu);
+    const std::complex<double> iw(0.0, 2.0 * M_PI * v / wavelength_m);
+    const Eigen::Vector4cd x = (iw * Eigen::Matrix4cd::Identity() - a).partialPivLu().solve(b);
+    return std::abs(x[0] - x[2]);
+}
+
+}  // namespace
+
+TEST(Iri, FlatAndInclinedProfilesGiveZero) {
+    std::vector<double> flat(500, 0.3), grade(500);
+    for (std::size_t j = 0; j < grade.size(); ++j) grade[j] = 0.04 * j * kDs;
+    EXPECT_NEAR(rp::iri(flat.data(), flat.size(), kDs), 0.0, 1e-12);
+    EXPECT_NEAR(rp::iri(grade.data(), grade.size(), kDs), 0.0, 1e-9);
+}
+
+TEST(Iri, SineGivesTheQuarterCarResponse) {
+    for (double wavelength : {2.47, 15.3}) {  // not multiples of the step: |cos| is sampled at every phase
+        const double amplitude = 0.004;
+        std::vector<double> z(20000);
+        for (std::size_t j = 0; j < z.size(); ++j) z[j] = amplitude * std::sin(2 * M_PI * j * kDs / wavelength);
+        const std::vector<double> rs = rp::iri_rectified_slope(z.data(), z.size(), kDs);
+        const double steady = 1000.0 * std::accumulate(rs.begin() + 2000, rs.end(), 0.0) / (rs.size() - 2000);
+        const double base = 3 * kDs, x = kDs / wavelength;
+        const double slope = amplitude * 2 * std::abs(std::sin(M_PI * base / wavelength)) / base *
+                             std::sin(M_PI * x) / (M_PI * x);  // 250 mm average, slope held over each step
+        EXPECT_NEAR(steady / (1000.0 * 2 / M_PI * golden_car_response(wavelength) * slope), 1.0, 5e-3) << wavelength;
+    }
+}
+
+TEST(Iri, RealProfileMatchesTheReferenceProgramWithinOnePercent) {
+    const std::string dir = std::string(ROADPREVIEW_TEST_DATA) + "/profiles/sroubek_iri/";
+    const std::vector<double> elevation = read_column(dir + "profile_1.txt", 1, 2);
+    ASSERT_EQ(elevation.size(), 2177u);
+    const std::vector<double> rs = rp::iri_rectified_slope(elevation.data() + 2, elevation.size() - 2, 0.25);  // from 478.5 m
+    for (int segment : {20, 100}) {
+        const std::vector<double> reference = reference_iri("profile_1_seg" + std::to_string(segment) + "_sayers_start478.5.txt");
+        ASSERT_FALSE(reference.empty());
+        const std::size_t steps = static_cast<std::size_t>(segment / 0.25);
+        for (std::size_t i = 0; i < reference.size(); ++i) {
+            const double ours = 1000.0 * std::accumulate(rs.begin() + i * steps, rs.begin() + (i + 1) * steps, 0.0) / steps;
+            EXPECT_NEAR(ours / reference[i], 1.0, 0.01) << segment << " m segment " << i;
+        }
+    }
+}
+
+TEST(Iri, ProfileIriTakesTheLongestStretchOrDeclines) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> z(400, nan);
+    for (int k = 100; k < 200; ++k) z[k] = 0.01 * std::sin(0.3 * k);  // 9.9 m
+    rp::IriConfig cfg;
+    rp::Iri short_one = rp::profile_iri(z, kDs, cfg);
+    EXPECT_FALSE(short_one.value);
+    EXPECT_EQ(short_one.reason, "valid stretch too short for IRI");
+    for (int k = 200; k < 260; ++k) z[k] = 0.01 * std::sin(0.3 * k);  // 15.9 m
+    const rp::Iri iri = rp::profile_iri(z, kDs, cfg);
+    ASSERT_TRUE(iri.value) << iri.reason;
+    EXPECT_DOUBLE_EQ(*iri.value, rp::iri(z.data() + 100, 160, kDs));
+    EXPECT_NEAR(iri.length_m, 15.9, 1e-9);
+    const rp::Iri mean = rp::vehicle_iri(iri, rp::profile_iri(std::vector<double>(400, 0.0), kDs, cfg));
+    EXPECT_DOUBLE_EQ(*mean.value, 0.5 * *iri.value);
+    EXPECT_EQ(rp::vehicle_iri(iri, short_one).reason, short_one.reason);
+}
