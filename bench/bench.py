@@ -177,7 +177,8 @@ def ouster_frame(meta_path: Path, seed: int = 0, max_range: float = 100.0) -> tu
 
 # ------------------------------------------------------------------------------------------------ timing
 def config(frame: Frame, method: str) -> rp.Config:
-    return rp.Config(sensor_height=frame.sensor_height, ground={"method": method})
+    """The paper's pipeline: the obstacle stage (not in the paper, timed by bench/obstacles.py) is off."""
+    return rp.Config(sensor_height=frame.sensor_height, ground={"method": method}, obstacles={"enabled": False})
 
 
 def time_cpp(frame: Frame, method: str, repeat: int):
@@ -194,15 +195,15 @@ def time_cpp(frame: Frame, method: str, repeat: int):
     return runs, res
 
 
-def reference_wheel_z(ground_xyz, plane, path: dict, wheel: str, speed: float, yaw_rate: float,
-                      cfg: rp.Config) -> np.ndarray:
-    """The height profile of ``reference.wheel_profile`` without its roughness analysis (timed apart)."""
+def reference_wheel_bins(ground_xyz, plane, path: dict, wheel: str, speed: float, yaw_rate: float,
+                         cfg: rp.Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(z, count, spread) of ``reference.wheel_profile`` without its roughness analysis (timed apart)."""
     xyz = ground_xyz
     if cfg.profile.level:
         xyz = ref_profile.level_points(xyz, plane)
     s, in_corridor = ref_profile.arc_length(xyz[:, :2], path, wheel, speed, yaw_rate, cfg)
-    median, _ = ref_profile.bin_medians(s[in_corridor], xyz[in_corridor, 2], cfg)
-    return ref_profile.fill_gaps(median, cfg.profile.ds_m, cfg.profile.max_gap_m)
+    median, count, spread = ref_profile.bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg)
+    return ref_profile.fill_gaps(median, cfg.profile.ds_m, cfg.profile.max_gap_m), count, spread
 
 
 def reference_once(points: np.ndarray, cfg: rp.Config):
@@ -232,14 +233,15 @@ def reference_once(points: np.ndarray, cfg: rp.Config):
     profiles = None
     if plane is not None and path["status"] != "stopped":
         ground_xyz = base_xyz[ground]
-        z = [reference_wheel_z(ground_xyz, plane, path, wheel, speed, yaw_rate, cfg) for wheel in ("left", "right")]
+        (zl, cl, sl), (zr, cr, sr) = (reference_wheel_bins(ground_xyz, plane, path, wheel, speed, yaw_rate, cfg)
+                                      for wheel in ("left", "right"))
         ms["profile"] = lap()
         ds = cfg.profile.ds_m
-        for wheel_z in z:
-            ref.analyze_roughness(wheel_z, ds, cfg)
-        ref.vehicle_roughness(z[0], z[1], ds, cfg)
+        for z, count, spread in ((zl, cl, sl), (zr, cr, sr)):  # noise-aware, as the C++ pipeline
+            ref.analyze_roughness(z, ds, cfg, count=count, spread=spread)
+        ref.vehicle_roughness(zl, zr, ds, cfg, count_left=cl, spread_left=sl, count_right=cr, spread_right=sr)
         ms["roughness"] = lap()
-        profiles = (z[0], z[1], ground_xyz, plane, path)
+        profiles = (zl, zr, ground_xyz, plane, path)
     ms["total"] = sum(ms.values())
     return ms, mask, profiles
 

@@ -63,12 +63,6 @@ def bin_count(cfg: Config) -> int:
     return math.ceil(p.preview_length_m / p.ds_m - 1e-9)
 
 
-def bin_medians(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
-    """(median z, count) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m."""
-    median, count, _ = bin_statistics(s, z, cfg)
-    return median, count
-
-
 def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(median z, count, spread) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m; the spread is
     the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points."""
