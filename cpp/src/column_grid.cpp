@@ -21,7 +21,7 @@ ColumnGrid::ColumnGrid(std::vector<Point> points, double edge) : points_(std::mo
     edge_ = std::max({edge, (x1_ - x0_) / (side - 1.0), (y1_ - y0_) / (side - 1.0)});  // ≤ side columns a side
     const std::size_t nx = column(x1_, x0_) + 1;
     ny_ = column(y1_, y0_) + 1;
-    // Counting sort by column, then each column by z.
+    // Counting sort by column.
     std::vector<std::uint32_t> key(points_.size());
     start_.assign(nx * ny_ + 1, 0);
     for (std::size_t k = 0; k < points_.size(); ++k) {
@@ -33,10 +33,6 @@ ColumnGrid::ColumnGrid(std::vector<Point> points, double edge) : points_(std::mo
     std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
     for (std::size_t k = 0; k < points_.size(); ++k) sorted[next[key[k]]++] = points_[k];
     points_ = std::move(sorted);
-    for (std::size_t c = 0; c + 1 < start_.size(); ++c)
-        if (start_[c + 1] - start_[c] > 1)
-            std::sort(points_.begin() + start_[c], points_.begin() + start_[c + 1],
-                      [](const Point& a, const Point& b) { return a.z < b.z; });
 }
 
 }  // namespace roadpreview

@@ -32,18 +32,18 @@ int GridRadiusSearch::radiusSearch(const pcl::PointXYZ& point, double radius, pc
     k_indices.clear();
     k_sqr_distances.clear();
     const auto sqr_radius = static_cast<float>(radius * radius);  // as pcl::KdTreeFLANN
-    // The box visited reaches a little beyond the radius: float rounding can accept a point just outside it.
+    // The columns visited reach a little beyond the radius: float rounding can accept a point just outside it.
     const double reach = radius * (1.0 + 1e-5);
-    grid_.visit(point.x - reach, point.x + reach, point.y - reach, point.y + reach, point.z - reach, point.z + reach,
-                [&](const ColumnGrid::Point& q) {
-                    const float dx = point.x - q.x, dy = point.y - q.y, dz = point.z - q.z;
-                    float sqr_distance = dx * dx;  // summed in FLANN's order
-                    sqr_distance += dy * dy;
-                    sqr_distance += dz * dz;
-                    if (sqr_distance >= sqr_radius) return;
-                    k_indices.push_back(q.index);
-                    k_sqr_distances.push_back(sqr_distance);
-                });
+    grid_.visit_columns(point.x - reach, point.x + reach, point.y - reach, point.y + reach,
+                        [&](const ColumnGrid::Point& q) {
+                            const float dx = point.x - q.x, dy = point.y - q.y, dz = point.z - q.z;
+                            float sqr_distance = dx * dx;  // summed in FLANN's order
+                            sqr_distance += dy * dy;
+                            sqr_distance += dz * dz;
+                            if (sqr_distance >= sqr_radius) return;
+                            k_indices.push_back(q.index);
+                            k_sqr_distances.push_back(sqr_distance);
+                        });
     if (sorted_results_ || (max_nn > 0 && k_indices.size() > max_nn)) sortResults(k_indices, k_sqr_distances);
     if (max_nn > 0 && k_indices.size() > max_nn) {
         k_indices.resize(max_nn);

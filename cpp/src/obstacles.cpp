@@ -9,6 +9,7 @@
 
 #include <pcl/segmentation/extract_clusters.h>
 
+#include "column_grid.hpp"
 #include "grid_radius_search.hpp"
 #include "median.hpp"
 #include "obstacles_pcl.hpp"
@@ -45,9 +46,12 @@ struct Representatives {
 
 using Voxel = std::array<std::int64_t, 3>;  // voxel indices in x, y, z
 
-// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index.
+// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index; the integer
+// conversion and its correction below zero spare a call of std::floor per coordinate.
 std::int64_t voxel_index(float v, double edge) {
-    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / edge), -1e15, 1e15));
+    const double q = std::clamp(static_cast<double>(v) / edge, -1e15, 1e15);
+    const auto truncated = static_cast<std::int64_t>(q);
+    return truncated - (q < static_cast<double>(truncated) ? 1 : 0);
 }
 
 // Stable counting sort of `order` by key(k) in [0, buckets).
@@ -215,63 +219,22 @@ Cluster describe(PointsView pts, const pcl::Indices& members) {
     return c;
 }
 
-// Ground points bucketed by square cells (counting sort), to find those around a cluster in O(nearby).
-class GroundGrid {
-public:
-    GroundGrid(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane) {
-        double x1 = -kInf, y1 = -kInf;
-        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
-            if (!ground[static_cast<std::size_t>(i)]) continue;
-            x0_ = std::min<double>(x0_, pts(i, 0)), x1 = std::max<double>(x1, pts(i, 0));
-            y0_ = std::min<double>(y0_, pts(i, 1)), y1 = std::max<double>(y1, pts(i, 1));
-        }
-        if (x1 < x0_) return;  // no ground point
-        cell_ = std::max({1.0, (x1 - x0_) / 512.0, (y1 - y0_) / 512.0});  // at most 513² cells
-        nx_ = cell_index(x1, x0_) + 1, ny_ = cell_index(y1, y0_) + 1;
-        start_.assign(nx_ * ny_ + 1, 0);
-        for (Eigen::Index i = 0; i < pts.rows(); ++i)
-            if (ground[static_cast<std::size_t>(i)]) ++start_[cell_of(pts(i, 0), pts(i, 1)) + 1];
-        for (std::size_t k = 0; k < nx_ * ny_; ++k) start_[k + 1] += start_[k];
-        points_.resize(start_.back());
-        std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
-        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
-            if (!ground[static_cast<std::size_t>(i)]) continue;
-            const double x = pts(i, 0), y = pts(i, 1);
-            points_[next[cell_of(x, y)]++] = {x, y, height_above(plane, x, y, pts(i, 2))};
-        }
-    }
-
-    /// Heights above the plane of the ground points with x in [x_lo, x_hi] and y in [y_lo, y_hi].
-    std::vector<double> heights_in(double x_lo, double x_hi, double y_lo, double y_hi) const {
-        std::vector<double> out;
-        if (points_.empty() || x_hi < x0_ || y_hi < y0_) return out;
-        const std::size_t ix1 = std::min(cell_index(x_hi, x0_), nx_ - 1), iy1 = std::min(cell_index(y_hi, y0_), ny_ - 1);
-        for (std::size_t ix = cell_index(std::max(x_lo, x0_), x0_); ix <= ix1; ++ix) {
-            for (std::size_t iy = cell_index(std::max(y_lo, y0_), y0_); iy <= iy1; ++iy) {
-                const std::size_t k = ix * ny_ + iy;
-                for (std::size_t j = start_[k]; j < start_[k + 1]; ++j) {
-                    const auto& q = points_[j];
-                    if (q[0] >= x_lo && q[0] <= x_hi && q[1] >= y_lo && q[1] <= y_hi) out.push_back(q[2]);
-                }
-            }
-        }
-        return out;
-    }
-
-private:
-    std::size_t cell_index(double v, double origin) const { return static_cast<std::size_t>((v - origin) / cell_); }
-    std::size_t cell_of(double x, double y) const { return cell_index(x, x0_) * ny_ + cell_index(y, y0_); }
-
-    double x0_ = kInf, y0_ = kInf, cell_ = 1.0;
-    std::size_t nx_ = 0, ny_ = 0;
-    std::vector<std::size_t> start_;
-    std::vector<std::array<double, 3>> points_;  // x, y, height above the plane
-};
+// The ground points in columns 1 m wide, to find those around a cluster in O(nearby).
+ColumnGrid ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground) {
+    std::vector<ColumnGrid::Point> points;
+    for (Eigen::Index i = 0; i < pts.rows(); ++i)
+        if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+    return ColumnGrid(std::move(points), 1.0);
+}
 
 // Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
-double local_ground(const GroundGrid& grid, const Cluster& c, double reach) {
-    std::vector<double> h = grid.heights_in(c.aabb_min[0] - reach, c.aabb_max[0] + reach, c.aabb_min[1] - reach,
-                                            c.aabb_max[1] + reach);
+double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach) {
+    const double x_lo = c.aabb_min[0] - reach, x_hi = c.aabb_max[0] + reach;
+    const double y_lo = c.aabb_min[1] - reach, y_hi = c.aabb_max[1] + reach;
+    std::vector<double> h;
+    ground.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](const ColumnGrid::Point& q) {
+        if (q.x >= x_lo && q.x <= x_hi && q.y >= y_lo && q.y <= y_hi) h.push_back(height_above(plane, q.x, q.y, q.z));
+    });
     return h.empty() ? 0.0 : median(h.begin(), h.end());
 }
 
@@ -280,11 +243,11 @@ Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const s
     const Groups groups = groups_of(label);
     Clustering out;
     out.label = std::move(label);
-    const GroundGrid grid(pts, ground, plane);
+    const ColumnGrid ground_grid = ground_columns(pts, ground);
     for (std::size_t g = 0; g < groups.size(); ++g) {
         Cluster c = describe(pts, groups[g]);
         c.id = static_cast<std::int32_t>(g);
-        c.ground_offset = local_ground(grid, c, cfg.ground_search_m);
+        c.ground_offset = local_ground(ground_grid, plane, c, cfg.ground_search_m);
         double top = -kInf;
         for (const auto i : groups[g]) top = std::max(top, height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2)));
         c.height = top - c.ground_offset;
