@@ -283,6 +283,11 @@ Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& gr
     return out;
 }
 
+pcl::PointCloud<pcl::PointXYZ>::Ptr cluster_representatives(PointsView points, const pcl::Indices& candidates,
+                                                            double voxel_m) {
+    return representatives(points, candidates, voxel_m).cloud;
+}
+
 std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfig& cfg) {
     pcl::Indices finite;
     for (Eigen::Index i = 0; i < points.rows(); ++i)
