@@ -14,7 +14,7 @@ What it prints, as Markdown tables on stdout (progress on stderr):
      sidewalk, other-ground, lane-marking, terrain); unlabelled points do not vote.
 2. Time per frame, median (min–max) over ``--repeat`` runs after warm-up, single-threaded:
    * "clustering": the C++ stage function ``cluster_labels`` on the frame's non-ground front-region points
-     (copy into a PCL cloud, voxels, PCL Euclidean clustering, ordering), timed around the call;
+     (voxels, PCL Euclidean clustering of their centroids, ids), timed around the call;
    * "obstacle stage": ``Result.timing_ms["obstacles"]`` — clustering, boxes, local ground heights and the
      wheel-path crossings, measured inside C++ — and the pipeline total beside it.
 3. Clustering variants on the same points (``pca`` ground): every point (``voxel_m`` = 0, PCL's Euclidean

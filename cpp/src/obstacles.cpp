@@ -7,9 +7,10 @@
 #include <stdexcept>
 #include <tuple>
 
-#include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
 
+#include "column_grid.hpp"
+#include "grid_radius_search.hpp"
 #include "median.hpp"
 #include "obstacles_pcl.hpp"
 #include "roadpreview/profile.hpp"
@@ -22,133 +23,156 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Groups = std::vector<pcl::Indices>;  // clusters as ascending point indices
 
-// PCL's Euclidean cluster extraction (KD-tree radius search) over the cloud points picked by `indices`, in place.
-std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, const pcl::IndicesConstPtr& indices,
-                                                  double tolerance) {
+// PCL's Euclidean cluster extraction of the cloud's points (radius searches in a grid of columns).
+std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, double tolerance) {
     std::vector<pcl::PointIndices> clusters;
-    if (indices->empty()) return clusters;
+    if (cloud->empty()) return clusters;
     pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
-    // Unsorted radius searches: the extraction only needs the neighbours, not their order.
-    extraction.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>(false));
+    extraction.setSearchMethod(pcl::make_shared<GridRadiusSearch>(tolerance));
     extraction.setClusterTolerance(tolerance);
     extraction.setMinClusterSize(1);  // the size limits count points, applied after voxels are expanded
     extraction.setMaxClusterSize(std::numeric_limits<pcl::uindex_t>::max());
     extraction.setInputCloud(cloud);
-    extraction.setIndices(indices);
     extraction.extract(clusters);
     return clusters;
 }
 
-// The candidates grouped by voxel: the centroid of each occupied voxel, and its points in
-// members[start[v] … start[v + 1]), ascending.
-struct Voxels {
-    Cloud::Ptr centroids = pcl::make_shared<Cloud>();
-    pcl::Indices members;
-    std::vector<std::size_t> start{0};
+// What is clustered: the centroid of each occupied voxel (each candidate itself when the voxel edge is 0),
+// and the representative of each candidate (by its position in the candidate list).
+struct Representatives {
+    Cloud::Ptr cloud = pcl::make_shared<Cloud>();
+    std::vector<std::int32_t> of;
 };
 
-struct VoxelEntry {
-    std::int64_t x, y, z;  // voxel indices
-    pcl::index_t point;
-    bool operator<(const VoxelEntry& o) const { return std::tie(x, y, z, point) < std::tie(o.x, o.y, o.z, o.point); }
-    bool same_voxel(const VoxelEntry& o) const { return x == o.x && y == o.y && z == o.z; }
-};
+using Voxel = std::array<std::int64_t, 3>;  // voxel indices in x, y, z
 
-// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index.
+// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index; the integer
+// conversion and its correction below zero spare a call of std::floor per coordinate.
 std::int64_t voxel_index(float v, double edge) {
-    return static_cast<std::int64_t>(std::clamp(std::floor(static_cast<double>(v) / edge), -1e15, 1e15));
+    const double q = std::clamp(static_cast<double>(v) / edge, -1e15, 1e15);
+    const auto truncated = static_cast<std::int64_t>(q);
+    return truncated - (q < static_cast<double>(truncated) ? 1 : 0);
 }
 
-// Entries ordered by voxel, then point: a counting sort by the x index (the ROI bounds it), then small sorts.
-std::vector<VoxelEntry> sorted_by_voxel(PointsView pts, const pcl::Indices& candidates, double edge) {
-    std::vector<VoxelEntry> entries;
-    entries.reserve(candidates.size());
-    std::int64_t x_min = std::numeric_limits<std::int64_t>::max(), x_max = std::numeric_limits<std::int64_t>::min();
-    for (const auto i : candidates) {
-        entries.push_back({voxel_index(pts(i, 0), edge), voxel_index(pts(i, 1), edge), voxel_index(pts(i, 2), edge), i});
-        x_min = std::min(x_min, entries.back().x), x_max = std::max(x_max, entries.back().x);
+// Stable counting sort of `order` by key(k) in [0, buckets).
+template <class Key>
+void counting_sort(std::vector<std::int32_t>& order, std::size_t buckets, Key key) {
+    std::vector<std::uint32_t> next(buckets + 1, 0);
+    for (const auto k : order) ++next[key(k) + 1];
+    for (std::size_t b = 0; b < buckets; ++b) next[b + 1] += next[b];
+    std::vector<std::int32_t> sorted(order.size());
+    for (const auto k : order) sorted[next[key(k)]++] = k;
+    order = std::move(sorted);
+}
+
+// Positions 0 … n−1 ordered by voxel, each voxel's ascending: counting sorts by z, then by the (x, y) column
+// when the spans are small (the ROI bounds x and y); one comparison sort otherwise.
+std::vector<std::int32_t> voxel_order(const std::vector<Voxel>& voxel) {
+    std::vector<std::int32_t> order(voxel.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<std::int32_t>(k);
+    Voxel lo = voxel.front(), hi = voxel.front();
+    for (const Voxel& v : voxel)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+    const auto span = [&](int a) { return static_cast<std::uint64_t>(hi[a] - lo[a]) + 1; };
+    const std::uint64_t most = 4 * voxel.size() + 4096;
+    if (span(2) <= most && span(0) <= most && span(1) <= most / span(0)) {
+        const auto offset = [&](std::int32_t k, int a) { return static_cast<std::size_t>(voxel[static_cast<std::size_t>(k)][a] - lo[a]); };
+        counting_sort(order, span(2), [&](std::int32_t k) { return offset(k, 2); });
+        counting_sort(order, span(0) * span(1), [&](std::int32_t k) { return offset(k, 0) * span(1) + offset(k, 1); });
+    } else {
+        std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+            return std::tie(voxel[static_cast<std::size_t>(a)], a) < std::tie(voxel[static_cast<std::size_t>(b)], b);
+        });
     }
-    if (entries.empty()) return entries;
-    const auto span = static_cast<std::uint64_t>(x_max - x_min);
-    const std::size_t slabs = span < 4 * entries.size() + 1024 ? static_cast<std::size_t>(span) + 1 : 1;
-    const auto slab = [&](const VoxelEntry& e) { return slabs == 1 ? 0 : static_cast<std::size_t>(e.x - x_min); };
-    std::vector<std::size_t> first(slabs + 1, 0);
-    for (const auto& e : entries) ++first[slab(e) + 1];
-    for (std::size_t k = 0; k < slabs; ++k) first[k + 1] += first[k];
-    std::vector<VoxelEntry> sorted(entries.size());
-    std::vector<std::size_t> next(first.begin(), first.end() - 1);
-    for (const auto& e : entries) sorted[next[slab(e)]++] = e;
-    for (std::size_t k = 0; k < slabs; ++k) std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
-    return sorted;
+    return order;
 }
 
-Voxels voxelize(PointsView pts, const pcl::Indices& candidates, double edge) {
-    const std::vector<VoxelEntry> sorted = sorted_by_voxel(pts, candidates, edge);
-    Voxels v;
-    v.members.reserve(sorted.size());
-    for (std::size_t first = 0, last = 0; first < sorted.size(); first = last) {
+// The voxel centroids, each the mean of its candidates in ascending order (double precision).
+Representatives voxel_centroids(PointsView pts, const pcl::Indices& candidates, double edge) {
+    Representatives r;
+    if (candidates.empty()) return r;
+    std::vector<Voxel> voxel(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        for (int a = 0; a < 3; ++a) voxel[k][a] = voxel_index(pts(candidates[k], a), edge);
+    const std::vector<std::int32_t> order = voxel_order(voxel);
+    r.of.resize(candidates.size());
+    for (std::size_t first = 0, last = 0; first < order.size(); first = last) {
+        const Voxel& v = voxel[static_cast<std::size_t>(order[first])];
         Vec3 sum{};
-        for (last = first; last < sorted.size() && sorted[last].same_voxel(sorted[first]); ++last) {
-            for (int a = 0; a < 3; ++a) sum[a] += pts(sorted[last].point, a);
-            v.members.push_back(sorted[last].point);
+        for (last = first; last < order.size() && voxel[static_cast<std::size_t>(order[last])] == v; ++last) {
+            const auto k = static_cast<std::size_t>(order[last]);
+            for (int a = 0; a < 3; ++a) sum[a] += pts(candidates[k], a);
+            r.of[k] = static_cast<std::int32_t>(r.cloud->size());
         }
         const double n = static_cast<double>(last - first);
-        v.centroids->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
-                                             static_cast<float>(sum[2] / n)));
-        v.start.push_back(last);
+        r.cloud->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
+                                         static_cast<float>(sum[2] / n)));
     }
-    return v;
+    return r;
 }
 
-// Clusters of the candidates: PCL's Euclidean clustering of the points themselves (voxel_m = 0, in place), or
-// of the voxel centroids, each point joining its voxel's cluster; then the size limits, in points.
-Groups point_clusters(const Cloud::ConstPtr& cloud, PointsView pts, const pcl::IndicesConstPtr& candidates,
-                      const ObstaclesConfig& cfg) {
-    Groups groups;
-    if (cfg.voxel_m <= 0.0) {
-        for (auto& c : euclidean_clusters(cloud, candidates, cfg.cluster_tolerance_m)) groups.push_back(std::move(c.indices));
-    } else {
-        const Voxels v = voxelize(pts, *candidates, cfg.voxel_m);
-        auto all = pcl::make_shared<pcl::Indices>(v.centroids->size());
-        for (std::size_t k = 0; k < all->size(); ++k) (*all)[k] = static_cast<pcl::index_t>(k);
-        for (const auto& c : euclidean_clusters(v.centroids, all, cfg.cluster_tolerance_m)) {
-            pcl::Indices points;
-            for (const auto k : c.indices)
-                points.insert(points.end(), v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k]),
-                              v.members.begin() + static_cast<std::ptrdiff_t>(v.start[k + 1]));
-            std::sort(points.begin(), points.end());
-            groups.push_back(std::move(points));
-        }
+Representatives representatives(PointsView pts, const pcl::Indices& candidates, double voxel_edge) {
+    if (voxel_edge > 0.0) return voxel_centroids(pts, candidates, voxel_edge);
+    Representatives r;
+    for (const auto i : candidates) {
+        r.of.push_back(static_cast<std::int32_t>(r.cloud->size()));
+        r.cloud->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
     }
-    const auto outside = [&](const pcl::Indices& g) {
-        const auto n = static_cast<std::int64_t>(g.size());
-        return n < cfg.min_cluster_points || n > cfg.max_cluster_points;
-    };
-    groups.erase(std::remove_if(groups.begin(), groups.end(), outside), groups.end());
-    return groups;
+    return r;
 }
 
-// Nearest first (smallest x), ties by the lowest point index.
-void sort_nearest_first(Groups& groups, PointsView pts) {
-    std::vector<std::pair<float, pcl::index_t>> keys(groups.size());
-    for (std::size_t g = 0; g < groups.size(); ++g) {
+// Cluster id per candidate (−1: none): PCL's Euclidean clusters of the representatives, each candidate joining
+// its representative's; clusters outside the size limits (in points) dropped, the rest ranked nearest first
+// (smallest x of their points), ties by their lowest point index.
+std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+    const Representatives reps = representatives(pts, candidates, cfg.voxel_m);
+    const std::vector<pcl::PointIndices> components = euclidean_clusters(reps.cloud, cfg.cluster_tolerance_m);
+    std::vector<std::int32_t> component_of(reps.cloud->size());
+    for (std::size_t c = 0; c < components.size(); ++c)
+        for (const auto r : components[c].indices) component_of[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(c);
+    struct Extent {
+        std::int64_t count = 0;
         float x_min = std::numeric_limits<float>::infinity();
-        for (const auto i : groups[g]) x_min = std::min(x_min, pts(i, 0));
-        keys[g] = {x_min, groups[g].front()};
+        pcl::index_t first = std::numeric_limits<pcl::index_t>::max();
+        bool operator<(const Extent& o) const { return std::tie(x_min, first) < std::tie(o.x_min, o.first); }
+    };
+    std::vector<Extent> extent(components.size());
+    std::vector<std::int32_t> label(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        label[k] = component_of[static_cast<std::size_t>(reps.of[k])];
+        Extent& e = extent[static_cast<std::size_t>(label[k])];
+        ++e.count;
+        e.x_min = std::min(e.x_min, pts(candidates[k], 0));
+        e.first = std::min(e.first, candidates[k]);
     }
-    std::vector<std::size_t> order(groups.size());
-    for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
-    Groups sorted(groups.size());
-    for (std::size_t g = 0; g < order.size(); ++g) sorted[g] = std::move(groups[order[g]]);
-    groups = std::move(sorted);
+    std::vector<std::int32_t> kept;
+    for (std::size_t c = 0; c < extent.size(); ++c)
+        if (extent[c].count >= cfg.min_cluster_points && extent[c].count <= cfg.max_cluster_points)
+            kept.push_back(static_cast<std::int32_t>(c));
+    std::sort(kept.begin(), kept.end(), [&](std::int32_t a, std::int32_t b) { return extent[a] < extent[b]; });
+    std::vector<std::int32_t> id(components.size(), -1);
+    for (std::size_t rank = 0; rank < kept.size(); ++rank) id[static_cast<std::size_t>(kept[rank])] = static_cast<std::int32_t>(rank);
+    for (auto& l : label) l = id[static_cast<std::size_t>(l)];
+    return label;
 }
 
-std::vector<std::int32_t> labels_of(const Groups& groups, std::size_t points) {
-    std::vector<std::int32_t> label(points, -1);
-    for (std::size_t g = 0; g < groups.size(); ++g)
-        for (const auto i : groups[g]) label[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(g);
+// Cluster id per point (−1: none) of the `candidates` among `points` points.
+std::vector<std::int32_t> point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+    std::vector<std::int32_t> label(static_cast<std::size_t>(pts.rows()), -1);
+    const std::vector<std::int32_t> of_candidate = candidate_labels(pts, candidates, cfg);
+    for (std::size_t k = 0; k < candidates.size(); ++k) label[static_cast<std::size_t>(candidates[k])] = of_candidate[k];
     return label;
+}
+
+// Each cluster's points, ascending.
+Groups groups_of(const std::vector<std::int32_t>& label) {
+    Groups groups;
+    for (std::size_t i = 0; i < label.size(); ++i) {
+        if (label[i] < 0) continue;
+        if (static_cast<std::size_t>(label[i]) >= groups.size()) groups.resize(static_cast<std::size_t>(label[i]) + 1);
+        groups[static_cast<std::size_t>(label[i])].push_back(static_cast<pcl::index_t>(i));
+    }
+    return groups;
 }
 
 // The box about the vertical axis along the principal horizontal directions: yaw = ½·atan2(2c_xy, c_xx − c_yy).
@@ -195,76 +219,35 @@ Cluster describe(PointsView pts, const pcl::Indices& members) {
     return c;
 }
 
-// Ground points bucketed by square cells (counting sort), to find those around a cluster in O(nearby).
-class GroundGrid {
-public:
-    GroundGrid(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane) {
-        double x1 = -kInf, y1 = -kInf;
-        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
-            if (!ground[static_cast<std::size_t>(i)]) continue;
-            x0_ = std::min<double>(x0_, pts(i, 0)), x1 = std::max<double>(x1, pts(i, 0));
-            y0_ = std::min<double>(y0_, pts(i, 1)), y1 = std::max<double>(y1, pts(i, 1));
-        }
-        if (x1 < x0_) return;  // no ground point
-        cell_ = std::max({1.0, (x1 - x0_) / 512.0, (y1 - y0_) / 512.0});  // at most 513² cells
-        nx_ = cell_index(x1, x0_) + 1, ny_ = cell_index(y1, y0_) + 1;
-        start_.assign(nx_ * ny_ + 1, 0);
-        for (Eigen::Index i = 0; i < pts.rows(); ++i)
-            if (ground[static_cast<std::size_t>(i)]) ++start_[cell_of(pts(i, 0), pts(i, 1)) + 1];
-        for (std::size_t k = 0; k < nx_ * ny_; ++k) start_[k + 1] += start_[k];
-        points_.resize(start_.back());
-        std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
-        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
-            if (!ground[static_cast<std::size_t>(i)]) continue;
-            const double x = pts(i, 0), y = pts(i, 1);
-            points_[next[cell_of(x, y)]++] = {x, y, height_above(plane, x, y, pts(i, 2))};
-        }
-    }
-
-    /// Heights above the plane of the ground points with x in [x_lo, x_hi] and y in [y_lo, y_hi].
-    std::vector<double> heights_in(double x_lo, double x_hi, double y_lo, double y_hi) const {
-        std::vector<double> out;
-        if (points_.empty() || x_hi < x0_ || y_hi < y0_) return out;
-        const std::size_t ix1 = std::min(cell_index(x_hi, x0_), nx_ - 1), iy1 = std::min(cell_index(y_hi, y0_), ny_ - 1);
-        for (std::size_t ix = cell_index(std::max(x_lo, x0_), x0_); ix <= ix1; ++ix) {
-            for (std::size_t iy = cell_index(std::max(y_lo, y0_), y0_); iy <= iy1; ++iy) {
-                const std::size_t k = ix * ny_ + iy;
-                for (std::size_t j = start_[k]; j < start_[k + 1]; ++j) {
-                    const auto& q = points_[j];
-                    if (q[0] >= x_lo && q[0] <= x_hi && q[1] >= y_lo && q[1] <= y_hi) out.push_back(q[2]);
-                }
-            }
-        }
-        return out;
-    }
-
-private:
-    std::size_t cell_index(double v, double origin) const { return static_cast<std::size_t>((v - origin) / cell_); }
-    std::size_t cell_of(double x, double y) const { return cell_index(x, x0_) * ny_ + cell_index(y, y0_); }
-
-    double x0_ = kInf, y0_ = kInf, cell_ = 1.0;
-    std::size_t nx_ = 0, ny_ = 0;
-    std::vector<std::size_t> start_;
-    std::vector<std::array<double, 3>> points_;  // x, y, height above the plane
-};
+// The ground points in columns 1 m wide, to find those around a cluster in O(nearby).
+ColumnGrid ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground) {
+    std::vector<ColumnGrid::Point> points;
+    for (Eigen::Index i = 0; i < pts.rows(); ++i)
+        if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+    return ColumnGrid(std::move(points), 1.0);
+}
 
 // Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
-double local_ground(const GroundGrid& grid, const Cluster& c, double reach) {
-    std::vector<double> h = grid.heights_in(c.aabb_min[0] - reach, c.aabb_max[0] + reach, c.aabb_min[1] - reach,
-                                            c.aabb_max[1] + reach);
+double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach) {
+    const double x_lo = c.aabb_min[0] - reach, x_hi = c.aabb_max[0] + reach;
+    const double y_lo = c.aabb_min[1] - reach, y_hi = c.aabb_max[1] + reach;
+    std::vector<double> h;
+    ground.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](const ColumnGrid::Point& q) {
+        if (q.x >= x_lo && q.x <= x_hi && q.y >= y_lo && q.y <= y_hi) h.push_back(height_above(plane, q.x, q.y, q.z));
+    });
     return h.empty() ? 0.0 : median(h.begin(), h.end());
 }
 
-Clustering describe_all(PointsView pts, Groups groups, const std::vector<std::uint8_t>& ground, const Plane& plane,
-                        const ObstaclesConfig& cfg) {
-    sort_nearest_first(groups, pts);
+Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const std::vector<std::uint8_t>& ground,
+                        const Plane& plane, const ObstaclesConfig& cfg) {
+    const Groups groups = groups_of(label);
     Clustering out;
-    out.label = labels_of(groups, static_cast<std::size_t>(pts.rows()));
-    const GroundGrid grid(pts, ground, plane);
+    out.label = std::move(label);
+    const ColumnGrid ground_grid = ground_columns(pts, ground);
     for (std::size_t g = 0; g < groups.size(); ++g) {
         Cluster c = describe(pts, groups[g]);
         c.id = static_cast<std::int32_t>(g);
-        c.ground_offset = local_ground(grid, c, cfg.ground_search_m);
+        c.ground_offset = local_ground(ground_grid, plane, c, cfg.ground_search_m);
         double top = -kInf;
         for (const auto i : groups[g]) top = std::max(top, height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2)));
         c.height = top - c.ground_offset;
@@ -277,10 +260,10 @@ Clustering describe_all(PointsView pts, Groups groups, const std::vector<std::ui
 
 Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
                           const ObstaclesConfig& cfg) {
-    auto candidates = pcl::make_shared<pcl::Indices>();
+    pcl::Indices candidates;
     for (std::size_t i = 0; i < ground_mask.size(); ++i)
-        if (!ground_mask[i]) candidates->push_back(static_cast<pcl::index_t>(i));
-    return describe_all(roi.view(), point_clusters(roi.cloud, roi.view(), candidates, cfg), ground_mask, plane, cfg);
+        if (!ground_mask[i]) candidates.push_back(static_cast<pcl::index_t>(i));
+    return describe_all(roi.view(), point_labels(roi.view(), candidates, cfg), ground_mask, plane, cfg);
 }
 
 Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
@@ -300,16 +283,16 @@ Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& gr
     return out;
 }
 
+pcl::PointCloud<pcl::PointXYZ>::Ptr cluster_representatives(PointsView points, const pcl::Indices& candidates,
+                                                            double voxel_m) {
+    return representatives(points, candidates, voxel_m).cloud;
+}
+
 std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfig& cfg) {
-    auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-    auto finite = pcl::make_shared<pcl::Indices>();
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        cloud->push_back({points(i, 0), points(i, 1), points(i, 2)});
-        if (points.row(i).allFinite()) finite->push_back(static_cast<pcl::index_t>(i));
-    }
-    Groups groups = point_clusters(cloud, points, finite, cfg);
-    sort_nearest_first(groups, points);
-    return labels_of(groups, static_cast<std::size_t>(points.rows()));
+    pcl::Indices finite;
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (points.row(i).allFinite()) finite.push_back(static_cast<pcl::index_t>(i));
+    return point_labels(points, finite, cfg);
 }
 
 std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,

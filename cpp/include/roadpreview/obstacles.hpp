@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Obstacles: Euclidean clusters of the non-ground ROI points (PCL, KD-tree), their boxes and heights above
+// Obstacles: Euclidean clusters of the non-ground ROI points (PCL), their boxes and heights above
 // the local ground, and the stretch of each wheel path they block (docs/method.md §5).
 #pragma once
 

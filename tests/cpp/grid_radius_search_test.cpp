@@ -1,0 +1,156 @@
+// The obstacle stage's radius search (an internal piece) against PCL's KdTree, which it replaces: the same
+// neighbours for every query, hence the same Euclidean clusters.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include "column_grid.hpp"
+#include "grid_radius_search.hpp"
+
+namespace rp = roadpreview;
+
+namespace {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+// Points uniform in [0, extent)² × [0, height): with the spacing near the radius, many neighbours sit close
+// to it; `extent` far above the column edge makes the grid widen its columns.
+Cloud::Ptr random_cloud(int n, double extent, double height, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> xy(0.0f, static_cast<float>(extent)), z(0.0f, static_cast<float>(height));
+    auto cloud = pcl::make_shared<Cloud>();
+    for (int i = 0; i < n; ++i) cloud->push_back(pcl::PointXYZ(xy(rng), xy(rng), z(rng)));
+    return cloud;
+}
+
+// A 0.25 m lattice: neighbours exactly one or two radii away, which a strict "less than" must exclude.
+Cloud::Ptr lattice() {
+    auto cloud = pcl::make_shared<Cloud>();
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j)
+            for (int k = 0; k < 4; ++k) cloud->push_back(pcl::PointXYZ(0.25f * i, 0.25f * j, 0.25f * k));
+    return cloud;
+}
+
+using Neighbours = std::vector<std::pair<pcl::index_t, float>>;
+
+Neighbours search(const pcl::search::Search<pcl::PointXYZ>& s, const pcl::PointXYZ& p, double radius,
+                  unsigned max_nn = 0) {
+    pcl::Indices indices;
+    std::vector<float> sqr_distances;
+    s.radiusSearch(p, radius, indices, sqr_distances, max_nn);
+    Neighbours found;
+    for (std::size_t k = 0; k < indices.size(); ++k) found.emplace_back(indices[k], sqr_distances[k]);
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
+void expect_same_neighbours(const Cloud::Ptr& cloud, const pcl::IndicesPtr& indices, double radius) {
+    pcl::search::KdTree<pcl::PointXYZ> tree;
+    rp::GridRadiusSearch grid(radius);
+    tree.setInputCloud(cloud, indices);
+    grid.setInputCloud(cloud, indices);
+    std::size_t total = 0;
+    for (const auto& p : *cloud) {
+        const Neighbours want = search(tree, p, radius);
+        ASSERT_EQ(search(grid, p, radius), want) << "query (" << p.x << ", " << p.y << ", " << p.z << ")";
+        total += want.size();
+    }
+    EXPECT_GT(total, cloud->size());  // the queries found neighbours besides themselves
+}
+
+std::vector<pcl::Indices> clusters(const Cloud::Ptr& cloud, pcl::search::Search<pcl::PointXYZ>::Ptr search,
+                                   double tolerance) {
+    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+    extraction.setSearchMethod(std::move(search));
+    extraction.setClusterTolerance(tolerance);
+    extraction.setInputCloud(cloud);
+    std::vector<pcl::PointIndices> found;
+    extraction.extract(found);
+    std::vector<pcl::Indices> out;
+    for (auto& c : found) out.push_back(std::move(c.indices));  // each ascending
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+TEST(GridRadiusSearch, FindsWhatPclsKdTreeFinds) {
+    expect_same_neighbours(random_cloud(4000, 12.0, 3.0, 1), nullptr, 0.5);
+    expect_same_neighbours(lattice(), nullptr, 0.5);               // two steps: excluded
+    expect_same_neighbours(lattice(), nullptr, std::sqrt(0.125));  // the diagonal of a step: excluded
+}
+
+TEST(GridRadiusSearch, WidenedColumnsOfAFarSpreadCloudStillFindEveryNeighbour) {
+    auto cloud = random_cloud(3000, 2000.0, 3.0, 2);
+    for (const auto& p : *random_cloud(1000, 20.0, 3.0, 3)) cloud->push_back(p);  // a dense patch in one corner
+    expect_same_neighbours(cloud, nullptr, 0.5);
+}
+
+TEST(GridRadiusSearch, SearchesOnlyTheIndexedPointsAndReturnsCloudIndices) {
+    const auto cloud = random_cloud(3000, 10.0, 2.0, 4);
+    auto odd = pcl::make_shared<pcl::Indices>();
+    for (pcl::index_t i = 1; i < static_cast<pcl::index_t>(cloud->size()); i += 2) odd->push_back(i);
+    expect_same_neighbours(cloud, odd, 0.6);
+}
+
+TEST(GridRadiusSearch, MaxNnKeepsTheNearestAndSortedResultsAreSorted) {
+    const auto cloud = random_cloud(3000, 8.0, 2.0, 5);
+    pcl::search::KdTree<pcl::PointXYZ> tree;
+    rp::GridRadiusSearch grid(0.5);
+    tree.setInputCloud(cloud);
+    grid.setInputCloud(cloud);
+    for (std::size_t i = 0; i < cloud->size(); i += 97) EXPECT_EQ(search(grid, (*cloud)[i], 0.8, 5), search(tree, (*cloud)[i], 0.8, 5));
+    grid.setSortedResults(true);
+    pcl::Indices indices;
+    std::vector<float> sqr_distances;
+    grid.radiusSearch((*cloud)[0], 1.0, indices, sqr_distances);
+    ASSERT_GT(indices.size(), 3u);
+    EXPECT_TRUE(std::is_sorted(sqr_distances.begin(), sqr_distances.end()));
+    EXPECT_EQ(indices.front(), 0);
+}
+
+TEST(GridRadiusSearch, GivesPclsEuclideanClusterExtractionTheKdTreesClusters) {
+    const auto cloud = random_cloud(6000, 30.0, 2.0, 6);  // sparse: many clusters of a few points
+    const auto want = clusters(cloud, pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>(), 0.5);
+    EXPECT_GT(want.size(), 50u);
+    EXPECT_EQ(clusters(cloud, pcl::make_shared<rp::GridRadiusSearch>(0.5), 0.5), want);
+}
+
+TEST(GridRadiusSearch, RejectsWhatItCannotDo) {
+    EXPECT_THROW(rp::GridRadiusSearch(0.0), std::invalid_argument);
+    rp::GridRadiusSearch grid(0.5);
+    grid.setInputCloud(lattice());
+    pcl::Indices indices;
+    std::vector<float> sqr_distances;
+    EXPECT_THROW(grid.nearestKSearch(pcl::PointXYZ(0, 0, 0), 3, indices, sqr_distances), std::logic_error);
+    grid.setInputCloud(pcl::make_shared<Cloud>());  // an empty cloud finds nothing
+    EXPECT_EQ(grid.radiusSearch(pcl::PointXYZ(0, 0, 0), 1.0, indices, sqr_distances), 0);
+}
+
+TEST(ColumnGrid, VisitsEveryPointInARectangleOnce) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-50.0f, 50.0f);
+    std::vector<rp::ColumnGrid::Point> points;
+    for (std::int32_t i = 0; i < 5000; ++i) points.push_back({u(rng), u(rng), u(rng), i});
+    const rp::ColumnGrid grid(points, 1.0);
+    for (int q = 0; q < 200; ++q) {
+        const double x0 = u(rng), y0 = u(rng), x1 = x0 + 0.1 * q, y1 = y0 + 0.05 * q;
+        std::vector<std::int32_t> seen, want;
+        grid.visit_columns(x0, x1, y0, y1, [&](const rp::ColumnGrid::Point& p) {
+            if (p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1) seen.push_back(p.index);
+        });
+        for (const auto& p : points)
+            if (p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1) want.push_back(p.index);
+        std::sort(seen.begin(), seen.end());
+        EXPECT_EQ(seen, want);
+    }
+}
