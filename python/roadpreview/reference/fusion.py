@@ -130,9 +130,9 @@ class FusedMap:
         """Median per cell of the frame's levelled ground points, fused into the map."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
-        keys, inverse = np.unique(ij, axis=0, return_inverse=True)
-        for k, key in enumerate(map(tuple, keys)):
-            z = levelled_ground[inverse.ravel() == k, 2]
+        keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
+        heights = levelled_ground[np.argsort(inverse.ravel(), kind="stable"), 2]
+        for key, z in zip(map(tuple, keys), np.split(heights, np.cumsum(counts)[:-1])):
             r = observation_variance(z, self.cfg.fusion.point_noise_m)
             self.cells[key] = fuse_cell(self.cells.get(key), float(np.median(z)), r, len(z), self.frame, self.cfg)
         self.fused += 1
