@@ -59,7 +59,7 @@ void from_json(const json& j, FusionMethod& m) {
     throw std::invalid_argument("fusion.method must be \"none\", \"ema\" or \"kalman\", got \"" + name + "\"");
 }
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cell_m, map_length_m, point_noise_m,
-                                                frame_rate_hz, max_time_gap_s, behind_m)
+                                                frame_rate_hz, max_time_gap_s, behind_m, align)
 
 void to_json(json& j, const Config& c) {
     j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},

@@ -6,10 +6,13 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+
+#include <Eigen/LU>
 #include <limits>
 #include <stdexcept>
 
 #include "median.hpp"
+#include "roadpreview/support.hpp"
 
 namespace roadpreview {
 namespace {
@@ -17,25 +20,11 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMedianVarianceFactor = M_PI / 2;  // Var(median of n Gaussians) ≈ (π/2)σ²/n
 constexpr double kMinVariance = 1e-12;              // m²; keeps a noise-free cell's Kalman gain defined
+constexpr int kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
 
 std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_t>(std::floor(v / cell)); }
 
 std::int64_t wrap(std::int64_t i, std::int64_t n) { return ((i % n) + n) % n; }
-
-// Variance of one frame's cell height: the median of its points, σ from their spread (from the configured
-// point noise below three points, where a spread says little).
-double observation_variance(const std::vector<double>& z, double point_noise_m) {
-    const double n = static_cast<double>(z.size());
-    double sigma2 = point_noise_m * point_noise_m;
-    if (z.size() >= 3) {
-        double squares = 0.0, mean = 0.0;
-        for (double v : z) mean += v;
-        mean /= n;
-        for (double v : z) squares += (v - mean) * (v - mean);
-        sigma2 = squares / (n - 1.0);
-    }
-    return std::max(kMedianVarianceFactor * sigma2 / n, kMinVariance);
-}
 
 void fuse_cell(MapCell& c, double z, double r, std::int32_t points, std::int32_t frame, const FusionConfig& cfg) {
     if (c.observations == 0) {
@@ -130,6 +119,11 @@ std::int64_t ElevationMap::slot(double x_m, double y_m) const {
     return wrap(i, n_) * n_ + wrap(j, n_);
 }
 
+std::array<double, 2> ElevationMap::centre(std::int64_t slot) const {
+    const std::int64_t i = i0_ + wrap(slot / n_ - i0_, n_), j = j0_ + wrap(slot % n_ - j0_, n_);
+    return {(static_cast<double>(i) + 0.5) * cell_, (static_cast<double>(j) + 0.5) * cell_};
+}
+
 MapCell* ElevationMap::at(double x_m, double y_m) {
     const std::int64_t k = slot(x_m, y_m);
     return k < 0 ? nullptr : &cells_[static_cast<std::size_t>(k)];
@@ -179,14 +173,14 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
 }
 
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L) {
-    const double c = std::cos(pose_.yaw_rad), s = std::sin(pose_.yaw_rad);
+    const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
     std::vector<std::int64_t> touched;
     z_.resize(static_cast<std::size_t>(points.rows()));
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [x, y, z] = L.apply(points(i, 0), points(i, 1), points(i, 2));
-        const std::int64_t k = map_.slot(pose_.x_m + c * x - s * y, pose_.y_m + s * x + c * y);
+        const std::int64_t k = map_.slot(pose_.x_m + cos_yaw * x - sin_yaw * y, pose_.y_m + sin_yaw * x + cos_yaw * y);
         if (k < 0) continue;
         auto& head = head_[static_cast<std::size_t>(k)];
         if (head < 0) touched.push_back(k);
@@ -194,17 +188,51 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         head = static_cast<std::int32_t>(i);
         z_[static_cast<std::size_t>(i)] = z;
     }
-    std::vector<double> cell_z;
-    for (const std::int64_t k : touched) {
+    // Per cell: the median of its points, their count and spread; then each median's variance as the
+    // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance).
+    const std::size_t cells = touched.size();
+    std::vector<double> medians(cells), spreads(cells), cell_z;
+    std::vector<std::int32_t> counts(cells);
+    for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
-        for (std::int32_t i = head_[static_cast<std::size_t>(k)]; i >= 0; i = next_[static_cast<std::size_t>(i)])
-            cell_z.push_back(z_[static_cast<std::size_t>(i)]);
-        head_[static_cast<std::size_t>(k)] = -1;
-        const double r = observation_variance(cell_z, cfg_.fusion.point_noise_m);
-        const double zm = median(cell_z.begin(), cell_z.end());
-        fuse_cell(map_.cell(k), zm, r, static_cast<std::int32_t>(cell_z.size()), frame_, cfg_.fusion);
+        auto& head = head_[static_cast<std::size_t>(touched[c])];
+        for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) cell_z.push_back(z_[static_cast<std::size_t>(i)]);
+        head = -1;
+        counts[c] = static_cast<std::int32_t>(cell_z.size());
+        spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
+        medians[c] = median(cell_z.begin(), cell_z.end());
+    }
+    if (cfg_.fusion.align) align(touched, medians);
+    const auto variances = backed_variances(counts.data(), spreads.data(), cells);
+    const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
+    for (std::size_t c = 0; c < cells; ++c) {
+        const double r = std::max(variances ? (*variances)[c] : single_point, kMinVariance);
+        fuse_cell(map_.cell(touched[c]), medians[c], r, counts[c], frame_, cfg_.fusion);
     }
     ++fused_;
+}
+
+void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& medians) const {
+    auto regressors = [&](std::int64_t slot) {  // (1, x, y) about the vehicle, for a well-conditioned fit
+        const auto [x, y] = map_.centre(slot);
+        return Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
+    };
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    int shared = 0;
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        const MapCell& cell = map_.cell(slots[c]);
+        if (cell.observations == 0) continue;
+        const Eigen::Vector3d v = regressors(slots[c]);
+        normal += v * v.transpose();
+        rhs += v * (medians[c] - cell.height);
+        ++shared;
+    }
+    if (shared < kMinAlignCells) return;
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(normal);
+    if (lu.rank() < 3) return;  // the shared cells lie on one line: no plane to remove
+    const Eigen::Vector3d plane = lu.solve(rhs);
+    for (std::size_t c = 0; c < slots.size(); ++c) medians[c] -= plane.dot(regressors(slots[c]));
 }
 
 Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,

@@ -93,10 +93,11 @@ class FusionConfig:
     alpha: float = 0.5  #: EMA weight of the new frame, (0, 1]; 1 = the latest frame's cells
     cell_m: float = 0.1  #: square map cells
     map_length_m: float = 100.0  #: side of the square map around the vehicle
-    point_noise_m: float = 0.03  #: σ of one point's height, for cells with fewer than 3 points
+    point_noise_m: float = 0.03  #: σ of one point's height when no cell of a frame holds two points
     frame_rate_hz: float = 10.0  #: frames without timestamps are 1/frame_rate_hz apart
     max_time_gap_s: float = 0.5  #: a longer step between timestamps, or one back in time, resets the map
     behind_m: float = 0.0  #: fused profiles start this far behind the wheels (already-driven road)
+    align: bool = True  #: remove the plane between a frame's heights and the map's before fusing
 
 
 _STAGES = {

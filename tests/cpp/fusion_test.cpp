@@ -1,6 +1,8 @@
 // Temporal fusion (docs/method.md §7): the rolling map, ego-motion, the fusion rules and their robustness.
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
+
 #include <cmath>
 #include <random>
 
@@ -112,7 +114,8 @@ TEST(Motion, IntegratesArcsAndLines) {
 }
 
 TEST(Fusion, EmaWithAlphaOneEqualsTheSingleFrameMap) {
-    const rp::Config cfg = fusion_config(rp::FusionMethod::Ema, 1.0);
+    rp::Config cfg = fusion_config(rp::FusionMethod::Ema, 1.0);
+    cfg.fusion.align = false;  // with it, the frame would first be moved onto the map by a plane
     rp::TemporalFusion fused(cfg), single(cfg);
     rp::FusionStatus status;
     const rp::Levelling L = rp::levelling_for(nullptr);
@@ -230,4 +233,35 @@ TEST(Fusion, NoneKeepsTheSingleFramePipeline) {
     EXPECT_FALSE(r.fusion);
     EXPECT_EQ(r.timestamp, 1.5);
     EXPECT_EQ(rp::result_to_json(r).find("\"fusion\":null") != std::string::npos, true);
+}
+
+TEST(Fusion, AlignmentRemovesEachFramesHeaveAndTilt) {
+    // Every frame carries its own height offset and pitch (what a per-frame plane fit leaves on long waves).
+    for (const bool align : {true, false}) {
+        rp::Config cfg = fusion_config(rp::FusionMethod::Kalman);
+        cfg.fusion.align = align;
+        rp::Estimator est(cfg);
+        rp::Result r;
+        for (int f = 0; f < 10; ++f) {
+            const rp::Pose2 pose{0.8 * f, 0.0, 0.0};
+            scenes::Cloud cloud = road_frame(pose, 15000, 0.01, 300u + unsigned(f));
+            const double heave = 0.02 * std::sin(1.3 * f), pitch = 0.002 * std::cos(0.9 * f);
+            for (Eigen::Index i = 0; i < cloud.rows(); ++i) cloud(i, 2) += float(heave + pitch * cloud(i, 0));
+            r = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{0.1 * f, std::nullopt});
+        }
+        // The map follows the first frame's offset and tilt (heave 0, pitch 0.002); the last frame's view of
+        // the road differs from that by a plane, so compare shapes: the RMSE about the best line.
+        const rp::Profile& p = r.left;
+        std::vector<double> s, e;
+        for (std::size_t k = 0; k < p.z.size(); ++k)
+            if (p.s[k] < 30.0 && std::isfinite(p.z[k])) s.push_back(p.s[k]), e.push_back(p.z[k] - road_height(7.2 + p.s[k]));
+        Eigen::MatrixXd A(s.size(), 2);
+        Eigen::VectorXd b(s.size());
+        for (std::size_t k = 0; k < s.size(); ++k) A(k, 0) = 1.0, A(k, 1) = s[k], b(k) = e[k];
+        const Eigen::VectorXd line = A.colPivHouseholderQr().solve(b);
+        const double rms = std::sqrt((b - A * line).squaredNorm() / double(s.size()));
+        std::printf("align %d: detrended RMSE %.4f m\n", align, rms);
+        if (align) EXPECT_LT(rms, 0.005);
+        else EXPECT_GT(rms, 0.006);
+    }
 }

@@ -86,7 +86,7 @@ def test_cpp_equals_the_reference_on_a_simulated_os1_128_sequence():
 
 def test_ema_with_alpha_one_is_the_latest_frame_where_it_looks():
     """Reference map (the C++ map's cells are checked the same way in fusion_test.cpp); reset() in C++."""
-    cfg = fusion_cfg("ema", alpha=1.0)
+    cfg = fusion_cfg("ema", alpha=1.0, align=False)  # aligned, the frame would first move onto the map
     first, last = noisy_road((0, 0, 0), 20000, 1), noisy_road((0.8, 0, 0), 20000, 2)
     fused, single = rp.reference.FusedMap(cfg), rp.reference.FusedMap(cfg)
     rp.reference.process_fused(fused, first, 8.0, 0.0, timestamp=0.0)

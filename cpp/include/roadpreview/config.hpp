@@ -81,10 +81,11 @@ struct FusionConfig {
     double alpha = 0.5;            ///< EMA weight of the new frame, (0, 1]; 1 = the latest frame's cells
     double cell_m = 0.1;           ///< square map cells
     double map_length_m = 100.0;   ///< side of the square map around the vehicle (≥ 2 × (preview + margin))
-    double point_noise_m = 0.03;   ///< σ of one point's height, used for cells with fewer than 3 points
+    double point_noise_m = 0.03;   ///< σ of one point's height when no cell of a frame holds two points
     double frame_rate_hz = 10.0;   ///< frames without timestamps are 1/frame_rate_hz apart
     double max_time_gap_s = 0.5;   ///< a longer step between timestamps, or one back in time, resets the map
     double behind_m = 0.0;         ///< fused profiles start this far behind the wheels (already-driven road)
+    bool align = true;             ///< remove the plane between a frame's heights and the map's before fusing
 };
 
 struct Config {

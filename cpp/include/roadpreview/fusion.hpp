@@ -3,6 +3,7 @@
 // levelled ground points of every frame, and the wheel-path profiles sampled from it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -63,6 +64,9 @@ public:
     /// Slot of the cell at (x, y), or −1 outside the window.
     std::int64_t slot(double x_m, double y_m) const;
     MapCell& cell(std::int64_t slot) { return cells_[static_cast<std::size_t>(slot)]; }
+    const MapCell& cell(std::int64_t slot) const { return cells_[static_cast<std::size_t>(slot)]; }
+    /// Odometry x, y of the centre of the cell in this slot.
+    std::array<double, 2> centre(std::int64_t slot) const;
 
     std::int64_t side() const { return n_; }
     double cell_m() const { return cell_; }
@@ -105,6 +109,8 @@ public:
     const Pose2& pose() const { return pose_; }
 
 private:
+    /// Removes from the frame's cell medians the least-squares plane of their differences to the map.
+    void align(const std::vector<std::int64_t>& slots, std::vector<double>& medians) const;
     Profile sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
                    std::size_t& ahead, std::size_t& ahead_now) const;
 

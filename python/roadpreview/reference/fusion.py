@@ -20,9 +20,11 @@ from .iri import profile_iri, vehicle_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_roughness
+from .support import backed_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
 _MIN_VARIANCE = 1e-12
+_MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
 
 
 def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[float, float, float]:
@@ -43,12 +45,6 @@ class Cell:
     observations: int
     points: int
     last_update: int
-
-
-def observation_variance(z: np.ndarray, point_noise_m: float) -> float:
-    """Variance of a cell's median: (π/2)σ²/n, σ from the points' spread, or the configured noise below 3 points."""
-    sigma2 = np.var(z, ddof=1) if len(z) >= 3 else point_noise_m**2
-    return max(_MEDIAN_VARIANCE_FACTOR * sigma2 / len(z), _MIN_VARIANCE)
 
 
 def fuse_cell(cell: Optional[Cell], z: float, r: float, points: int, frame: int, cfg: Config) -> Cell:
@@ -132,10 +128,31 @@ class FusedMap:
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
         heights = levelled_ground[np.argsort(inverse.ravel(), kind="stable"), 2]
-        for key, z in zip(map(tuple, keys), np.split(heights, np.cumsum(counts)[:-1])):
-            r = observation_variance(z, self.cfg.fusion.point_noise_m)
-            self.cells[key] = fuse_cell(self.cells.get(key), float(np.median(z)), r, len(z), self.frame, self.cfg)
+        groups = np.split(heights, np.cumsum(counts)[:-1])
+        spreads = np.array([np.std(z, ddof=1) if len(z) >= 2 else np.nan for z in groups])
+        medians = np.array([np.median(z) for z in groups])
+        if self.cfg.fusion.align:
+            medians = self.align(keys, medians)
+        variances = backed_variances(counts, spreads)  # as the roughness stage rates a bin's median
+        if variances is None:  # no cell with two points: the configured noise of one point
+            variances = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
+        for key, z, m, r in zip(map(tuple, keys), groups, medians, np.maximum(variances, _MIN_VARIANCE)):
+            self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg)
         self.fused += 1
+
+    def align(self, keys: np.ndarray, medians: np.ndarray) -> np.ndarray:
+        """The frame's cell medians minus the least-squares plane of their differences to the map's heights."""
+        centres = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
+        regressors = np.column_stack([np.ones(len(keys)), centres])
+        shared = np.array([tuple(k) in self.cells for k in keys], dtype=bool)
+        if shared.sum() < _MIN_ALIGN_CELLS:
+            return medians
+        v = regressors[shared]
+        difference = medians[shared] - np.array([self.cells[tuple(k)].height for k in keys[shared]])
+        normal = v.T @ v
+        if np.linalg.matrix_rank(normal) < 3:
+            return medians
+        return medians - regressors @ np.linalg.solve(normal, v.T @ difference)
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
         """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""
