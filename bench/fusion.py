@@ -35,7 +35,7 @@ import roadpreview as rp
 from roadpreview import sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from accuracy import BUMP_HEIGHTS_M, BUMP_LENGTH_M, BUMP_X_M, CURVE_YAW_RATE_RPS, bump_height, class_index, \
+from accuracy import BUMP_HEIGHTS_M, BUMP_X_M, CURVE_YAW_RATE_RPS, Scenario, bump_height, class_index, \
     detrended_rms, md_table  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -53,31 +53,27 @@ NEAR_M, FAR_M = 30.0, 40.0
 
 @dataclass(frozen=True)
 class Sequence:
-    group: str
-    name: str
-    speed: float
-    iso_class: str = "A"
-    seed: int = 0
-    yaw_rate: float = 0.0
-    bump: float = 0.0
-    frames: int = FRAMES
+    """One of accuracy.py's scenarios (OS1-128), driven at `speed`."""
 
-    def scene(self) -> sim.Scene:
-        bumps = (sim.SpeedBump(BUMP_X_M, self.bump, BUMP_LENGTH_M),) if self.bump else ()
-        return sim.Scene(sim.Road.iso8608(self.iso_class, seed=self.seed, bumps=bumps))
+    scenario: Scenario
+    speed: float
+
+    @property
+    def name(self) -> str:
+        return self.scenario.name
 
 
 def suite(quick: bool) -> list[Sequence]:
     if quick:
-        return [Sequence("classes", "class C, straight", 10.0, "C", seed=3, frames=4),
-                Sequence("bumps", "bump 6 cm", 10.0, bump=0.06)]
+        return [Sequence(Scenario("classes", "class C, straight", "OS1-128", "C", seed=3, frames=4), 10.0),
+                Sequence(Scenario("bumps", "bump 6 cm", "OS1-128", bump_height=0.06), 10.0)]
     out = []
     for speed in SPEEDS_MPS:
         for k, c in enumerate("ABCDEF"):
             for path, yaw_rate in (("straight", 0.0), ("curved", CURVE_YAW_RATE_RPS * speed / 10.0)):
-                out.append(Sequence("classes", f"class {c}, {path}", speed, c, 10 * k + 1, yaw_rate))
+                out.append(Sequence(Scenario("classes", f"class {c}, {path}", "OS1-128", c, 10 * k + 1, yaw_rate), speed))
         for h in BUMP_HEIGHTS_M:
-            out.append(Sequence("bumps", f"bump {h * 100:.0f} cm", speed, seed=50, bump=h))
+            out.append(Sequence(Scenario("bumps", f"bump {h * 100:.0f} cm", "OS1-128", seed=50, bump_height=h), speed))
     return out
 
 
@@ -87,7 +83,7 @@ def coverage(res, lo: float, hi: float) -> float:
     return float(np.mean(np.concatenate(parts) > 0))
 
 
-def score(res, truth: dict, seq: Sequence, pose) -> dict:
+def score(res, truth: dict, scenario: Scenario, pose) -> dict:
     out = {"near": coverage(res, 0.0, NEAR_M), "far": coverage(res, NEAR_M, FAR_M), "rms": [], "bump": [],
            "class": res.vehicle.iso_class, "ms": res.timing_ms["total"],
            "fusion_ms": res.fusion["time_ms"] if res.fusion else 0.0}
@@ -96,22 +92,23 @@ def score(res, truth: dict, seq: Sequence, pose) -> dict:
         s, z, count = np.asarray(p.s), np.asarray(p.z), np.asarray(p.count)
         backed = (count > 0) & np.isfinite(z) & (s >= 0)
         out["rms"].append(detrended_rms(s[backed], (z - truth[wheel][: len(z)])[backed]))
-        if seq.bump:
-            out["bump"].append(bump_height(s, z, BUMP_X_M - pose.x_m) - seq.bump)
+        if scenario.bump_height:
+            out["bump"].append(bump_height(s, z, BUMP_X_M - pose.x_m) - scenario.bump_height)
     return out
 
 
 def run(seq: Sequence) -> dict:
     lidar = sim.os1_128(height_m=SENSOR_HEIGHT_M)
-    scene = seq.scene()
-    frames = sim.drive(scene, lidar, seq.speed, seq.yaw_rate, seq.frames, seed=seq.seed)
-    truth = sim.truth_profiles(scene, frames[-1].pose, seq.speed, seq.yaw_rate)
+    sc, speed = seq.scenario, seq.speed
+    scene = sc.scene()
+    frames = sim.drive(scene, lidar, speed, sc.yaw_rate, sc.frames, seed=sc.seed)
+    truth = sim.truth_profiles(scene, frames[-1].pose, speed, sc.yaw_rate)
     out = {"sequence": seq}
     for method in METHODS:
         est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method, "alpha": ALPHA}))
         for f in frames:
-            res = est.process(f.points, seq.speed, seq.yaw_rate, timestamp=f.time_s)
-        out[method] = score(res, truth, seq, frames[-1].pose)
+            res = est.process(f.points, speed, sc.yaw_rate, timestamp=f.time_s)
+        out[method] = score(res, truth, sc, frames[-1].pose)
     return out
 
 
@@ -123,14 +120,14 @@ def accuracy_rows(results: list[dict]) -> list[list[str]]:
     rows = []
     for speed in sorted({r["sequence"].speed for r in results}):
         for group in ("classes", "bumps"):
-            chosen = [r for r in results if r["sequence"].speed == speed and r["sequence"].group == group]
+            chosen = [r for r in results if r["sequence"].speed == speed and r["sequence"].scenario.group == group]
             if not chosen:
                 continue
             for method in METHODS:
                 m = [r[method] for r in chosen]
                 rms = [v for x in m for v in x["rms"] if np.isfinite(v)]
                 bumps = [v for x in m for v in x["bump"] if np.isfinite(v)]
-                classified = [(x["class"], r["sequence"].iso_class) for x, r in zip(m, chosen) if x["class"]]
+                classified = [(x["class"], r["sequence"].scenario.iso_class) for x, r in zip(m, chosen) if x["class"]]
                 exact = sum(c == t for c, t in classified)
                 within = sum(abs(class_index(c) - class_index(t)) <= 1 for c, t in classified)
                 cls = f"{exact}/{len(chosen)} · {within}/{len(chosen)}" if group == "classes" else "–"
@@ -183,7 +180,8 @@ def draw(results: dict, path: str) -> None:
 
 def timing(results_frames: int, repeat: int) -> list[list[str]]:
     lidar = sim.os1_128(height_m=SENSOR_HEIGHT_M)
-    frames = sim.drive(Sequence("classes", "", 10.0, "C", seed=3).scene(), lidar, 10.0, 0.0, results_frames, seed=3)
+    scene = Scenario("classes", "class C", "OS1-128", "C", seed=3).scene()
+    frames = sim.drive(scene, lidar, 10.0, 0.0, results_frames, seed=3)
     rows, base = [], None
     for method in METHODS:
         total, fusion = [], []
@@ -218,11 +216,11 @@ def main(argv=None) -> int:
             print(f"[{len(results)}/{len(sequences)}] {r['sequence'].speed:g} m/s {r['sequence'].name}", file=sys.stderr)
     load = os.getloadavg()[0]
     print("# roadpreview temporal fusion benchmark\n")
-    print(f"- {len(sequences)} simulated sequences of {sequences[0].frames} frames at 10 Hz, OS1-128 "
+    print(f"- {len(sequences)} simulated sequences of {sequences[0].scenario.frames} frames at 10 Hz, OS1-128 "
           f"{SENSOR_HEIGHT_M} m high, EMA α = {ALPHA}; {time.perf_counter() - start:.0f} s on {args.jobs} worker(s); "
           f"1-min load {load:.1f}{' (busy machine: timings are noisy)' if load > 0.5 else ''}; Python "
           f"{platform.python_version()}, numpy {np.__version__}, roadpreview {rp.__version__}\n")
-    print(f"## Simulated sequences, scored on frame {sequences[0].frames}\n")
+    print(f"## Simulated sequences, scored on their last frame ({FRAMES} frames; --quick: 4 for the classes)\n")
     print(md_table(["sequences", "speed m/s", "fusion", f"coverage 0–{NEAR_M:g} m %", f"coverage {NEAR_M:g}–{FAR_M:g} m %",
                     "median profile RMSE cm", "bump height RMSE cm", "bump max abs error cm",
                     "class exact · within one"], accuracy_rows(results)) + "\n")
