@@ -151,6 +151,8 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
     const auto source = rp::open_frames(o.inputs, o.source);
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
+    if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
+        throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
     std::vector<rp::Pose2> poses;
     if (!o.poses_file.empty()) poses = rp::read_kitti_poses(o.poses_file);
     std::ofstream file;

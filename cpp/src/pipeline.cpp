@@ -116,6 +116,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.timestamp = motion.timestamp_s;
     TemporalFusion* fusion = impl_->fusion ? &*impl_->fusion : nullptr;
     if (fusion) fusion->advance(speed_mps, yaw_rate_rps, motion, r.fusion.emplace());
+    r.timing_ms.fusion = ms_since(mark);
 
     RoiCloud& roi = impl_->roi;
     crop_roi(points, impl_->sensor_to_base, cfg.ground, roi);
@@ -136,7 +137,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
     // Stopped: the same view again and again is not new evidence, so the map holds.
     if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
-    r.timing_ms.fusion = ms_since(mark);
+    r.timing_ms.fusion += ms_since(mark);
     if (!r.reason.empty()) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;

@@ -181,3 +181,5 @@ def test_cli_fuses_the_os1_128_recording_with_its_poses():
     assert fused[2]["fusion"]["coverage"] > fused[2]["fusion"]["frame_coverage"]
     bad = run_cli(*base, "--fusion", "kalman", "--poses", OUSTER / "OS-1-128_v2.3.0_1024x10.json", check=False)
     assert bad.returncode == 1 and "a pose needs 12 finite numbers" in bad.stderr
+    unused = run_cli(*base, "--poses", POSES, check=False)
+    assert unused.returncode == 1 and "give --fusion ema or kalman" in unused.stderr
