@@ -35,6 +35,9 @@ struct RunOptions {
     std::string motion_file;
     std::string frames;  // "A:B"
     rp::SourceOptions source;
+    std::string fusion;
+    double alpha = 0.0;
+    std::string poses_file;
 };
 
 // Config file first, then the flags that were given on the command line.
@@ -54,6 +57,11 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
     if (run.count("--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
     if (run.count("--clusters")) cfg.obstacles.enabled = o.clusters == "on";
     if (run.count("--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
+    if (run.count("--fusion"))
+        cfg.fusion.method = o.fusion == "ema" ? rp::FusionMethod::Ema
+                            : o.fusion == "kalman" ? rp::FusionMethod::Kalman : rp::FusionMethod::None;
+    if (run.count("--alpha")) cfg.fusion.alpha = o.alpha;
+    if (run.count("--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
     rp::validate(cfg);
     return cfg;
 }
@@ -143,6 +151,10 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
     const auto source = rp::open_frames(o.inputs, o.source);
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
+    if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
+        throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
+    std::vector<rp::Pose2> poses;
+    if (!o.poses_file.empty()) poses = rp::read_kitti_poses(o.poses_file);
     std::ofstream file;
     if (!o.output.empty()) {
         file.open(o.output);
@@ -159,10 +171,16 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (index == 0 && !o.quiet) report_source(source->info());
         if (index < first) continue;
         const FrameMotion m = motion_for(o, app, table, *frame, cfg);
-        rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source);
+        rp::FrameMotion at{frame->timestamp, std::nullopt};
+        if (!at.timestamp_s && o.frame_rate > 0.0) at.timestamp_s = static_cast<double>(index) / o.frame_rate;
+        if (!o.poses_file.empty()) {
+            if (index >= static_cast<std::int64_t>(poses.size()))
+                throw std::runtime_error(o.poses_file + ": no pose for frame " + std::to_string(index) + " (it has " +
+                                         std::to_string(poses.size()) + ")");
+            at.pose = poses[static_cast<std::size_t>(index)];
+        }
+        rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
         r.yaw_rate_source = m.yaw_rate_source;
-        r.timestamp = frame->timestamp;
-        if (!r.timestamp && o.frame_rate > 0.0) r.timestamp = static_cast<double>(index) / o.frame_rate;
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
         ++classes[class_of(r.vehicle)];
@@ -268,6 +286,12 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
         ->check(CLI::PositiveNumber);  // pcap frames carry their own timestamps
+    run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")
+        ->check(CLI::IsMember({"none", "ema", "kalman"}));
+    run_cmd->add_option("--alpha", o.alpha, "EMA fusion: weight of the newest frame, (0, 1] (default 0.5)")
+        ->check(CLI::Range(0.0, 1.0));
+    run_cmd->add_option("--poses", o.poses_file, "KITTI poses file (one 3x4 row-major pose per frame of the input): "
+                                                  "moves the fusion map instead of integrating the motion");
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");

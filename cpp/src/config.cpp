@@ -42,6 +42,25 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_
                                                 pca_iterations, pca_threshold_m, ransac_distance_m,
                                                 ransac_max_tilt_deg, ransac_max_iterations, ransac_seed)
 
+const char* to_string(FusionMethod method) {
+    switch (method) {
+        case FusionMethod::None: return "none";
+        case FusionMethod::Ema: return "ema";
+        case FusionMethod::Kalman: return "kalman";
+    }
+    return "?";
+}
+
+void to_json(json& j, const FusionMethod& m) { j = to_string(m); }
+void from_json(const json& j, FusionMethod& m) {
+    const auto name = j.get<std::string>();
+    for (const FusionMethod candidate : {FusionMethod::None, FusionMethod::Ema, FusionMethod::Kalman})
+        if (name == to_string(candidate)) return void(m = candidate);
+    throw std::invalid_argument("fusion.method must be \"none\", \"ema\" or \"kalman\", got \"" + name + "\"");
+}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cell_m, map_length_m, point_noise_m,
+                                                frame_rate_hz, max_time_gap_s, behind_m, align)
+
 void to_json(json& j, const Config& c) {
     j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
              {"extrinsics", c.extrinsics ? json(*c.extrinsics) : json(nullptr)},
@@ -52,7 +71,8 @@ void to_json(json& j, const Config& c) {
              {"profile", c.profile},
              {"roughness", c.roughness},
              {"obstacles", c.obstacles},
-             {"iri", c.iri}};
+             {"iri", c.iri},
+             {"fusion", c.fusion}};
 }
 
 void from_json(const json& j, Config& c) {
@@ -67,6 +87,7 @@ void from_json(const json& j, Config& c) {
     c.roughness = j.value("roughness", defaults.roughness);
     c.obstacles = j.value("obstacles", defaults.obstacles);
     c.iri = j.value("iri", defaults.iri);
+    c.fusion = j.value("fusion", defaults.fusion);
 }
 
 namespace {
@@ -144,6 +165,17 @@ void validate(const Config& c) {
             "roughness.min_resolved_fraction must be in (0, 1]");
 
     require(std::isfinite(c.iri.min_length_m) && c.iri.min_length_m >= 0.0, "iri.min_length_m must be >= 0");
+
+    const FusionConfig& f = c.fusion;
+    require(std::isfinite(f.alpha) && f.alpha > 0.0 && f.alpha <= 1.0, "fusion.alpha must be in (0, 1]");
+    require(std::isfinite(f.cell_m) && f.cell_m >= 0.01, "fusion.cell_m must be >= 0.01");
+    require(std::isfinite(f.map_length_m) && f.map_length_m >= 2.0 * (p.preview_length_m + f.behind_m) &&
+                f.map_length_m / f.cell_m <= 4000.0,
+            "fusion.map_length_m must be >= 2 x (profile.preview_length_m + fusion.behind_m) and <= 4000 cells");
+    require(positive(f.point_noise_m), "fusion.point_noise_m must be > 0");
+    require(positive(f.frame_rate_hz), "fusion.frame_rate_hz must be > 0");
+    require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
+    require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

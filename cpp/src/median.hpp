@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: the median the method uses for profile bins and local ground levels.
+// Internal: the median the method uses for profile bins, map cells and local ground levels, and the bins' spread.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace roadpreview {
@@ -14,6 +15,16 @@ inline double median(std::vector<double>::iterator first, std::vector<double>::i
     std::nth_element(first, upper, last);
     if (n % 2 == 1) return *upper;
     return 0.5 * (*std::max_element(first, upper) + *upper);
+}
+
+// Sample standard deviation (n − 1 in the denominator) of at least two values.
+inline double sample_spread(std::vector<double>::const_iterator first, std::vector<double>::const_iterator last) {
+    const double n = static_cast<double>(last - first);
+    double mean = 0.0, squares = 0.0;
+    for (auto it = first; it != last; ++it) mean += *it;
+    mean /= n;
+    for (auto it = first; it != last; ++it) squares += (*it - mean) * (*it - mean);
+    return std::sqrt(squares / (n - 1.0));
 }
 
 }  // namespace roadpreview

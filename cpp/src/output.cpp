@@ -100,6 +100,13 @@ json path_json(const WheelPaths& p, const std::string& yaw_rate_source) {
     return out;
 }
 
+json fusion_json(const std::optional<FusionStatus>& f, double time_ms) {
+    if (!f) return nullptr;
+    return {{"method", to_string(f->method)}, {"frames", f->frames}, {"coverage", f->coverage},
+            {"frame_coverage", f->frame_coverage}, {"reset", f->reset.empty() ? json(nullptr) : json(f->reset)},
+            {"pose", {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}}, {"time_ms", time_ms}};
+}
+
 }  // namespace
 
 std::string result_to_json(const Result& r) {
@@ -119,6 +126,7 @@ std::string result_to_json(const Result& r) {
                        {"right", roughness_json(r.right.roughness)},
                        {"vehicle", roughness_json(r.vehicle)}}},
         {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)},
+        {"fusion", fusion_json(r.fusion, r.timing_ms.fusion)},
         {"timing_ms", {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
                        {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},
                        {"total", r.timing_ms.total}}},

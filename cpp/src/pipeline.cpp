@@ -74,12 +74,18 @@ struct Estimator::Impl {
     RigidTransform sensor_to_base;
     RoiCloud roi;  // reused across frames
     std::int64_t frames = 0;
+    std::optional<TemporalFusion> fusion;  // only with fusion.method other than "none"
 };
 
 Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     validate(cfg);
     impl_->cfg = cfg;
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
+    if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
+}
+
+void Estimator::reset() {
+    if (impl_->fusion) impl_->fusion->reset();
 }
 
 Estimator::~Estimator() = default;
@@ -89,6 +95,11 @@ Estimator& Estimator::operator=(Estimator&&) noexcept = default;
 const Config& Estimator::config() const { return impl_->cfg; }
 
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
+    return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
+}
+
+Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                          const FrameMotion& motion) {
     const Config& cfg = impl_->cfg;
     if (points.rows() > std::numeric_limits<std::int32_t>::max())
         throw std::invalid_argument("too many points in one frame: " + std::to_string(points.rows()));
@@ -102,6 +113,10 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.speed_mps = speed_mps;
     r.yaw_rate_rps = yaw_rate_rps;
     r.ground_method = cfg.ground.method;
+    r.timestamp = motion.timestamp_s;
+    TemporalFusion* fusion = impl_->fusion ? &*impl_->fusion : nullptr;
+    if (fusion) fusion->advance(speed_mps, yaw_rate_rps, motion, r.fusion.emplace());
+    r.timing_ms.fusion = ms_since(mark);
 
     RoiCloud& roi = impl_->roi;
     crop_roi(points, impl_->sensor_to_base, cfg.ground, roi);
@@ -119,6 +134,10 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.timing_ms.obstacles = ms_since(mark);
 
     r.reason = blocking_reason(r);
+    const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
+    // Stopped: the same view again and again is not new evidence, so the map holds.
+    if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
+    r.timing_ms.fusion += ms_since(mark);
     if (!r.reason.empty()) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;
@@ -126,13 +145,13 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
         r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
         return r;
     }
-    const Levelling L = levelling_for(cfg.profile.level ? &*r.plane : nullptr);
     std::optional<PathCrossings> crossings;
     if (cfg.obstacles.enabled) crossings = cross_paths(roi, clustering, r, L, cfg);
     r.timing_ms.obstacles += ms_since(mark);
 
-    WheelProfiles wheels = build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile,
-                                          crossings ? &crossings->blocked : nullptr);
+    const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
+    WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
+                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked);
     r.left = std::move(wheels.left);
     r.right = std::move(wheels.right);
     if (crossings) {

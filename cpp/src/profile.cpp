@@ -18,16 +18,6 @@ struct Hit {
     double z;
 };
 
-// Sample standard deviation (n − 1 in the denominator) of at least two values.
-double sample_spread(std::vector<double>::const_iterator first, std::vector<double>::const_iterator last) {
-    const double n = static_cast<double>(last - first);
-    double mean = 0.0, squares = 0.0;
-    for (auto it = first; it != last; ++it) mean += *it;
-    mean /= n;
-    for (auto it = first; it != last; ++it) squares += (*it - mean) * (*it - mean);
-    return std::sqrt(squares / (n - 1.0));
-}
-
 // Bins the hits of one wheel (counting sort by bin), takes per-bin medians outside blocked bins, fills short gaps.
 Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg,
                     const std::vector<std::uint8_t>* blocked) {

@@ -265,6 +265,17 @@ void bind_results(py::module_& m) {
         .def_property_readonly("reason", [](const rp::Result& r) -> py::object {
             return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
         })
+        .def_property_readonly("fusion", [](const rp::Result& r) -> py::object {
+            if (!r.fusion) return py::none();
+            const rp::FusionStatus& f = *r.fusion;
+            py::dict d;
+            d["method"] = rp::to_string(f.method), d["frames"] = f.frames, d["coverage"] = f.coverage;
+            d["frame_coverage"] = f.frame_coverage;
+            d["reset"] = f.reset.empty() ? py::object(py::none()) : py::object(py::str(f.reset));
+            d["pose"] = py::make_tuple(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad);
+            d["time_ms"] = r.timing_ms.fusion;
+            return d;
+        }, "the temporal fusion's state after this frame (docs/output.md), or None without fusion")
         .def("to_json", &rp::result_to_json, "The CLI's output line for this frame")
         .def("to_dict", [](const rp::Result& r) { return py::module_::import("json").attr("loads")(rp::result_to_json(r)); },
              "The CLI's output line for this frame, parsed");
@@ -274,19 +285,22 @@ void bind_estimator(py::module_& m) {
     py::class_<rp::Estimator>(m, "Estimator")
         .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
         .def("process", [](rp::Estimator& est, py::handle points, double speed, double yaw_rate, const std::string& source,
-                           std::optional<double> timestamp, const std::string& yaw_rate_source) {
+                           std::optional<double> timestamp, const std::string& yaw_rate_source,
+                           std::optional<std::array<double, 3>> pose) {
             py::object holder;
             const rp::PointsView view = points_from(points, holder);
+            rp::FrameMotion motion{timestamp, std::nullopt};
+            if (pose) motion.pose = rp::Pose2{(*pose)[0], (*pose)[1], (*pose)[2]};
             rp::Result r;
             {
                 py::gil_scoped_release release;
-                r = est.process(view, speed, yaw_rate, source);
+                r = est.process(view, speed, yaw_rate, source, motion);
             }
-            r.timestamp = timestamp;
             r.yaw_rate_source = yaw_rate_source;
             return r;
         }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
-           py::arg("yaw_rate_source") = "");
+           py::arg("yaw_rate_source") = "", py::arg("pose") = py::none())
+        .def("reset", &rp::Estimator::reset, "Forgets the fused map, the pose and the clock");
 }
 
 void bind_obstacle_stages(py::module_& m) {

@@ -13,8 +13,8 @@ from pathlib import Path
 
 from . import reference, sim
 from ._native import native_available
-from .config import (Config, Extrinsics, GroundConfig, IriConfig, ObstaclesConfig, PathConfig, ProfileConfig,
-                     RoughnessConfig)
+from .config import (Config, Extrinsics, FusionConfig, GroundConfig, IriConfig, ObstaclesConfig, PathConfig,
+                     ProfileConfig, RoughnessConfig)
 from .estimator import Estimator
 
 if native_available():
@@ -31,6 +31,6 @@ def cmake_dir() -> str:
 
 __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
-    "ObstaclesConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
+    "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__",
 ]

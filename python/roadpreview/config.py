@@ -85,6 +85,21 @@ class ObstaclesConfig:
     min_height_m: float = 0.1  #: lower clusters do not block a wheel path (ground the fit missed)
 
 
+@dataclass
+class FusionConfig:
+    """Temporal fusion: a rolling elevation map fused over frames (docs/method.md §7)."""
+
+    method: str = "none"  #: "none" (each frame alone), "ema" (the paper's moving average) or "kalman"
+    alpha: float = 0.5  #: EMA weight of the new frame, (0, 1]; 1 = the latest frame's cells
+    cell_m: float = 0.1  #: square map cells
+    map_length_m: float = 100.0  #: side of the square map around the vehicle
+    point_noise_m: float = 0.03  #: σ of one point's height when no cell of a frame holds two points
+    frame_rate_hz: float = 10.0  #: frames without timestamps are 1/frame_rate_hz apart
+    max_time_gap_s: float = 0.5  #: a longer step between timestamps, or one back in time, resets the map
+    behind_m: float = 0.0  #: fused profiles start this far behind the wheels (already-driven road)
+    align: bool = True  #: remove the plane between a frame's heights and the map's before fusing
+
+
 _STAGES = {
     "extrinsics": Extrinsics,
     "ground": GroundConfig,
@@ -93,6 +108,7 @@ _STAGES = {
     "roughness": RoughnessConfig,
     "obstacles": ObstaclesConfig,
     "iri": IriConfig,
+    "fusion": FusionConfig,
 }
 
 
@@ -115,6 +131,7 @@ class Config:
     roughness: RoughnessConfig = field(default_factory=RoughnessConfig)
     obstacles: ObstaclesConfig = field(default_factory=ObstaclesConfig)
     iri: IriConfig = field(default_factory=IriConfig)
+    fusion: FusionConfig = field(default_factory=FusionConfig)
 
     def __post_init__(self) -> None:
         for name, cls in _STAGES.items():

@@ -21,7 +21,7 @@ class Estimator:
         self._impl = core().Estimator(self.config.to_json())
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
-                timestamp: Optional[float] = None, yaw_rate_source: str = ""):
+                timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None):
         """One frame.
 
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
@@ -29,6 +29,17 @@ class Estimator:
         speed: m/s, negative when reversing. yaw_rate: rad/s, positive turning left.
         yaw_rate_source: where the yaw rate came from (e.g. "imu"); when given, the output line's ``path``
         carries it (docs/output.md).
+        timestamp: s; with ``cfg.fusion.method`` "ema" or "kalman" the map moves by the speed and yaw rate
+        integrated since the previous frame's timestamp (1/``fusion.frame_rate_hz`` without timestamps).
+        pose: (x, y, yaw) of the vehicle in the odometry frame (m, m, rad), used instead of that integration.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
-        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source)
+        if pose is not None:
+            pose = tuple(float(v) for v in pose)
+            if len(pose) != 3:
+                raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
+        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose)
+
+    def reset(self):
+        """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""
+        self._impl.reset()

@@ -73,6 +73,21 @@ struct ObstaclesConfig {
     double min_height_m = 0.1;         ///< lower clusters do not block a wheel path (ground the fit missed)
 };
 
+enum class FusionMethod { None, Ema, Kalman };
+
+/// Temporal fusion (docs/method.md §7): a rolling elevation map fused over frames; "none" is the single frame.
+struct FusionConfig {
+    FusionMethod method = FusionMethod::None;
+    double alpha = 0.5;            ///< EMA weight of the new frame, (0, 1]; 1 = the latest frame's cells
+    double cell_m = 0.1;           ///< square map cells
+    double map_length_m = 100.0;   ///< side of the square map around the vehicle (≥ 2 × (preview + margin))
+    double point_noise_m = 0.03;   ///< σ of one point's height when no cell of a frame holds two points
+    double frame_rate_hz = 10.0;   ///< frames without timestamps are 1/frame_rate_hz apart
+    double max_time_gap_s = 0.5;   ///< a longer step between timestamps, or one back in time, resets the map
+    double behind_m = 0.0;         ///< fused profiles start this far behind the wheels (already-driven road)
+    bool align = true;             ///< remove the plane between a frame's heights and the map's before fusing
+};
+
 struct Config {
     std::optional<double> sensor_height;   ///< m; shortcut for extrinsics (0, 0, h, 0, 0, 0)
     std::optional<Extrinsics> extrinsics;  ///< neither set: points are already in the base frame
@@ -84,6 +99,7 @@ struct Config {
     RoughnessConfig roughness;
     ObstaclesConfig obstacles;
     IriConfig iri;
+    FusionConfig fusion;
 };
 
 /// Throws std::invalid_argument naming the first offending field.
@@ -99,5 +115,6 @@ std::string config_to_json(const Config& cfg);
 Config config_from_file(const std::string& path);
 
 const char* to_string(GroundMethod method);
+const char* to_string(FusionMethod method);
 
 }  // namespace roadpreview

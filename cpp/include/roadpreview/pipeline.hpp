@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "roadpreview/config.hpp"
+#include "roadpreview/fusion.hpp"
 #include "roadpreview/ground.hpp"
 #include "roadpreview/obstacles.hpp"
 #include "roadpreview/path.hpp"
@@ -33,6 +34,7 @@ struct TimingMs {
     double profile = 0.0;
     double roughness = 0.0;
     double obstacles = 0.0;  ///< clustering and the wheel-path crossings
+    double fusion = 0.0;     ///< moving the map and fusing the frame (sampling the map counts as profile)
     double total = 0.0;
 };
 
@@ -56,6 +58,7 @@ struct Result {
     /// Where the yaw rate came from ("option", "motion", "imu", "default"), set by the caller; when set, the
     /// output line's `path` is an object for every motion status and carries it (docs/output.md).
     std::string yaw_rate_source;
+    std::optional<FusionStatus> fusion;  ///< nullopt when fusion.method is "none" (docs/method.md §7)
 };
 
 /// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;
@@ -70,16 +73,22 @@ public:
     /// speed in m/s (negative when reversing), yaw rate in rad/s (positive turning left).
     /// Throws std::invalid_argument for non-finite speed or yaw rate.
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source = {});
+    /// The same with the frame's timestamp (copied to the result) and, optionally, its pose for the fusion.
+    Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                   const FrameMotion& motion);
+
+    /// Forgets the fused map, the pose and the clock (the frame counter keeps counting).
+    void reset();
 
     /// Any row-major float Eigen matrix, map or ref with 3 or more columns (N×3, N×4 KITTI), read in place.
     template <typename Derived>
     Result process(const Eigen::DenseBase<Derived>& points, double speed_mps, double yaw_rate_rps,
-                   const std::string& source = {}) {
+                   const std::string& source = {}, const FrameMotion& motion = {}) {
         static_assert(std::is_same_v<typename Derived::Scalar, float>, "points must be float32");
         static_assert(Derived::IsRowMajor || Derived::ColsAtCompileTime == 1, "points must be row-major");
         if (points.cols() < 3) throw std::invalid_argument("points need at least 3 columns (x, y, z)");
         const auto& m = points.derived();
-        return process(points_view(m.data(), m.rows(), m.outerStride()), speed_mps, yaw_rate_rps, source);
+        return process(points_view(m.data(), m.rows(), m.outerStride()), speed_mps, yaw_rate_rps, source, motion);
     }
 
     const Config& config() const;

@@ -4,6 +4,7 @@
 
 #include "roadpreview/config.hpp"
 #include "roadpreview/frames.hpp"
+#include "roadpreview/fusion.hpp"
 #include "roadpreview/ground.hpp"
 #include "roadpreview/io.hpp"
 #include "roadpreview/io/ouster.hpp"

@@ -6,6 +6,7 @@ Written for clarity, not speed; every stage function below has a C++ twin with t
 import numpy as _np
 
 from .frames import to_base_frame
+from .fusion import FusedMap, integrate_motion, process_fused
 from .ground import fit_ground, fit_plane
 from .obstacles import Obstacles, PathObstacles, blocked_bins, cluster_labels, find_obstacles, wheel_obstacles
 from .iri import Iri, profile_iri, rectified_slope
@@ -32,6 +33,7 @@ __all__ = [
     "ISO_GEOMETRIC_MEANS",
     "Obstacles",
     "PathObstacles",
+    "FusedMap",
     "Profile",
     "Result",
     "Roughness",
@@ -48,11 +50,13 @@ __all__ = [
     "resolved_fraction",
     "fit_ground",
     "fit_plane",
+    "integrate_motion",
     "iso_class",
     "level_points",
     "longest_valid_stretch",
     "plan_path",
     "process",
+    "process_fused",
     "to_base_frame",
     "vehicle_roughness",
     "wheel_obstacles",

@@ -1,0 +1,232 @@
+"""Temporal fusion (docs/method.md §7), simple version: an unbounded, non-scrolling map of the same cells.
+
+The C++ map is a window over this same grid of cells (i, j) = (floor(x/cell), floor(y/cell)) in the
+odometry frame; while the vehicle stays within half the map's side of where cells were seen, both hold the
+same values.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from ..config import Config
+from .frames import check_points, to_base_frame
+from .ground import fit_ground
+from .iri import profile_iri, vehicle_iri
+from .path import check_motion, plan_path, wheel_y
+from .profile import Profile, bin_count, fill_gaps, level_points
+from .roughness import analyze_roughness, vehicle_roughness
+from .support import backed_variances
+
+_MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
+_MIN_VARIANCE = 1e-12
+_MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
+
+
+def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[float, float, float]:
+    """(x, y, yaw) after dt seconds at constant speed and yaw rate: an arc, or a line when ω·dt = 0."""
+    x, y, yaw = pose
+    turn = yaw_rate * dt
+    if turn == 0:
+        return x + speed * dt * math.cos(yaw), y + speed * dt * math.sin(yaw), yaw
+    radius = speed / yaw_rate
+    return x + radius * (math.sin(yaw + turn) - math.sin(yaw)), y + radius * (math.cos(yaw) - math.cos(yaw + turn)), \
+        yaw + turn
+
+
+@dataclass
+class Cell:
+    height: float
+    variance: float
+    observations: int
+    points: int
+    last_update: int
+
+
+def fuse_cell(cell: Optional[Cell], z: float, r: float, points: int, frame: int, cfg: Config) -> Cell:
+    if cell is None:
+        return Cell(z, r, 1, points, frame)
+    if cfg.fusion.method == "ema":
+        a = cfg.fusion.alpha
+        height, variance = a * z + (1 - a) * cell.height, a * a * r + (1 - a) ** 2 * cell.variance
+    else:  # kalman
+        gain = cell.variance / (cell.variance + r)
+        height, variance = cell.height + gain * (z - cell.height), cell.variance * r / (cell.variance + r)
+    return Cell(height, variance, cell.observations + 1, cell.points + points, frame)
+
+
+def spread_for_variance(v: float, count: int) -> float:
+    """The spread whose bin variance in the roughness stage ((π/2)s²/n; s²/2 for two points) is v."""
+    if count >= 3:
+        return math.sqrt(v * count / _MEDIAN_VARIANCE_FACTOR)
+    return math.sqrt(2 * v) if count == 2 else math.nan
+
+
+def path_point(path: dict, wheel: str, s: float, offset: float, speed: float, yaw_rate: float, cfg: Config):
+    """Base-frame (x, y) of the point `offset` across (radially outward on an arc) from the wheel's path at s."""
+    y_w = wheel_y(wheel, cfg)
+    if path["status"] == "straight":
+        return math.copysign(1.0, speed) * s, y_w + offset
+    r_w = path[f"{wheel}_radius"]
+    if r_w <= 0:
+        return None
+    phi = math.copysign(1.0, yaw_rate) * s / r_w
+    u = (y_w - path["icr_y"]) / r_w
+    return -math.sin(phi) * u * (r_w + offset), path["icr_y"] + math.cos(phi) * u * (r_w + offset)
+
+
+@dataclass
+class FusedMap:
+    """The map, the pose (x, y, yaw) and the clock of one fusing estimator."""
+
+    cfg: Config
+    cells: dict = field(default_factory=dict)
+    pose: tuple = (0.0, 0.0, 0.0)
+    last_time: Optional[float] = None
+    frame: int = 0
+    fused: int = 0
+    started: bool = False
+
+    def reset(self):
+        self.cells, self.pose, self.last_time, self.fused, self.started = {}, (0.0, 0.0, 0.0), None, 0, False
+
+    def advance(self, speed, yaw_rate, timestamp=None, pose=None) -> Optional[str]:
+        """Moves to this frame's pose; returns why the map was reset, if it was."""
+        dt = 1.0 / self.cfg.fusion.frame_rate_hz if self.started else 0.0
+        reset = None
+        if timestamp is not None and self.last_time is not None:
+            dt = timestamp - self.last_time
+            if dt < 0:
+                reset = f"time went back by {-dt:.3f} s"
+            elif dt > self.cfg.fusion.max_time_gap_s:
+                reset = f"time gap of {dt:.3f} s"
+            if reset:
+                self.reset()
+                dt = 0.0
+        if timestamp is not None:
+            self.last_time = timestamp
+        if pose is not None:
+            self.pose = tuple(pose)
+        elif self.started:
+            self.pose = integrate_motion(self.pose, speed, yaw_rate, dt)
+        self.started = True
+        self.frame += 1
+        return reset
+
+    def to_odometry(self, xy: np.ndarray) -> np.ndarray:
+        x0, y0, yaw = self.pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.column_stack([x0 + c * xy[:, 0] - s * xy[:, 1], y0 + s * xy[:, 0] + c * xy[:, 1]])
+
+    def fuse(self, levelled_ground: np.ndarray):
+        """Median per cell of the frame's levelled ground points, fused into the map."""
+        cell = self.cfg.fusion.cell_m
+        ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
+        keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
+        heights = levelled_ground[np.argsort(inverse.ravel(), kind="stable"), 2]
+        groups = np.split(heights, np.cumsum(counts)[:-1])
+        spreads = np.array([np.std(z, ddof=1) if len(z) >= 2 else np.nan for z in groups])
+        medians = np.array([np.median(z) for z in groups])
+        if self.cfg.fusion.align:
+            medians = self.align(keys, medians)
+        variances = backed_variances(counts, spreads)  # as the roughness stage rates a bin's median
+        if variances is None:  # no cell with two points: the configured noise of one point
+            variances = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
+        for key, z, m, r in zip(map(tuple, keys), groups, medians, np.maximum(variances, _MIN_VARIANCE)):
+            self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg)
+        self.fused += 1
+
+    def align(self, keys: np.ndarray, medians: np.ndarray) -> np.ndarray:
+        """The frame's cell medians minus the least-squares plane of their differences to the map's heights."""
+        centres = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
+        regressors = np.column_stack([np.ones(len(keys)), centres])
+        shared = np.array([tuple(k) in self.cells for k in keys], dtype=bool)
+        if shared.sum() < _MIN_ALIGN_CELLS:
+            return medians
+        v = regressors[shared]
+        difference = medians[shared] - np.array([self.cells[tuple(k)].height for k in keys[shared]])
+        normal = v.T @ v
+        if np.linalg.matrix_rank(normal) < 3:
+            return medians
+        return medians - regressors @ np.linalg.solve(normal, v.T @ difference)
+
+    def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
+        """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""
+        cfg = self.cfg
+        ds, cell, tire = cfg.profile.ds_m, cfg.fusion.cell_m, cfg.tire_width
+        behind = math.ceil(cfg.fusion.behind_m / ds - 1e-9)
+        bins = behind + bin_count(cfg)
+        lanes = max(1, round(tire / cell))
+        offsets = [(lane + 0.5) * tire / lanes - tire / 2 for lane in range(lanes)]
+        s = (np.arange(bins) + 0.5 - behind) * ds
+        z, spread = np.full(bins, np.nan), np.full(bins, np.nan)
+        count = np.zeros(bins, dtype=np.int64)
+        flags = np.zeros(bins, dtype=bool)
+        if blocked is not None:
+            flags[behind:] = np.asarray(blocked, dtype=bool)
+        ahead = ahead_now = 0
+        for k in range(bins):
+            found = [self._cell_at(path, wheel, s[k], o, speed, yaw_rate) for o in offsets]
+            found = [c for c in found if c is not None]
+            if not found:
+                continue
+            count[k] = sum(c.points for c in found)
+            if k >= behind:
+                ahead += 1
+                ahead_now += any(c.last_update == self.frame for c in found)
+            if flags[k]:
+                continue
+            z[k] = sum(c.height for c in found) / len(found)
+            spread[k] = spread_for_variance(sum(c.variance for c in found) / len(found) ** 2, count[k])
+        z = fill_gaps(z, ds, cfg.profile.max_gap_m, flags)
+        roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
+        roughness.iri = profile_iri(z, ds, cfg)
+        return Profile(s=s, z=z, count=count, spread=spread, roughness=roughness, blocked=flags), ahead, ahead_now
+
+    def _cell_at(self, path, wheel, s, offset, speed, yaw_rate) -> Optional[Cell]:
+        xy = path_point(path, wheel, s, offset, speed, yaw_rate, self.cfg)
+        if xy is None:
+            return None
+        odom = self.to_odometry(np.array([xy]))[0]
+        return self.cells.get(tuple(np.floor(odom / self.cfg.fusion.cell_m).astype(np.int64)))
+
+
+@dataclass
+class FusedResult:
+    left: Profile
+    right: Profile
+    fusion: dict  #: method, frames, coverage, frame_coverage, reset, pose
+    reason: Optional[str] = None
+    vehicle: object = None
+
+
+def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, pose=None) -> FusedResult:
+    """One frame through the fusing pipeline without obstacles (cfg.obstacles is not consulted)."""
+    cfg = state.cfg
+    points = check_points(points)
+    speed, yaw_rate = check_motion(speed, yaw_rate)
+    path = plan_path(speed, yaw_rate, cfg)
+    reset = state.advance(speed, yaw_rate, timestamp, pose)
+    status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
+              "reset": reset, "pose": state.pose}
+    base_xyz, _ = to_base_frame(points, cfg)
+    ground, plane = fit_ground(base_xyz, cfg) if len(base_xyz) else (None, None)
+    reason = "no finite points" if len(base_xyz) == 0 else "no ground" if plane is None else \
+        "vehicle stopped" if path["status"] == "stopped" else None
+    if plane is not None and path["status"] != "stopped":
+        xyz = base_xyz[ground]
+        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz)
+    status["frames"] = state.fused
+    if reason:
+        return FusedResult(Profile(), Profile(), status, reason)
+    (left, a_l, n_l), (right, a_r, n_r) = (state.profile(path, w, speed, yaw_rate) for w in ("left", "right"))
+    status["coverage"] = (a_l + a_r) / (2 * bin_count(cfg))
+    status["frame_coverage"] = (n_l + n_r) / (2 * bin_count(cfg))
+    vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
+                                spread_left=left.spread, count_right=right.count, spread_right=right.spread)
+    vehicle.iri = vehicle_iri(left.roughness.iri, right.roughness.iri)
+    return FusedResult(left, right, status, None, vehicle)

@@ -1,0 +1,267 @@
+// Temporal fusion (docs/method.md §7): the rolling map, ego-motion, the fusion rules and their robustness.
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+
+#include <cmath>
+#include <random>
+
+#include "scenes.hpp"
+
+namespace rp = roadpreview;
+
+namespace {
+
+// The road of the static scenes: a 5 m swell across the whole width, in the odometry frame.
+double road_height(double x) { return 0.03 * std::sin(2.0 * M_PI * x / 5.0); }
+
+// One frame of noisy points on that road seen from `pose` (base frame points), |y| ≤ 3 m, 1 ≤ x ≤ 40 m; like a
+// LiDAR's, their density falls with range (x log-uniform: density ∝ 1/x).
+scenes::Cloud road_frame(const rp::Pose2& pose, int n, double noise_m, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> log_x(0.0, std::log(40.0)), uy(-3.0, 3.0);
+    std::normal_distribution<double> gauss(0.0, noise_m);
+    scenes::Cloud pts(n, 3);
+    const double c = std::cos(pose.yaw_rad), s = std::sin(pose.yaw_rad);
+    for (int i = 0; i < n; ++i) {
+        const double x = std::exp(log_x(rng)), y = uy(rng);
+        pts.row(i) << float(x), float(y), float(road_height(pose.x_m + c * x - s * y) + gauss(rng));
+    }
+    return pts;
+}
+
+rp::Config fusion_config(rp::FusionMethod method, double alpha = 0.5) {
+    rp::Config cfg;
+    cfg.fusion.method = method;
+    cfg.fusion.alpha = alpha;
+    cfg.profile.level = false;  // the swell tilts the plane fit a little; these tests check the fusion alone
+    cfg.obstacles.enabled = false;
+    return cfg;
+}
+
+// RMSE of a straight-ahead profile against the road, over the bins 0 ≤ s < length that have a height.
+double profile_rmse(const rp::Profile& p, double x0, double length) {
+    double squares = 0.0;
+    int n = 0;
+    for (std::size_t k = 0; k < p.z.size(); ++k)
+        if (p.s[k] >= 0.0 && p.s[k] < length && std::isfinite(p.z[k]))
+            squares += std::pow(p.z[k] - road_height(x0 + p.s[k]), 2), ++n;
+    return n ? std::sqrt(squares / n) : NAN;
+}
+
+double backed_fraction(const rp::Profile& p, double length) {
+    int backed = 0, bins = 0;
+    for (std::size_t k = 0; k < p.z.size(); ++k)
+        if (p.s[k] >= 0.0 && p.s[k] < length) ++bins, backed += p.count[k] > 0;
+    return double(backed) / bins;
+}
+
+// Drives straight at `speed` for `frames` frames of 10 Hz; returns the last result.
+rp::Result drive(rp::Estimator& est, double speed, int frames, int points, double noise, double t0 = 0.0) {
+    rp::Result r;
+    rp::Pose2 pose;
+    for (int f = 0; f < frames; ++f) {
+        pose.x_m = speed * 0.1 * f;
+        const auto cloud = road_frame(pose, points, noise, 100u + unsigned(f));
+        r = est.process(cloud, speed, 0.0, "", rp::FrameMotion{t0 + 0.1 * f, std::nullopt});
+    }
+    return r;
+}
+
+}  // namespace
+
+TEST(ElevationMap, MovingKeepsCellsAtTheirPlaceAndForgetsThoseThatLeave) {
+    rp::ElevationMap map(0.1, 20.0);
+    ASSERT_EQ(map.side(), 200);
+    map.at(3.05, -2.05)->height = 1.5f;
+    map.at(3.05, -2.05)->observations = 1;
+    map.move_to(7.3, 4.1);  // the cell is still inside the window: same place, same value
+    ASSERT_NE(map.at(3.05, -2.05), nullptr);
+    EXPECT_EQ(map.at(3.05, -2.05)->height, 1.5f);
+    EXPECT_EQ(map.at(3.05, -2.05)->observations, 1);
+    EXPECT_EQ(map.at(-7.0, 0.0), nullptr);  // left the window
+    map.move_to(16.0, 0.0);                 // the cell leaves the window...
+    EXPECT_EQ(map.at(3.05, -2.05), nullptr);
+    map.move_to(0.0, 0.0);  // ...and comes back empty
+    EXPECT_EQ(map.at(3.05, -2.05)->observations, 0);
+}
+
+TEST(ElevationMap, DefaultsCoverThePreviewAndDocumentTheirMemory) {
+    const rp::Config cfg;
+    rp::ElevationMap map(cfg.fusion.cell_m, cfg.fusion.map_length_m);
+    EXPECT_EQ(map.side(), 1000);
+    EXPECT_EQ(map.bytes(), 1000u * 1000u * sizeof(rp::MapCell));
+    EXPECT_EQ(sizeof(rp::MapCell), 20u);  // docs/method.md §7 quotes 20 MB
+}
+
+TEST(Motion, IntegratesArcsAndLines) {
+    const rp::Pose2 line = rp::integrate_motion({1.0, 2.0, M_PI / 2}, 5.0, 0.0, 0.5);
+    EXPECT_NEAR(line.x_m, 1.0, 1e-12);
+    EXPECT_NEAR(line.y_m, 4.5, 1e-12);
+    rp::Pose2 p;  // a full circle of radius 10 m in 40 steps comes back to the start
+    const double w = 0.5, v = 5.0, dt = 2.0 * M_PI / w / 40.0;
+    for (int i = 0; i < 40; ++i) p = rp::integrate_motion(p, v, w, dt);
+    EXPECT_NEAR(p.x_m, 0.0, 1e-9);
+    EXPECT_NEAR(p.y_m, 0.0, 1e-9);
+    const rp::Pose2 quarter = rp::integrate_motion({}, v, w, M_PI / 2 / w);
+    EXPECT_NEAR(quarter.x_m, 10.0, 1e-9);  // a left quarter turn of radius 10 m
+    EXPECT_NEAR(quarter.y_m, 10.0, 1e-9);
+    const double kitti[12] = {0, -1, 0, 3, 1, 0, 0, 4, 0, 0, 1, 0};
+    const rp::Pose2 from_matrix = rp::pose_from_matrix(kitti);
+    EXPECT_DOUBLE_EQ(from_matrix.x_m, 3.0);
+    EXPECT_DOUBLE_EQ(from_matrix.y_m, 4.0);
+    EXPECT_DOUBLE_EQ(from_matrix.yaw_rad, M_PI / 2);
+}
+
+TEST(Fusion, EmaWithAlphaOneEqualsTheSingleFrameMap) {
+    rp::Config cfg = fusion_config(rp::FusionMethod::Ema, 1.0);
+    cfg.fusion.align = false;  // with it, the frame would first be moved onto the map by a plane
+    rp::TemporalFusion fused(cfg), single(cfg);
+    rp::FusionStatus status;
+    const rp::Levelling L = rp::levelling_for(nullptr);
+    const auto first = road_frame({}, 20000, 0.02, 1), second = road_frame({0.8, 0.0, 0.0}, 20000, 0.02, 2);
+    const std::vector<std::uint8_t> all(20000, 1);
+    fused.advance(8.0, 0.0, {0.0, std::nullopt}, status);
+    fused.fuse(rp::points_view(first.data(), first.rows(), 3), all, L);
+    fused.advance(8.0, 0.0, {0.1, std::nullopt}, status);
+    fused.fuse(rp::points_view(second.data(), second.rows(), 3), all, L);
+    single.advance(0.0, 0.0, {0.0, rp::Pose2{0.8, 0.0, 0.0}}, status);
+    single.fuse(rp::points_view(second.data(), second.rows(), 3), all, L);
+    int compared = 0;
+    for (double x = 2.0; x < 40.0; x += 0.1)
+        for (double y = -2.95; y < 3.0; y += 0.1) {
+            const rp::MapCell* one = single.map().at(x, y);
+            if (!one || one->observations == 0) continue;
+            EXPECT_EQ(fused.map().at(x, y)->height, one->height);
+            ++compared;
+        }
+    EXPECT_GT(compared, 10000);
+}
+
+TEST(Fusion, StaticSceneWithExactMotionConvergesToTheTruth) {
+    for (const auto method : {rp::FusionMethod::Ema, rp::FusionMethod::Kalman}) {
+        rp::Estimator single(fusion_config(rp::FusionMethod::None)), est(fusion_config(method, 0.3));
+        const double speed = 8.0, noise = 0.02;
+        const rp::Result fused = drive(est, speed, 10, 15000, noise);
+        const double x0 = speed * 0.9;
+        const auto cloud = road_frame({x0, 0.0, 0.0}, 15000, noise, 109u);
+        const rp::Result one = single.process(cloud, speed, 0.0);
+        ASSERT_TRUE(fused.fusion);
+        EXPECT_EQ(fused.fusion->frames, 10);
+        EXPECT_NEAR(fused.fusion->pose.x_m, x0, 1e-9);
+        EXPECT_GT(backed_fraction(fused.left, 30.0), 0.99);
+        EXPECT_LT(backed_fraction(one.left, 30.0), 0.9);
+        EXPECT_GT(fused.fusion->coverage, 0.95);
+        EXPECT_LT(fused.fusion->frame_coverage, fused.fusion->coverage);
+        const double rmse_fused = profile_rmse(fused.left, x0, 30.0), rmse_single = profile_rmse(one.left, x0, 30.0);
+        std::printf("%s: coverage %.3f (frame %.3f, single %.3f), RMSE fused %.4f single %.4f m\n", rp::to_string(method),
+                    fused.fusion->coverage, fused.fusion->frame_coverage, backed_fraction(one.left, 30.0), rmse_fused,
+                    rmse_single);
+        EXPECT_LE(rmse_fused, 0.01) << rp::to_string(method);  // the target
+        EXPECT_LT(rmse_fused, 0.6 * rmse_single) << rp::to_string(method);
+    }
+}
+
+TEST(Fusion, ProfilesBehindTheWheelsReadTheDrivenRoad) {
+    rp::Config cfg = fusion_config(rp::FusionMethod::Kalman);
+    cfg.fusion.behind_m = 5.0;
+    rp::Estimator est(cfg);
+    const rp::Result r = drive(est, 8.0, 10, 60000, 0.02);
+    ASSERT_EQ(r.left.z.size(), 450u);
+    EXPECT_NEAR(r.left.s0, -4.95, 1e-12);
+    double squares = 0.0;
+    for (std::size_t k = 0; k < 50; ++k) {
+        ASSERT_TRUE(std::isfinite(r.left.z[k]));
+        squares += std::pow(r.left.z[k] - road_height(7.2 + r.left.s[k]), 2);
+    }
+    EXPECT_LT(std::sqrt(squares / 50), 0.01);
+}
+
+TEST(Fusion, ALargeTimeGapResetsTheMapAndSaysSo) {
+    rp::Estimator est(fusion_config(rp::FusionMethod::Ema));
+    drive(est, 8.0, 5, 20000, 0.02);
+    const auto cloud = road_frame({}, 20000, 0.02, 7);
+    const rp::Result gap = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{5.0, std::nullopt});
+    ASSERT_TRUE(gap.fusion);
+    EXPECT_EQ(gap.fusion->reset, "time gap of 4.600 s");
+    EXPECT_EQ(gap.fusion->frames, 1);  // only this frame
+    const rp::Result back = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{4.0, std::nullopt});
+    EXPECT_EQ(back.fusion->reset, "time went back by 1.000 s");
+    const rp::Result next = est.process(cloud, 0.0, 0.0, "", rp::FrameMotion{4.1, std::nullopt});
+    EXPECT_EQ(next.fusion->reset, "");
+    est.reset();
+    const rp::Result after_reset = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{100.0, std::nullopt});
+    EXPECT_EQ(after_reset.fusion->reset, "");  // reset() forgot the clock: no gap to report
+    EXPECT_EQ(after_reset.fusion->frames, 1);
+}
+
+TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
+    rp::Estimator est(fusion_config(rp::FusionMethod::Kalman));
+    const rp::Result before = drive(est, 8.0, 10, 60000, 0.02);
+    const double x0 = 7.2;
+    double t = 1.0;
+    const scenes::Cloud empty(0, 3);
+    const rp::Result no_ground = est.process(empty, 8.0, 0.0, "", rp::FrameMotion{t, std::nullopt});
+    EXPECT_EQ(no_ground.reason, "no finite points");
+    EXPECT_EQ(no_ground.fusion->frames, 10);
+    double x = x0 + 0.8;
+    for (int i = 0; i < 30; ++i) {  // stopped for 3 s: the map holds
+        t += 0.1;
+        const rp::Result r = est.process(road_frame({x, 0, 0}, 20000, 0.05, 500u + unsigned(i)), 0.0, 0.0, "",
+                                         rp::FrameMotion{t, std::nullopt});
+        EXPECT_EQ(r.fusion->frames, 10);
+        EXPECT_NEAR(r.fusion->pose.x_m, x, 1e-9);
+    }
+    for (int i = 0; i < 5; ++i) {  // backing up 2 m: the points land where they belong
+        t += 0.1;
+        x -= 0.4;
+        est.process(road_frame({x, 0, 0}, 60000, 0.02, 600u + unsigned(i)), -4.0, 0.0, "", rp::FrameMotion{t, std::nullopt});
+    }
+    t += 0.1;
+    const rp::Result after = est.process(road_frame({x, 0, 0}, 60000, 0.02, 700u), 0.0001, 0.0, "",
+                                         rp::FrameMotion{t, std::nullopt});
+    EXPECT_NEAR(after.fusion->pose.x_m, x + 0.00001, 1e-9);
+    EXPECT_LT(profile_rmse(after.left, x + 0.00001, 30.0), 0.006);
+    EXPECT_LT(profile_rmse(before.left, x0, 30.0), 0.006);
+}
+
+TEST(Fusion, NoneKeepsTheSingleFramePipeline) {
+    rp::Config cfg = fusion_config(rp::FusionMethod::None);
+    rp::Estimator est(cfg);
+    const auto cloud = road_frame({}, 20000, 0.02, 3);
+    const rp::Result r = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{1.5, std::nullopt});
+    EXPECT_FALSE(r.fusion);
+    EXPECT_EQ(r.timestamp, 1.5);
+    EXPECT_EQ(rp::result_to_json(r).find("\"fusion\":null") != std::string::npos, true);
+}
+
+TEST(Fusion, AlignmentRemovesEachFramesHeaveAndTilt) {
+    // Every frame carries its own height offset and pitch (what a per-frame plane fit leaves on long waves).
+    for (const bool align : {true, false}) {
+        rp::Config cfg = fusion_config(rp::FusionMethod::Kalman);
+        cfg.fusion.align = align;
+        rp::Estimator est(cfg);
+        rp::Result r;
+        for (int f = 0; f < 10; ++f) {
+            const rp::Pose2 pose{0.8 * f, 0.0, 0.0};
+            scenes::Cloud cloud = road_frame(pose, 15000, 0.01, 300u + unsigned(f));
+            const double heave = 0.02 * std::sin(1.3 * f), pitch = 0.002 * std::cos(0.9 * f);
+            for (Eigen::Index i = 0; i < cloud.rows(); ++i) cloud(i, 2) += float(heave + pitch * cloud(i, 0));
+            r = est.process(cloud, 8.0, 0.0, "", rp::FrameMotion{0.1 * f, std::nullopt});
+        }
+        // The map follows the first frame's offset and tilt (heave 0, pitch 0.002); the last frame's view of
+        // the road differs from that by a plane, so compare shapes: the RMSE about the best line.
+        const rp::Profile& p = r.left;
+        std::vector<double> s, e;
+        for (std::size_t k = 0; k < p.z.size(); ++k)
+            if (p.s[k] < 30.0 && std::isfinite(p.z[k])) s.push_back(p.s[k]), e.push_back(p.z[k] - road_height(7.2 + p.s[k]));
+        Eigen::MatrixXd A(s.size(), 2);
+        Eigen::VectorXd b(s.size());
+        for (std::size_t k = 0; k < s.size(); ++k) A(k, 0) = 1.0, A(k, 1) = s[k], b(k) = e[k];
+        const Eigen::VectorXd line = A.colPivHouseholderQr().solve(b);
+        const double rms = std::sqrt((b - A * line).squaredNorm() / double(s.size()));
+        std::printf("align %d: detrended RMSE %.4f m\n", align, rms);
+        if (align) EXPECT_LT(rms, 0.005);
+        else EXPECT_GT(rms, 0.006);
+    }
+}
