@@ -19,6 +19,9 @@ void bind_io(py::module_& m);  // io.cpp
 
 namespace {
 
+// A 1-D (or any) float64 array, converted once when the caller passes another dtype or layout.
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
 template <typename T>
 py::array view_of(const std::vector<T>& v, py::handle owner, py::dtype dtype = py::dtype::of<T>()) {
     py::array a(dtype, {static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner);
@@ -107,7 +110,7 @@ py::dict path_dict(const rp::WheelPaths& p) {
 
 rp::Config config_from(const std::string& json) { return rp::config_from_json(json, "config"); }
 
-std::vector<double> as_vector(const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+std::vector<double> as_vector(const DoubleArray& a) {
     if (a.ndim() != 1) throw py::value_error("expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
     return std::vector<double>(a.data(), a.data() + a.size());
 }
@@ -153,7 +156,7 @@ py::object records_or_none(const std::optional<std::vector<Record>>& items, py::
 }
 
 // A profile of heights z with the count and spread of the points behind each bin (for the stage functions).
-rp::Profile profile_of(const py::array_t<double, py::array::c_style | py::array::forcecast>& z, double ds,
+rp::Profile profile_of(const DoubleArray& z, double ds,
                        const py::object& count, const py::object& spread) {
     rp::Profile p;
     p.ds = ds;
@@ -161,7 +164,7 @@ rp::Profile profile_of(const py::array_t<double, py::array::c_style | py::array:
     const auto c = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>::ensure(count);
     if (!c || c.ndim() != 1) throw py::value_error("count must be a 1-D array of integers");
     p.count.assign(c.data(), c.data() + c.size());
-    p.spread = as_vector(py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(spread));
+    p.spread = as_vector(DoubleArray::ensure(spread));
     if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
         throw py::value_error("z, count and spread must have one entry per bin");
     return p;
@@ -423,7 +426,7 @@ void bind_stages(py::module_& m) {
             for (int r = 0; r < 3; ++r) o(i, r) = L.R[r][0] * v(i, 0) + L.R[r][1] * v(i, 1) + L.R[r][2] * v(i, 2);
         return out;
     });
-    m.def("fill_gaps", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds, double max_gap_m,
+    m.def("fill_gaps", [](DoubleArray z, double ds, double max_gap_m,
                           std::optional<std::vector<bool>> blocked) {
         std::vector<double> v = as_vector(z);
         std::vector<std::uint8_t> flags;
@@ -431,25 +434,25 @@ void bind_stages(py::module_& m) {
         rp::fill_gaps(v, ds, max_gap_m, blocked ? &flags : nullptr);
         return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
     }, py::arg("z"), py::arg("ds"), py::arg("max_gap_m"), py::arg("blocked") = py::none());
-    m.def("longest_valid_stretch", [](py::array_t<double, py::array::c_style | py::array::forcecast> z) {
+    m.def("longest_valid_stretch", [](DoubleArray z) {
         return rp::longest_valid_stretch(as_vector(z));
     });
-    m.def("displacement_psd", [](py::array_t<double, py::array::c_style | py::array::forcecast> x, double ds) {
+    m.def("displacement_psd", [](DoubleArray x, double ds) {
         const std::vector<double> v = as_vector(x);
         if (v.size() < 2) throw py::value_error("displacement_psd needs at least 2 samples");
         rp::Spectrum sp = rp::displacement_psd(v.data(), v.size(), ds);
         return py::make_tuple(py::array_t<double>(static_cast<py::ssize_t>(sp.n.size()), sp.n.data()),
                               py::array_t<double>(static_cast<py::ssize_t>(sp.psd.size()), sp.psd.data()));
     });
-    m.def("analyze_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds,
+    m.def("analyze_roughness", [](DoubleArray z, double ds,
                                   const std::string& config_json, py::object count, py::object spread) {
         const rp::RoughnessConfig cfg = config_from(config_json).roughness;
         if (count.is_none() != spread.is_none()) throw py::value_error("give both count and spread, or neither");
         if (count.is_none()) return rp::analyze_roughness(as_vector(z), ds, cfg);
         return rp::analyze_roughness(profile_of(z, ds, count, spread), cfg);
     }, py::arg("z"), py::arg("ds"), py::arg("config_json"), py::arg("count") = py::none(), py::arg("spread") = py::none());
-    m.def("vehicle_roughness", [](py::array_t<double, py::array::c_style | py::array::forcecast> zl,
-                                  py::array_t<double, py::array::c_style | py::array::forcecast> zr, double ds,
+    m.def("vehicle_roughness", [](DoubleArray zl,
+                                  DoubleArray zr, double ds,
                                   const std::string& config_json, py::object count_left, py::object spread_left,
                                   py::object count_right, py::object spread_right) {
         const rp::RoughnessConfig cfg = config_from(config_json).roughness;
@@ -459,23 +462,23 @@ void bind_stages(py::module_& m) {
     }, py::arg("z_left"), py::arg("z_right"), py::arg("ds"), py::arg("config_json"), py::arg("count_left") = py::none(),
        py::arg("spread_left") = py::none(), py::arg("count_right") = py::none(), py::arg("spread_right") = py::none());
     m.def("noise_psd", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count,
-                          py::array_t<double, py::array::c_style | py::array::forcecast> spread, double ds) -> py::object {
+                          DoubleArray spread, double ds) -> py::object {
         if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
         const auto psd = rp::noise_psd(count.data(), spread.data(), static_cast<std::size_t>(count.size()), ds);
         if (!psd) return py::none();
         return py::array_t<double>(static_cast<py::ssize_t>(psd->size()), psd->data());
     });
     m.def("resolved_fraction", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count, double ds,
-                                  py::array_t<double, py::array::c_style | py::array::forcecast> n) {
+                                  DoubleArray n) {
         const std::vector<double> phi = rp::resolved_fraction(count.data(), static_cast<std::size_t>(count.size()), ds, as_vector(n));
         return py::array_t<double>(static_cast<py::ssize_t>(phi.size()), phi.data());
     });
-    m.def("iri_rectified_slope", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds) {
+    m.def("iri_rectified_slope", [](DoubleArray z, double ds) {
         const std::vector<double> v = as_vector(z);
         const std::vector<double> rs = rp::iri_rectified_slope(v.data(), v.size(), ds);
         return py::array_t<double>(static_cast<py::ssize_t>(rs.size()), rs.data());
     });
-    m.def("profile_iri", [](py::array_t<double, py::array::c_style | py::array::forcecast> z, double ds,
+    m.def("profile_iri", [](DoubleArray z, double ds,
                             const std::string& config_json) {
         return rp::profile_iri(as_vector(z), ds, config_from(config_json).iri);
     });
