@@ -59,7 +59,8 @@ void from_json(const json& j, FusionMethod& m) {
     throw std::invalid_argument("fusion.method must be \"none\", \"ema\" or \"kalman\", got \"" + name + "\"");
 }
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cell_m, map_length_m, point_noise_m,
-                                                frame_rate_hz, max_time_gap_s, behind_m, align)
+                                                frame_rate_hz, max_time_gap_s, behind_m, align,
+                                                align_tilt_sigma)
 
 void to_json(json& j, const Config& c) {
     j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
@@ -176,6 +177,7 @@ void validate(const Config& c) {
     require(positive(f.frame_rate_hz), "fusion.frame_rate_hz must be > 0");
     require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
     require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
+    require(positive(f.align_tilt_sigma), "fusion.align_tilt_sigma must be > 0");
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

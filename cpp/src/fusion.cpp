@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include <Eigen/LU>
+#include <Eigen/Cholesky>
 #include <limits>
 #include <stdexcept>
 
@@ -202,37 +202,54 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
     }
-    if (cfg_.fusion.align) align(touched, medians);
-    const auto variances = backed_variances(counts.data(), spreads.data(), cells);
+    const auto pooled = backed_variances(counts.data(), spreads.data(), cells);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
-    for (std::size_t c = 0; c < cells; ++c) {
-        const double r = std::max(variances ? (*variances)[c] : single_point, kMinVariance);
-        fuse_cell(map_.cell(touched[c]), medians[c], r, counts[c], frame_, cfg_.fusion);
-    }
+    std::vector<double> variances(cells);
+    for (std::size_t c = 0; c < cells; ++c) variances[c] = std::max(pooled ? (*pooled)[c] : single_point, kMinVariance);
+    if (cfg_.fusion.align) align(touched, variances, medians);
+    for (std::size_t c = 0; c < cells; ++c)
+        fuse_cell(map_.cell(touched[c]), medians[c], variances[c], counts[c], frame_, cfg_.fusion);
     ++fused_;
 }
 
-void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& medians) const {
+void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
+                           std::vector<double>& medians) const {
     auto regressors = [&](std::int64_t slot) {  // (1, x, y) about the vehicle, for a well-conditioned fit
         const auto [x, y] = map_.centre(slot);
         return Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
     };
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    // Weighted least squares (each difference weighted by 1 / (its variance + the map cell's)) with a zero-mean
+    // prior of σ = align_tilt_sigma on the slopes: a few shared cells along one ring fix the offset but
+    // must not tilt the whole frame (a VLP-16's sparse rings otherwise walk the map off by decimetres).
+    const double prior = 1.0 / (cfg_.fusion.align_tilt_sigma * cfg_.fusion.align_tilt_sigma);
+    Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
     Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
     int shared = 0;
     for (std::size_t c = 0; c < slots.size(); ++c) {
         const MapCell& cell = map_.cell(slots[c]);
         if (cell.observations == 0) continue;
         const Eigen::Vector3d v = regressors(slots[c]);
-        normal += v * v.transpose();
-        rhs += v * (medians[c] - cell.height);
+        const double w = 1.0 / (variances[c] + std::max<double>(cell.variance, kMinVariance));
+        normal += w * v * v.transpose();
+        rhs += w * v * (medians[c] - cell.height);
         ++shared;
     }
     if (shared < kMinAlignCells) return;
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(normal);
-    if (lu.rank() < 3) return;  // the shared cells lie on one line: no plane to remove
-    const Eigen::Vector3d plane = lu.solve(rhs);
-    for (std::size_t c = 0; c < slots.size(); ++c) medians[c] -= plane.dot(regressors(slots[c]));
+    const Eigen::Vector3d plane = normal.ldlt().solve(rhs);
+    // Disagreement beyond the variances (seams between frames' levellings, sub-cell relief) is noise the
+    // variances missed: add its mean excess to every cell of the frame so the roughness stage sees it.
+    double excess = 0.0;
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        const MapCell& cell = map_.cell(slots[c]);
+        if (cell.observations == 0) continue;
+        const double residual = medians[c] - cell.height - plane.dot(regressors(slots[c]));
+        excess += residual * residual - variances[c] - std::max<double>(cell.variance, kMinVariance);
+    }
+    excess = std::max(0.0, excess / shared);
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        medians[c] -= plane.dot(regressors(slots[c]));
+        variances[c] += excess;
+    }
 }
 
 Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,

@@ -98,6 +98,7 @@ class FusionConfig:
     max_time_gap_s: float = 0.5  #: a longer step between timestamps, or one back in time, resets the map
     behind_m: float = 0.0  #: fused profiles start this far behind the wheels (already-driven road)
     align: bool = True  #: remove the plane between a frame's heights and the map's before fusing
+    align_tilt_sigma: float = 1e-4  #: rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
 
 
 _STAGES = {

@@ -265,3 +265,75 @@ TEST(Fusion, AlignmentRemovesEachFramesHeaveAndTilt) {
         else EXPECT_GT(rms, 0.006);
     }
 }
+
+namespace {
+
+// Fuses `cloud` (base frame, already levelled, every point ground) at `pose` into `fusion`.
+void fuse_at(rp::TemporalFusion& fusion, const scenes::Cloud& cloud, const rp::Pose2& pose, double t) {
+    rp::FusionStatus status;
+    fusion.advance(1.0, 0.0, {t, pose}, status);
+    fusion.fuse(rp::points_view(cloud.data(), cloud.rows(), 3), std::vector<std::uint8_t>(cloud.rows(), 1),
+                rp::levelling_for(nullptr));
+}
+
+// Points on the flat ground z = `z`, four per 0.1 m cell, over x in [x0, x1), |y| < y_abs, with Gaussian noise.
+scenes::Cloud flat_patch(double x0, double x1, double y_abs, double z, double noise_m, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> gauss(0.0, noise_m);
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = x0 + 0.025; x < x1; x += 0.05)
+        for (double y = -y_abs + 0.025; y < y_abs; y += 0.05) pts.emplace_back(x, y, z + gauss(rng));
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    return cloud;
+}
+
+}  // namespace
+
+TEST(Fusion, AFewSharedCellsAlongOneRingFixTheOffsetButDoNotTiltTheFrame) {
+    // The map knows the flat road up to 12 m. The next frame sees it 4 cm higher (its plane fit's offset), but
+    // shares with the map only the cells of one ring 10 m ahead — like a VLP-16's — and brings new cells
+    // 20–30 m ahead. The ring fixes the offset; its slope along x (the ring's curvature only) is noise.
+    for (const double tilt_sigma : {1e-4, 1e3}) {
+        rp::Config cfg = fusion_config(rp::FusionMethod::Kalman);
+        cfg.fusion.align_tilt_sigma = tilt_sigma;
+        rp::TemporalFusion fusion(cfg);
+        fuse_at(fusion, flat_patch(1.0, 12.0, 3.0, 0.0, 0.005, 1), {}, 0.0);
+        std::mt19937 rng(2);
+        std::normal_distribution<double> gauss(0.0, 0.005);
+        std::vector<Eigen::Vector3d> pts;
+        for (double y = -3.0; y < 3.0; y += 0.02) pts.emplace_back(std::sqrt(100.0 - y * y), y, 0.04 + gauss(rng));
+        const scenes::Cloud far = flat_patch(20.0, 30.0, 1.0, 0.04, 0.005, 3);
+        scenes::Cloud frame(static_cast<Eigen::Index>(pts.size()) + far.rows(), 3);
+        for (std::size_t i = 0; i < pts.size(); ++i) frame.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+        frame.bottomRows(far.rows()) = far;
+        fuse_at(fusion, frame, {}, 0.1);
+        double sum = 0.0;  // mean height of the far cells: their noise averages out, the frame's plane does not
+        int cells = 0;
+        for (double x = 20.05; x < 30.0; x += 0.1)
+            for (double y = -0.95; y < 1.0; y += 0.1) sum += fusion.map().at(x, y)->height, ++cells;
+        const double mean = sum / cells;
+        std::printf("align_tilt_sigma %g: mean height 20-30 m ahead %.4f m\n", tilt_sigma, mean);
+        if (tilt_sigma < 1.0) EXPECT_LT(std::abs(mean), 0.002);  // the offset is gone and nothing tilted
+        else EXPECT_GT(std::abs(mean), 0.01);                     // a free fit tilts the far road by centimetres
+    }
+}
+
+TEST(Fusion, DisagreementBeyondTheVariancesIsAddedToTheFramesVariances) {
+    // The map holds a flat road. The next frame's cells are exact (no spread) but alternate ±1 cm against the
+    // map in a checkerboard — relief within cells, or seams between frames, that no plane removes. Its new
+    // cells (beyond the map) must carry that 1e-4 m² disagreement as their variance, not ~0.
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 1), {}, 0.0);
+    scenes::Cloud frame = flat_patch(1.0, 15.0, 2.0, 0.0, 0.0, 2);
+    for (Eigen::Index i = 0; i < frame.rows(); ++i) {
+        const auto ix = static_cast<long>(std::floor(frame(i, 0) / 0.1)), iy = static_cast<long>(std::floor(frame(i, 1) / 0.1));
+        frame(i, 2) = (ix + iy) % 2 ? 0.01f : -0.01f;
+    }
+    fuse_at(fusion, frame, {}, 0.1);
+    const rp::MapCell* fresh = fusion.map().at(12.05, 0.05);
+    ASSERT_NE(fresh, nullptr);
+    EXPECT_EQ(fresh->observations, 1);
+    EXPECT_NEAR(fresh->variance, 1e-4, 5e-6);
+    EXPECT_LT(fusion.map().at(5.05, 0.05)->variance, 1e-9);  // a shared cell keeps the map's confidence
+}

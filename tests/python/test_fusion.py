@@ -124,7 +124,8 @@ def test_python_interface_and_output_line():
 @pytest.mark.parametrize("field,value,message", [
     ("method", "average", "fusion.method"), ("alpha", 0.0, "fusion.alpha"), ("alpha", 1.5, "fusion.alpha"),
     ("map_length_m", 50.0, "fusion.map_length_m"), ("max_time_gap_s", -1.0, "fusion.max_time_gap_s"),
-    ("behind_m", -1.0, "fusion.behind_m"), ("cell_m", 0.0, "fusion.cell_m")])
+    ("behind_m", -1.0, "fusion.behind_m"), ("cell_m", 0.0, "fusion.cell_m"),
+    ("align_tilt_sigma", 0.0, "fusion.align_tilt_sigma")])
 def test_bad_fusion_config_names_the_field(field, value, message):
     with pytest.raises(ValueError, match=message):
         rp.Estimator(rp.Config(fusion={field: value}))

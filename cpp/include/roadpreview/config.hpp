@@ -86,6 +86,7 @@ struct FusionConfig {
     double max_time_gap_s = 0.5;   ///< a longer step between timestamps, or one back in time, resets the map
     double behind_m = 0.0;         ///< fused profiles start this far behind the wheels (already-driven road)
     bool align = true;             ///< remove the plane between a frame's heights and the map's before fusing
+    double align_tilt_sigma = 1e-4;   ///< rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
 };
 
 struct Config {

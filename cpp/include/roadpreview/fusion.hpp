@@ -109,8 +109,9 @@ public:
     const Pose2& pose() const { return pose_; }
 
 private:
-    /// Removes from the frame's cell medians the least-squares plane of their differences to the map.
-    void align(const std::vector<std::int64_t>& slots, std::vector<double>& medians) const;
+    /// Removes from the frame's cell medians the plane of their differences to the map (method.md §7).
+    void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
+               std::vector<double>& medians) const;
     Profile sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
                    std::size_t& ahead, std::size_t& ahead_now) const;
 

@@ -131,28 +131,33 @@ class FusedMap:
         groups = np.split(heights, np.cumsum(counts)[:-1])
         spreads = np.array([np.std(z, ddof=1) if len(z) >= 2 else np.nan for z in groups])
         medians = np.array([np.median(z) for z in groups])
-        if self.cfg.fusion.align:
-            medians = self.align(keys, medians)
         variances = backed_variances(counts, spreads)  # as the roughness stage rates a bin's median
         if variances is None:  # no cell with two points: the configured noise of one point
             variances = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
-        for key, z, m, r in zip(map(tuple, keys), groups, medians, np.maximum(variances, _MIN_VARIANCE)):
+        variances = np.maximum(variances, _MIN_VARIANCE)
+        if self.cfg.fusion.align:
+            medians, variances = self.align(keys, medians, variances)
+        for key, z, m, r in zip(map(tuple, keys), groups, medians, variances):
             self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg)
         self.fused += 1
 
-    def align(self, keys: np.ndarray, medians: np.ndarray) -> np.ndarray:
-        """The frame's cell medians minus the least-squares plane of their differences to the map's heights."""
+    def align(self, keys: np.ndarray, medians: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The frame's cell medians minus the plane of their differences to the map's heights (weighted least
+        squares, slopes held to zero with σ = align_tilt_sigma), and their variances plus the mean excess
+        disagreement."""
         centres = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
         regressors = np.column_stack([np.ones(len(keys)), centres])
         shared = np.array([tuple(k) in self.cells for k in keys], dtype=bool)
         if shared.sum() < _MIN_ALIGN_CELLS:
-            return medians
+            return medians, variances
+        cells = [self.cells[tuple(k)] for k in keys[shared]]
         v = regressors[shared]
-        difference = medians[shared] - np.array([self.cells[tuple(k)].height for k in keys[shared]])
-        normal = v.T @ v
-        if np.linalg.matrix_rank(normal) < 3:
-            return medians
-        return medians - regressors @ np.linalg.solve(normal, v.T @ difference)
+        difference = medians[shared] - np.array([c.height for c in cells])
+        total_variance = variances[shared] + np.maximum([c.variance for c in cells], _MIN_VARIANCE)
+        prior = np.diag([0.0, 1.0, 1.0]) / self.cfg.fusion.align_tilt_sigma ** 2
+        plane = np.linalg.solve(v.T @ (v / total_variance[:, None]) + prior, v.T @ (difference / total_variance))
+        excess = max(0.0, float(np.mean((difference - v @ plane) ** 2 - total_variance)))
+        return medians - regressors @ plane, variances + excess
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
         """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""
