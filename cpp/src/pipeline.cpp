@@ -22,10 +22,11 @@ double ms_since(Clock::time_point& mark) {
     return ms;
 }
 
-// Why no profile can be built for this frame, or empty when one can.
-std::string blocking_reason(const Result& r) {
-    if (r.points.finite == 0) return "no finite points";
-    if (!r.plane) return "no ground";
+// Why no profile can be built for this frame, or empty when one can. A fused map that holds data stands in
+// for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
+std::string blocking_reason(const Result& r, bool map_has_data) {
+    if (!map_has_data && r.points.finite == 0) return "no finite points";
+    if (!map_has_data && !r.plane) return "no ground";
     if (r.path.status == PathStatus::Stopped) return "vehicle stopped";
     return {};
 }
@@ -133,11 +134,11 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     if (cfg.obstacles.enabled) clustering = cluster_frame(roi, ground, cfg.obstacles, r);
     r.timing_ms.obstacles = ms_since(mark);
 
-    r.reason = blocking_reason(r);
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
     // Stopped: the same view again and again is not new evidence, so the map holds.
     if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
     r.timing_ms.fusion += ms_since(mark);
+    r.reason = blocking_reason(r, fusion && fusion->frames() > 0);
     if (!r.reason.empty()) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;
@@ -145,8 +146,8 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
         r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
         return r;
     }
-    std::optional<PathCrossings> crossings;
-    if (cfg.obstacles.enabled) crossings = cross_paths(roi, clustering, r, L, cfg);
+    std::optional<PathCrossings> crossings;  // none without a plane (profiles from the map): nothing in the way
+    if (cfg.obstacles.enabled && r.plane) crossings = cross_paths(roi, clustering, r, L, cfg);
     r.timing_ms.obstacles += ms_since(mark);
 
     const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
@@ -154,9 +155,9 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
                                   : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked);
     r.left = std::move(wheels.left);
     r.right = std::move(wheels.right);
-    if (crossings) {
-        r.left.obstacles = std::move(crossings->left);
-        r.right.obstacles = std::move(crossings->right);
+    if (cfg.obstacles.enabled) {
+        r.left.obstacles = crossings ? std::move(crossings->left) : std::vector<PathObstacle>{};
+        r.right.obstacles = crossings ? std::move(crossings->right) : std::vector<PathObstacle>{};
     }
     r.timing_ms.profile = ms_since(mark);
 

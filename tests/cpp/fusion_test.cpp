@@ -202,8 +202,12 @@ TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
     double t = 1.0;
     const scenes::Cloud empty(0, 3);
     const rp::Result no_ground = est.process(empty, 8.0, 0.0, "", rp::FrameMotion{t, std::nullopt});
-    EXPECT_EQ(no_ground.reason, "no finite points");
+    EXPECT_EQ(no_ground.reason, "");  // the map stands in for the frame: profiles from it, at the moved pose
     EXPECT_EQ(no_ground.fusion->frames, 10);
+    EXPECT_EQ(no_ground.fusion->frame_coverage, 0.0);
+    EXPECT_FALSE(no_ground.plane);
+    EXPECT_LT(profile_rmse(no_ground.left, x0 + 0.8, 30.0), 0.006);
+    EXPECT_GT(backed_fraction(no_ground.left, 10.0), 0.9);
     double x = x0 + 0.8;
     for (int i = 0; i < 30; ++i) {  // stopped for 3 s: the map holds
         t += 0.1;
@@ -223,6 +227,18 @@ TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
     EXPECT_NEAR(after.fusion->pose.x_m, x + 0.00001, 1e-9);
     EXPECT_LT(profile_rmse(after.left, x + 0.00001, 30.0), 0.006);
     EXPECT_LT(profile_rmse(before.left, x0, 30.0), 0.006);
+}
+
+TEST(Fusion, AFrameWithoutGroundOnAnEmptyMapHasNoProfiles) {
+    rp::Estimator est(fusion_config(rp::FusionMethod::Kalman));
+    const scenes::Cloud empty(0, 3);
+    EXPECT_EQ(est.process(empty, 8.0, 0.0, "", rp::FrameMotion{0.0, std::nullopt}).reason, "no finite points");
+    scenes::Cloud far(10, 3);  // points, but none in the region of interest
+    for (int i = 0; i < 10; ++i) far.row(i) << 100.0f, float(i), 0.0f;
+    const rp::Result r = est.process(far, 8.0, 0.0, "", rp::FrameMotion{0.1, std::nullopt});
+    EXPECT_FALSE(r.plane);
+    EXPECT_EQ(r.reason, "no ground");
+    EXPECT_TRUE(r.left.z.empty());
 }
 
 TEST(Fusion, NoneKeepsTheSingleFramePipeline) {

@@ -84,6 +84,18 @@ def test_cpp_equals_the_reference_on_a_simulated_os1_128_sequence():
     assert cpp.fusion["coverage"] == pytest.approx(ref.fusion["coverage"], abs=0.01)
 
 
+def test_a_frame_without_ground_reads_its_profiles_from_the_map():
+    cfg = fusion_cfg("kalman")
+    poses = [(0.8 * i, 0.0, 0.0) for i in range(4)]
+    frames = [noisy_road(p, 6000, i) for i, p in enumerate(poses[:3])] + [np.zeros((0, 3), np.float32)]
+    cpp, ref = run_sequence(cfg, frames, 8.0, 0.0, [0.1 * i for i in range(4)])
+    assert cpp.reason is None and ref.reason is None and cpp.plane is None
+    assert cpp.fusion["frames"] == 3 and cpp.fusion["frame_coverage"] == 0.0 and cpp.fusion["coverage"] > 0.2
+    assert_profiles_agree(cpp, ref)
+    first = rp.Estimator(cfg).process(frames[-1], 8.0, 0.0, timestamp=0.0)  # an empty map has nothing to give
+    assert first.reason == "no finite points" and first.left.z.size == 0
+
+
 def test_ema_with_alpha_one_is_the_latest_frame_where_it_looks():
     """Reference map (the C++ map's cells are checked the same way in fusion_test.cpp); reset() in C++."""
     cfg = fusion_cfg("ema", alpha=1.0, align=False)  # aligned, the frame would first move onto the map

@@ -106,6 +106,8 @@ public:
     WheelProfiles profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status) const;
 
     const ElevationMap& map() const { return map_; }
+    /// Frames fused since the last reset (0: the map is empty).
+    std::int64_t frames() const { return fused_; }
     const Pose2& pose() const { return pose_; }
 
 private:

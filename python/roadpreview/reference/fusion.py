@@ -220,12 +220,13 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
               "reset": reset, "pose": state.pose}
     base_xyz, _ = to_base_frame(points, cfg)
     ground, plane = fit_ground(base_xyz, cfg) if len(base_xyz) else (None, None)
-    reason = "no finite points" if len(base_xyz) == 0 else "no ground" if plane is None else \
-        "vehicle stopped" if path["status"] == "stopped" else None
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
         state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz)
     status["frames"] = state.fused
+    # A map that holds data stands in for a frame without ground: the profiles are read from it.
+    reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \
+        "no ground" if plane is None and not state.fused else "vehicle stopped" if path["status"] == "stopped" else None
     if reason:
         return FusedResult(Profile(), Profile(), status, reason)
     (left, a_l, n_l), (right, a_r, n_r) = (state.profile(path, w, speed, yaw_rate) for w in ("left", "right"))
