@@ -20,7 +20,10 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMedianVarianceFactor = M_PI / 2;  // Var(median of n Gaussians) ≈ (π/2)σ²/n
 constexpr double kMinVariance = 1e-12;              // m²; keeps a noise-free cell's Kalman gain defined
-constexpr int kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
+constexpr std::size_t kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
+constexpr double kMadToSigma = 1.4826;        // σ of a Gaussian from its median absolute deviation
+constexpr double kOutlierSigmas = 3.0;        // cells farther than this from the alignment plane are outliers
+constexpr double kPoolMaxSpread = 3.0;        // × the median spread: cells spread wider stay out of the pool
 
 std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_t>(std::floor(v / cell)); }
 
@@ -189,7 +192,9 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         z_[static_cast<std::size_t>(i)] = z;
     }
     // Per cell: the median of its points, their count and spread; then each median's variance as the
-    // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance).
+    // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance, pooled
+    // without the cells spread over kPoolMaxSpread × the median spread — the foot of a wall or a car counts
+    // as ground up to 0.2 m high and says nothing of the road's noise).
     const std::size_t cells = touched.size();
     std::vector<double> medians(cells), spreads(cells), cell_z;
     std::vector<std::int32_t> counts(cells);
@@ -202,7 +207,11 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
     }
-    const auto pooled = backed_variances(counts.data(), spreads.data(), cells);
+    std::vector<double> measured;
+    for (std::size_t c = 0; c < cells; ++c)
+        if (counts[c] >= 2) measured.push_back(spreads[c]);
+    const double typical = measured.empty() ? kNaN : median(measured.begin(), measured.end());
+    const auto pooled = backed_variances(counts.data(), spreads.data(), cells, kPoolMaxSpread * typical);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
     std::vector<double> variances(cells);
     for (std::size_t c = 0; c < cells; ++c) variances[c] = std::max(pooled ? (*pooled)[c] : single_point, kMinVariance);
@@ -214,41 +223,63 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
 
 void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
                            std::vector<double>& medians) const {
-    auto regressors = [&](std::int64_t slot) {  // (1, x, y) about the vehicle, for a well-conditioned fit
+    struct Shared {
+        std::size_t index;
+        Eigen::Vector3d v;  // (1, x, y) about the vehicle, for a well-conditioned fit
+        double difference, variance;
+        bool inlier = true;
+    };
+    auto regressors = [&](std::int64_t slot) {
         const auto [x, y] = map_.centre(slot);
         return Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
     };
-    // Weighted least squares (each difference weighted by 1 / (its variance + the map cell's)) with a zero-mean
-    // prior of σ = align_tilt_sigma on the slopes: a few shared cells along one ring fix the offset but
-    // must not tilt the whole frame (a VLP-16's sparse rings otherwise walk the map off by decimetres).
+    std::vector<Shared> shared;
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        const MapCell& cell = map_.cell(slots[c]);
+        if (cell.observations > 0)
+            shared.push_back({c, regressors(slots[c]), medians[c] - cell.height,
+                              variances[c] + std::max<double>(cell.variance, kMinVariance)});
+    }
+    if (shared.size() < kMinAlignCells) return;
+    // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the
+    // slopes: a few shared cells along one ring fix the offset but must not tilt the whole frame.
     const double prior = 1.0 / (cfg_.fusion.align_tilt_sigma * cfg_.fusion.align_tilt_sigma);
-    Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-    int shared = 0;
+    auto fit = [&] {
+        Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
+        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+        for (const Shared& s : shared)
+            if (s.inlier) normal += s.v * s.v.transpose() / s.variance, rhs += s.v * s.difference / s.variance;
+        return Eigen::Vector3d(normal.ldlt().solve(rhs));
+    };
+    Eigen::Vector3d plane = fit();
+    // Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and
+    // their disagreement joins their own variance.
+    std::vector<double> deviations;
+    for (const Shared& s : shared) deviations.push_back(std::abs(s.difference - plane.dot(s.v)));
+    const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
+    std::size_t inliers = 0;
+    for (Shared& s : shared) {
+        const double residual = s.difference - plane.dot(s.v);
+        s.inlier = std::abs(residual) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
+        if (!s.inlier) variances[s.index] += residual * residual;
+        inliers += s.inlier;
+    }
+    if (inliers >= kMinAlignCells && inliers < shared.size()) plane = fit();
+    // Disagreement of the rest beyond their variances (seams between frames, per-beam calibration offsets)
+    // is noise the variances missed. It grows with range like an angular error, so it is modelled as
+    // a·d² (d the cell's distance from the vehicle) and a·d² joins every cell's variance.
+    double excess = 0.0, squares = 0.0;
+    for (const Shared& s : shared) {
+        if (!s.inlier) continue;
+        const double residual = s.difference - plane.dot(s.v);
+        excess += residual * residual - s.variance;
+        squares += s.v.tail<2>().squaredNorm();
+    }
+    const double per_square_metre = squares > 0.0 ? std::max(0.0, excess) / squares : 0.0;
     for (std::size_t c = 0; c < slots.size(); ++c) {
-        const MapCell& cell = map_.cell(slots[c]);
-        if (cell.observations == 0) continue;
         const Eigen::Vector3d v = regressors(slots[c]);
-        const double w = 1.0 / (variances[c] + std::max<double>(cell.variance, kMinVariance));
-        normal += w * v * v.transpose();
-        rhs += w * v * (medians[c] - cell.height);
-        ++shared;
-    }
-    if (shared < kMinAlignCells) return;
-    const Eigen::Vector3d plane = normal.ldlt().solve(rhs);
-    // Disagreement beyond the variances (seams between frames' levellings, sub-cell relief) is noise the
-    // variances missed: add its mean excess to every cell of the frame so the roughness stage sees it.
-    double excess = 0.0;
-    for (std::size_t c = 0; c < slots.size(); ++c) {
-        const MapCell& cell = map_.cell(slots[c]);
-        if (cell.observations == 0) continue;
-        const double residual = medians[c] - cell.height - plane.dot(regressors(slots[c]));
-        excess += residual * residual - variances[c] - std::max<double>(cell.variance, kMinVariance);
-    }
-    excess = std::max(0.0, excess / shared);
-    for (std::size_t c = 0; c < slots.size(); ++c) {
-        medians[c] -= plane.dot(regressors(slots[c]));
-        variances[c] += excess;
+        medians[c] -= plane.dot(v);
+        variances[c] += per_square_metre * v.tail<2>().squaredNorm();
     }
 }
 

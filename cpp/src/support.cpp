@@ -53,10 +53,10 @@ double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(M_PI * x) / (M_PI * x);
 }  // namespace
 
 std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread,
-                                                    std::size_t bins) {
+                                                    std::size_t bins, double pool_max_spread) {
     double squares = 0.0, dof = 0.0;
     for (std::size_t j = 0; j < bins; ++j)
-        if (count[j] >= 2) squares += (count[j] - 1) * spread[j] * spread[j], dof += count[j] - 1;
+        if (count[j] >= 2 && spread[j] <= pool_max_spread) squares += (count[j] - 1) * spread[j] * spread[j], dof += count[j] - 1;
     if (dof == 0.0) return std::nullopt;
     std::vector<double> v(bins, std::numeric_limits<double>::quiet_NaN());
     for (std::size_t j = 0; j < bins; ++j) {

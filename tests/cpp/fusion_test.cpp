@@ -335,10 +335,11 @@ TEST(Fusion, AFewSharedCellsAlongOneRingFixTheOffsetButDoNotTiltTheFrame) {
     }
 }
 
-TEST(Fusion, DisagreementBeyondTheVariancesIsAddedToTheFramesVariances) {
+TEST(Fusion, DisagreementBeyondTheVariancesIsAddedToTheFramesVariancesGrowingWithRange) {
     // The map holds a flat road. The next frame's cells are exact (no spread) but alternate ±1 cm against the
-    // map in a checkerboard — relief within cells, or seams between frames, that no plane removes. Its new
-    // cells (beyond the map) must carry that 1e-4 m² disagreement as their variance, not ~0.
+    // map in a checkerboard — relief within cells, or seams between frames, that no plane removes. The frame's
+    // cells must carry that disagreement, modelled as a·d² (d the distance from the vehicle) with a fitted so
+    // that the shared cells' mean matches their 1e-4 m²: the new cells beyond the map get a·d², not ~0.
     rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
     fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 1), {}, 0.0);
     scenes::Cloud frame = flat_patch(1.0, 15.0, 2.0, 0.0, 0.0, 2);
@@ -347,9 +348,48 @@ TEST(Fusion, DisagreementBeyondTheVariancesIsAddedToTheFramesVariances) {
         frame(i, 2) = (ix + iy) % 2 ? 0.01f : -0.01f;
     }
     fuse_at(fusion, frame, {}, 0.1);
+    double squares = 0.0;  // mean d² of the shared cells' centres
+    int shared = 0;
+    for (double x = 1.05; x < 10.0; x += 0.1)
+        for (double y = -1.95; y < 2.0; y += 0.1) squares += x * x + y * y, ++shared;
+    const double per_square_metre = 1e-4 / (squares / shared);
     const rp::MapCell* fresh = fusion.map().at(12.05, 0.05);
     ASSERT_NE(fresh, nullptr);
     EXPECT_EQ(fresh->observations, 1);
-    EXPECT_NEAR(fresh->variance, 1e-4, 5e-6);
+    EXPECT_NEAR(fresh->variance, per_square_metre * (12.05 * 12.05 + 0.05 * 0.05), 0.02 * fresh->variance);
     EXPECT_LT(fusion.map().at(5.05, 0.05)->variance, 1e-9);  // a shared cell keeps the map's confidence
+}
+
+TEST(Fusion, CellsFarOffTheAlignmentPlaneLeaveItAndKeepTheirDisagreement) {
+    // The next frame sees the flat road 3 cm higher, except a strip along y ∈ [1.5, 2) m 15 cm higher (the foot
+    // of a wall counts as ground up to 0.2 m). The strip must neither shift nor tilt the rest of the frame,
+    // and its cells must carry their disagreement as variance.
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.001, 1), {}, 0.0);
+    scenes::Cloud frame = flat_patch(1.0, 10.0, 2.0, 0.03, 0.001, 2);
+    for (Eigen::Index i = 0; i < frame.rows(); ++i)
+        if (frame(i, 1) >= 1.5f) frame(i, 2) += 0.15f;
+    fuse_at(fusion, frame, {}, 0.1);
+    for (double x : {1.55, 5.05, 9.55})
+        for (double y : {-1.95, 0.05, 1.35}) EXPECT_NEAR(fusion.map().at(x, y)->height, 0.0, 0.002) << x << ", " << y;
+    // The strip's cells carry their 15 cm disagreement as variance: the map's confident heights barely move
+    // (fused without the outlier variance, they would move by half of it).
+    EXPECT_NEAR(fusion.map().at(5.05, 1.75)->height, 0.0, 0.002);
+}
+
+TEST(Fusion, TheFootOfAWallDoesNotInflateTheNoiseOfSinglePoints) {
+    // One frame on an empty map: cells of four points spread 1 cm, a strip of cells spread 10 cm (a wall's
+    // foot), and single points. A single point's variance is the pooled variance of the road cells (~1e-4 m²),
+    // not of the strip.
+    std::mt19937 rng(7);
+    std::normal_distribution<double> road(0.0, 0.01), foot(0.0, 0.1);
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = 1.025; x < 10.0; x += 0.05)
+        for (double y = -1.975; y < 2.0; y += 0.05) pts.emplace_back(x, y, y > 1.5 ? foot(rng) : road(rng));
+    pts.emplace_back(12.05, 0.05, 0.0);  // alone in its cell
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, cloud, {}, 0.0);
+    EXPECT_NEAR(fusion.map().at(12.05, 0.05)->variance, 1e-4, 1e-5);
 }

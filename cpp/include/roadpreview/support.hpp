@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -16,10 +17,12 @@ struct StretchSupport {
     double backed_fraction = 0.0;              ///< bins that hold points (the others are interpolated)
 };
 
-/// Variance (m²) of each backed bin's height (NaN for interpolated bins); nullopt when no bin has 2+ points.
+/// Variance (m²) of each backed bin's height (NaN for interpolated bins); nullopt when no bin has 2+ points
+/// (with a spread within `pool_max_spread`).
 /// Own sample variance s² scaled to the median (s²/2 for 2 points, (π/2)s²/n from 3), the pooled within-bin
-/// variance for single-point bins.
-std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread, std::size_t bins);
+/// variance for single-point bins — over the bins whose spread is at most `pool_max_spread` (all by default).
+std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread, std::size_t bins,
+                                                    double pool_max_spread = std::numeric_limits<double>::infinity());
 
 /// Expected one-sided PSD of the bin errors of a stretch (independent errors of the backed bins, carried into
 /// the gaps by the linear interpolation, periodic Hann window; detrend neglected), k = 0 … bins/2.

@@ -25,6 +25,9 @@ from .support import backed_variances
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
 _MIN_VARIANCE = 1e-12
 _MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
+_MAD_TO_SIGMA = 1.4826  # σ of a Gaussian from its median absolute deviation
+_OUTLIER_SIGMAS = 3.0  # cells farther than this from the alignment plane are outliers
+_POOL_MAX_SPREAD = 3.0  # × the median spread: cells spread wider stay out of the pooled variance
 
 
 def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[float, float, float]:
@@ -131,7 +134,11 @@ class FusedMap:
         groups = np.split(heights, np.cumsum(counts)[:-1])
         spreads = np.array([np.std(z, ddof=1) if len(z) >= 2 else np.nan for z in groups])
         medians = np.array([np.median(z) for z in groups])
-        variances = backed_variances(counts, spreads)  # as the roughness stage rates a bin's median
+        # As the roughness stage rates a bin's median; single points get the pooled variance of the cells spread
+        # at most _POOL_MAX_SPREAD × the median spread (a wall's foot, ground up to 0.2 m high, is no road noise).
+        measured = spreads[counts >= 2]
+        typical = np.median(measured) if len(measured) else np.nan
+        variances = backed_variances(counts, spreads, pool_max_spread=_POOL_MAX_SPREAD * typical)
         if variances is None:  # no cell with two points: the configured noise of one point
             variances = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
         variances = np.maximum(variances, _MIN_VARIANCE)
@@ -142,22 +149,35 @@ class FusedMap:
         self.fused += 1
 
     def align(self, keys: np.ndarray, medians: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The frame's cell medians minus the plane of their differences to the map's heights (weighted least
-        squares, slopes held to zero with σ = align_tilt_sigma), and their variances plus the mean excess
-        disagreement."""
-        centres = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
-        regressors = np.column_stack([np.ones(len(keys)), centres])
-        shared = np.array([tuple(k) in self.cells for k in keys], dtype=bool)
-        if shared.sum() < _MIN_ALIGN_CELLS:
+        """The frame's cell medians minus the plane of their differences to the map's heights, and their
+        variances plus the disagreement the variances missed (docs/method.md §7, step 3)."""
+        offsets = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
+        regressors = np.column_stack([np.ones(len(keys)), offsets])
+        shared = np.flatnonzero([tuple(k) in self.cells for k in keys])
+        if len(shared) < _MIN_ALIGN_CELLS:
             return medians, variances
         cells = [self.cells[tuple(k)] for k in keys[shared]]
         v = regressors[shared]
         difference = medians[shared] - np.array([c.height for c in cells])
-        total_variance = variances[shared] + np.maximum([c.variance for c in cells], _MIN_VARIANCE)
+        total = variances[shared] + np.maximum([c.variance for c in cells], _MIN_VARIANCE)
         prior = np.diag([0.0, 1.0, 1.0]) / self.cfg.fusion.align_tilt_sigma ** 2
-        plane = np.linalg.solve(v.T @ (v / total_variance[:, None]) + prior, v.T @ (difference / total_variance))
-        excess = max(0.0, float(np.mean((difference - v @ plane) ** 2 - total_variance)))
-        return medians - regressors @ plane, variances + excess
+
+        def fit(use):
+            return np.linalg.solve(v[use].T @ (v[use] / total[use, None]) + prior,
+                                   v[use].T @ (difference[use] / total[use]))
+
+        plane = fit(np.ones(len(shared), dtype=bool))
+        residual = difference - v @ plane
+        scale = _MAD_TO_SIGMA * np.median(np.abs(residual))
+        inlier = np.abs(residual) <= _OUTLIER_SIGMAS * np.maximum(scale, np.sqrt(total))
+        variances = variances.copy()
+        variances[shared[~inlier]] += residual[~inlier] ** 2
+        if _MIN_ALIGN_CELLS <= inlier.sum() < len(shared):
+            plane = fit(inlier)
+        residual = difference - v @ plane
+        squares = np.sum(offsets[shared[inlier]] ** 2)
+        per_square_metre = max(0.0, float(np.sum(residual[inlier] ** 2 - total[inlier]))) / squares if squares > 0 else 0.0
+        return medians - regressors @ plane, variances + per_square_metre * np.sum(offsets ** 2, axis=1)
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
         """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""

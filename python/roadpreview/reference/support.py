@@ -16,19 +16,19 @@ MEDIAN_VARIANCE_FACTOR = math.pi / 2
 NYQUIST_TOLERANCE = 1e-9  # relative: a frequency on an interval's Nyquist frequency is resolved
 
 
-def backed_variances(count, spread) -> Optional[np.ndarray]:
+def backed_variances(count, spread, pool_max_spread: float = np.inf) -> Optional[np.ndarray]:
     """Variance (m²) of the height of each bin of a stretch that holds points (NaN elsewhere), or None when no
-    bin has 2+ points to measure a spread.
+    bin has 2+ points to measure a spread (within pool_max_spread).
 
     Bins with 2+ points use their own sample variance s²: s²/2 for 2 points, (π/2)·s²/n from 3 on. Single-point
-    bins use the pooled within-bin variance of the stretch, Σ(n − 1)s² / Σ(n − 1).
+    bins use the pooled within-bin variance Σ(n − 1)s² / Σ(n − 1) of the bins spread at most pool_max_spread.
     """
     count = np.asarray(count, dtype=np.int64)
     spread = np.asarray(spread, dtype=np.float64)
-    multi = count >= 2
-    if not multi.any():
+    pool = (count >= 2) & (spread <= pool_max_spread)
+    if not pool.any():
         return None
-    pooled = np.sum((count[multi] - 1) * spread[multi] ** 2) / np.sum(count[multi] - 1)
+    pooled = np.sum((count[pool] - 1) * spread[pool] ** 2) / np.sum(count[pool] - 1)
     variance = np.full(len(count), np.nan)
     variance[count == 1] = pooled
     variance[count == 2] = spread[count == 2] ** 2 / 2
