@@ -7,14 +7,16 @@ A fixed suite (roadpreview.sim, every random draw seeded):
   * a class C road with 6 % grade and 4 % cross-slope, straight and curved, OS1-128;
   * classes B and C seen by an HDL-64E whose beams miss their table angles by 0.03° (1σ), the size of the
     per-beam height offsets measured on the bundled KITTI frame (README, "Accuracy").
-Each is a sequence of 10 frames at 10 Hz, driving at 10 m/s, sensor 1.8 m high.
+Each is a sequence of 10 frames at 10 Hz, driving at 10 m/s, sensor 1.8 m high, run twice: frame by frame
+(fusion "none") and through the temporal fusion's elevation map (fusion "kalman", docs/method.md §7).
 
 Printed (Markdown, progress on stderr):
-  * per scenario: sequence class (exact, within one), frames classified, per-frame class and median
-    |log2(G_d(n0) estimate / truth)|, profile RMSE vs truth (cm), bump height error (cm), ground precision /
-    recall vs the per-point labels, C++ ms per frame;
+  * per scenario and fusion: sequence class (exact, within one), frames classified, per-frame class and median
+    |log2(G_d(n0) estimate / truth)|, bins backed by data in the first 30 m, profile RMSE vs truth (cm), bump
+    height error (cm), ground precision / recall vs the per-point labels, C++ ms per frame;
+  * the bump height error per bump height, single frame and fused;
   * what one frame resolves per range: bins backed by points, spacing of the points, the highest frequency
-    that spacing resolves, and the profile error, per sensor.
+    that spacing resolves, and the profile error, per sensor; and the bins the fused map backs there.
 Definitions are in bench/README.md. Usage: ``python bench/accuracy.py [--quick] [--jobs N]``.
 """
 
@@ -40,6 +42,8 @@ FRAMES = 10
 SENSOR_HEIGHT_M = 1.8
 CLASSES = "ABCDEF"
 SENSORS = {"OS1-128": sim.os1_128, "HDL-64E": sim.hdl_64e, "VLP-16": sim.vlp_16}
+FUSION = ("none", "kalman")  # frame by frame, and the fused map (bench/fusion.py compares EMA too)
+COVERAGE_M = 30.0  # the temporal fusion issue's coverage target is over the first 30 m
 BUMP_HEIGHTS_M = (0.02, 0.04, 0.06, 0.08, 0.10)
 BUMP_X_M = 14.05  # seen from 14 m ahead down to 5 m in the 10 frames
 BUMP_LENGTH_M = 1.0
@@ -146,32 +150,38 @@ def ground_counts(frame: sim.Frame, mask: np.ndarray) -> np.ndarray:
                      np.count_nonzero(truth & scored)])
 
 
+def measure(res, frame: sim.Frame, truth: dict, scenario: Scenario) -> dict:
+    """One frame's result against the truth."""
+    record = {"gd_n0": res.vehicle.gd_n0, "class": res.vehicle.iso_class, "confidence": res.vehicle.confidence,
+              "band": res.vehicle.band, "ms": res.timing_ms["total"],
+              "ground": ground_counts(frame, np.asarray(res.ground_mask)), "rms": [], "rms_all": [],
+              "bump": [], "ranges": [], "coverage": []}
+    for wheel in ("left", "right"):
+        profile, truth_z = getattr(res, wheel), truth[wheel]
+        s, z, count = np.asarray(profile.s), np.asarray(profile.z), np.asarray(profile.count)
+        record["rms"].append(detrended_rms(s[count > 0], (z - truth_z)[count > 0]))
+        record["rms_all"].append(detrended_rms(s[np.isfinite(z)], (z - truth_z)[np.isfinite(z)]))
+        record["ranges"].append(range_stats(profile, truth_z))
+        record["coverage"].append(float(np.mean(count[s < COVERAGE_M] > 0)))
+        if scenario.bump_height:
+            ahead = BUMP_X_M - frame.pose.x_m
+            if BUMP_RANGE_M[0] <= ahead <= BUMP_RANGE_M[1]:
+                record["bump"].append(bump_height(s, z, ahead) - scenario.bump_height)
+    return record
+
+
 def run(scenario: Scenario) -> dict:
-    """Simulate and process one scenario; per-frame measurements."""
+    """Simulate one scenario and process it frame by frame and fused; per-frame measurements of each."""
     scene = scenario.scene()
     lidar = SENSORS[scenario.sensor](height_m=SENSOR_HEIGHT_M, elevation_error_deg=scenario.elevation_error_deg,
                                      calibration_seed=scenario.seed)
-    est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics()))
     frames = sim.drive(scene, lidar, SPEED_MPS, scenario.yaw_rate, scenario.frames, seed=scenario.seed)
-    out = {"scenario": scenario, "frames": []}
-    for frame in frames:
-        res = est.process(frame.points, SPEED_MPS, scenario.yaw_rate)
-        truth = sim.truth_profiles(scene, frame.pose, SPEED_MPS, scenario.yaw_rate)
-        record = {"gd_n0": res.vehicle.gd_n0, "class": res.vehicle.iso_class, "confidence": res.vehicle.confidence,
-                  "band": res.vehicle.band, "ms": res.timing_ms["total"],
-                  "ground": ground_counts(frame, np.asarray(res.ground_mask)), "rms": [], "rms_all": [],
-                  "bump": [], "ranges": []}
-        for wheel in ("left", "right"):
-            profile, truth_z = getattr(res, wheel), truth[wheel]
-            s, z, count = np.asarray(profile.s), np.asarray(profile.z), np.asarray(profile.count)
-            record["rms"].append(detrended_rms(s[count > 0], (z - truth_z)[count > 0]))
-            record["rms_all"].append(detrended_rms(s[np.isfinite(z)], (z - truth_z)[np.isfinite(z)]))
-            record["ranges"].append(range_stats(profile, truth_z))
-            if scenario.bump_height:
-                ahead = BUMP_X_M - frame.pose.x_m
-                if BUMP_RANGE_M[0] <= ahead <= BUMP_RANGE_M[1]:
-                    record["bump"].append(bump_height(np.asarray(profile.s), z, ahead) - scenario.bump_height)
-        out["frames"].append(record)
+    truths = [sim.truth_profiles(scene, f.pose, SPEED_MPS, scenario.yaw_rate) for f in frames]
+    out = {"scenario": scenario}
+    for method in FUSION:
+        est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method}))
+        out[method] = [measure(est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s), f, truth,
+                               scenario) for f, truth in zip(frames, truths)]
     return out
 
 
@@ -180,8 +190,12 @@ def class_index(c: str) -> int:
     return "ABCDEFGH".index(c)
 
 
-def sequence_class(frames: list[dict]):
-    """Geometric mean of the classified frames' G_d(n0) when at least half of the frames are classified."""
+def sequence_class(frames: list[dict], method: str):
+    """Frame by frame: the geometric mean of the classified frames' G_d(n0) when at least half of the frames are
+    classified. Fused: the last frame's class (its map holds the whole sequence)."""
+    if method != "none":
+        last = frames[-1]
+        return last["class"], last["gd_n0"] if last["class"] else None
     values = [f["gd_n0"] for f in frames if f["class"] is not None]
     if 2 * len(values) < len(frames):
         return None, None
@@ -189,21 +203,23 @@ def sequence_class(frames: list[dict]):
     return rp.reference.iso_class(gd), gd
 
 
-def summarise(results: list[dict]) -> dict:
+def summarise(results: list[dict], method: str) -> dict:
     s = {"sequences": 0, "seq_classified": 0, "seq_exact": 0, "seq_within": 0, "frames": 0, "classified": 0,
-         "exact": 0, "within": 0, "log2": [], "rms": [], "rms_all": [], "bump": [], "ground": np.zeros(3), "ms": []}
+         "exact": 0, "within": 0, "log2": [], "rms": [], "rms_all": [], "bump": [], "ground": np.zeros(3), "ms": [],
+         "coverage": []}
     for r in results:
         sc, truth_class = r["scenario"], r["scenario"].iso_class
         truth_gd = sim.class_gd_n0(truth_class)
         if sc.group != "bumps":
             s["sequences"] += 1
-            seq, _ = sequence_class(r["frames"])
+            seq, _ = sequence_class(r[method], method)
             if seq is not None:
                 s["seq_classified"] += 1
                 s["seq_exact"] += seq == truth_class
                 s["seq_within"] += abs(class_index(seq) - class_index(truth_class)) <= 1
-        for f in r["frames"]:
+        for f in r[method]:
             s["frames"] += 1
+            s["coverage"] += f["coverage"]
             s["ground"] += f["ground"]
             s["ms"].append(f["ms"])
             s["rms"] += [v for v in f["rms"] if np.isfinite(v)]
@@ -221,14 +237,16 @@ def fraction(part: int, whole: int) -> str:
     return f"{part}/{whole} ({100 * part / whole:.0f} %)" if whole else "–"
 
 
-def row(name: str, sensor: str, s: dict, classes: bool = True) -> list[str]:
+def row(name: str, sensor: str, method: str, s: dict, classes: bool = True) -> list[str]:
     tp, predicted, truth = s["ground"]
     median = lambda v, scale=1.0, digits=2: f"{np.median(v) * scale:.{digits}f}" if len(v) else "–"  # noqa: E731
-    bump = f"{np.sqrt(np.mean(np.square(s['bump']))) * 100:.2f} (n = {len(s['bump'])})" if s["bump"] else "–"
+    bump = (f"{np.sqrt(np.mean(np.square(s['bump']))) * 100:.2f} / {np.max(np.abs(s['bump'])) * 100:.2f} "
+            f"(n = {len(s['bump'])})") if s["bump"] else "–"
     cls = [fraction(s["seq_exact"], s["sequences"]), fraction(s["seq_within"], s["sequences"]),
            fraction(s["classified"], s["frames"]), fraction(s["exact"], s["classified"]),
            fraction(s["within"], s["classified"]), median(s["log2"])] if classes else ["–"] * 6
-    return [name, sensor, *cls, f"{median(s['rms'], 100)} / {median(s['rms_all'], 100)}", bump,
+    return [name, sensor, method, *cls, f"{100 * np.mean(s['coverage']):.0f}",
+            f"{median(s['rms'], 100)} / {median(s['rms_all'], 100)}", bump,
             f"{tp / max(predicted, 1):.3f} / {tp / max(truth, 1):.3f}", median(s["ms"])]
 
 
@@ -241,34 +259,51 @@ def print_accuracy(results: list[dict]) -> None:
     rows = []
     for sensor in SENSORS:
         classes = [r for r in results if r["scenario"].group == "classes" and r["scenario"].sensor == sensor]
-        if classes:
-            rows.append(row(f"classes {''.join(sorted({r['scenario'].iso_class for r in classes}))}, straight + curved",
-                            sensor, summarise(classes)))
-    for group in ("bumps", "scene", "slope", "calibration"):
+        name = f"classes {''.join(sorted({r['scenario'].iso_class for r in classes}))}, straight + curved"
+        rows += [row(name, sensor, m, summarise(classes, m)) for m in FUSION if classes]
+    bumps = [r for r in results if r["scenario"].group == "bumps"]
+    heights = "–".join(f"{r['scenario'].bump_height * 100:.0f}" for r in bumps[:: max(len(bumps) - 1, 1)])
+    rows += [row(f"bumps {heights} cm", "OS1-128", m, summarise(bumps, m), classes=False) for m in FUSION if bumps]
+    for group in ("scene", "slope", "calibration"):
         for r in (r for r in results if r["scenario"].group == group):
-            rows.append(row(r["scenario"].name, r["scenario"].sensor, summarise([r]), classes=group != "bumps"))
+            rows += [row(r["scenario"].name, r["scenario"].sensor, m, summarise([r], m)) for m in FUSION]
     print("## Accuracy against the simulator's truth\n")
-    print(md_table(["scenario", "sensor", "sequence class exact", "sequence within one", "frames classified",
-                    "frame class exact", "frame within one", "median abs log2 G_d(n0) error", "profile RMSE cm (backed / all)",
-                    "bump height RMSE cm", "ground precision / recall", "ms / frame"], rows) + "\n")
+    print(md_table(["scenario", "sensor", "fusion", "sequence class exact", "sequence within one", "frames classified",
+                    "frame class exact", "frame within one", "median abs log2 G_d(n0) error",
+                    f"bins backed 0–{COVERAGE_M:g} m %", "profile RMSE cm (backed / all)",
+                    "bump height error cm (RMSE / max)", "ground precision / recall", "ms / frame"], rows) + "\n")
+
+
+def print_bumps(results: list[dict]) -> None:
+    rows = []
+    for r in (r for r in results if r["scenario"].group == "bumps"):
+        errors = [summarise([r], m)["bump"] for m in FUSION]
+        rows.append([f"{r['scenario'].bump_height * 100:.0f}"] + [
+            f"{np.sqrt(np.mean(np.square(e))) * 100:.2f} / {np.max(np.abs(e)) * 100:.2f}" if e else "–" for e in errors])
+    if rows:
+        print("## Bump height error by height (cm, RMSE / max over frames and wheels)\n")
+        print(md_table(["bump cm", *FUSION], rows) + "\n")
 
 
 def print_classes(results: list[dict]) -> None:
     rows = []
     for r in (r for r in results if r["scenario"].group == "classes"):
-        seq, gd = sequence_class(r["frames"])
-        classes = "".join(f["class"] or "·" for f in r["frames"])
-        rows.append([r["scenario"].name, r["scenario"].sensor, seq or "declined",
-                     f"{gd * 1e6:.0f}" if gd else "–", classes])
+        cells = []
+        for method in FUSION:
+            seq, gd = sequence_class(r[method], method)
+            cells += [seq or "declined", f"{gd * 1e6:.0f}" if gd else "–", "".join(f["class"] or "·" for f in r[method])]
+        rows.append([r["scenario"].name, r["scenario"].sensor, *cells])
     print("## Per sequence (vehicle result; frame classes in order, · = declined)\n")
-    print(md_table(["scenario", "sensor", "sequence class", "G_d(n0) 10⁻⁶ m³", "frames"], rows) + "\n")
+    print(md_table(["scenario", "sensor"] + [f"{m}: {h}" for m in FUSION for h in ("class", "G_d(n0) 10⁻⁶ m³", "frames")],
+                   rows) + "\n")
 
 
 def print_ranges(results: list[dict]) -> None:
     rows = []
     for sensor in SENSORS:
-        stats = [rs for r in results if r["scenario"].group == "classes" and r["scenario"].sensor == sensor
-                 for f in r["frames"] for rs in f["ranges"]]
+        chosen = [r for r in results if r["scenario"].group == "classes" and r["scenario"].sensor == sensor]
+        stats = [rs for r in chosen for f in r["none"] for rs in f["ranges"]]
+        fused = [rs for r in chosen for rs in r[FUSION[-1]][-1]["ranges"]]  # the map after the whole sequence
         if not stats:
             continue
         for i, (lo, hi) in enumerate(RANGE_BUCKETS_M):
@@ -279,10 +314,11 @@ def print_ranges(results: list[dict]) -> None:
             resolved = f"{1 / (2 * max(spacing, 0.1)):.2f}" if np.isfinite(spacing) else "–"
             rows.append([sensor, f"{lo}–{hi} m", f"{np.mean(backed):.2f}",
                          f"{spacing:.2f}" if np.isfinite(spacing) else "–", resolved,
-                         f"{np.median(error) * 100:.2f}" if error else "–"])
+                         f"{np.median(error) * 100:.2f}" if error else "–", f"{np.mean([s[i]['backed'] for s in fused]):.2f}"])
     print("## What one frame resolves, by distance ahead (classes A–F, both paths, both wheels)\n")
     print(md_table(["sensor", "ahead", "bins backed by points", "median spacing of points (m)",
-                    "resolvable up to (cycles/m)", "profile RMSE (cm)"], rows) + "\n")
+                    "resolvable up to (cycles/m)", "profile RMSE (cm)",
+                    f"bins backed, {FUSION[-1]} map after the sequence"], rows) + "\n")
 
 
 def main(argv=None) -> int:
@@ -305,6 +341,7 @@ def main(argv=None) -> int:
           f"{args.jobs} worker(s); Python {platform.python_version()}, numpy {np.__version__}, "
           f"roadpreview {rp.__version__}\n")
     print_accuracy(results)
+    print_bumps(results)
     print_classes(results)
     print_ranges(results)
     return 0

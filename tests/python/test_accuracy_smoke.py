@@ -13,12 +13,19 @@ def test_accuracy_quick_prints_the_accuracy_and_range_tables():
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     out = run.stdout
-    for heading in ("## Accuracy against the simulator's truth", "## Per sequence", "## What one frame resolves"):
+    for heading in ("## Accuracy against the simulator's truth", "## Bump height error", "## Per sequence",
+                    "## What one frame resolves"):
         assert heading in out
-    os1 = re.search(r"\| classes C, straight \+ curved \| OS1-128 \| 1/1 \(100 %\) \| 1/1 \(100 %\) \| (\d+)/3 .*"
-                    r"\| (\d\.\d\d) / (\d\.\d\d) \| – \| (1\.000|0\.\d{3}) / (1\.000|0\.\d{3}) \| \d+\.\d\d \|", out)
-    assert os1, out  # a class C road seen by an OS1-128 is class C
-    assert 0 < float(os1.group(2)) < 1.0  # profile RMSE in cm
-    bump = re.search(r"\| bump 6 cm \| OS1-128 \|( – \|){6} \d\.\d\d / \d\.\d\d \| (\d\.\d\d) \(n = (\d+)\)", out)
-    assert bump and float(bump.group(2)) < 2.0 and int(bump.group(3)) > 0, out
-    assert re.search(r"\| class C, straight \| VLP-16 \| declined \| – \| ··· \|", out)  # too sparse: no class
+    for fusion in ("none", "kalman"):
+        os1 = re.search(rf"\| classes C, straight \+ curved \| OS1-128 \| {fusion} \| 1/1 \(100 %\) \| 1/1 \(100 %\) \| "
+                        r"(\d+)/3 .*\| (\d+) \| (\d\.\d\d) / (\d\.\d\d) \| – \| (1\.000|0\.\d{3}) / (1\.000|0\.\d{3}) \| "
+                        r"\d+\.\d\d \|", out)
+        assert os1, out  # a class C road seen by an OS1-128 is class C, frame by frame and fused
+        assert 0 < float(os1.group(3)) < 1.0  # profile RMSE in cm
+        bump = re.search(rf"\| bumps 6 cm \| OS1-128 \| {fusion} \|( – \|){{6}} (\d+) \| \d\.\d\d / \d\.\d\d \| "
+                         r"(\d\.\d\d) / (\d\.\d\d) \(n = (\d+)\)", out)
+        assert bump and float(bump.group(3)) < 2.0 and int(bump.group(5)) > 0, out
+    coverage = [int(m) for m in re.findall(r"\| bumps 6 cm \| OS1-128 \| \w+ \|(?: – \|){6} (\d+) \|", out)]
+    assert len(coverage) == 2 and coverage[1] > coverage[0]  # the map backs more bins than one frame
+    # too sparse: no class, frame by frame or fused
+    assert re.search(r"\| class C, straight \| VLP-16 \| declined \| – \| ··· \| declined \| – \| ··· \|", out)
