@@ -225,20 +225,18 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
                            std::vector<double>& medians) const {
     struct Shared {
         std::size_t index;
-        Eigen::Vector3d v;  // (1, x, y) about the vehicle, for a well-conditioned fit
         double difference, variance;
         bool inlier = true;
     };
-    auto regressors = [&](std::int64_t slot) {
-        const auto [x, y] = map_.centre(slot);
-        return Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
-    };
+    std::vector<Eigen::Vector3d> v(slots.size());  // (1, x, y) about the vehicle, for a well-conditioned fit
     std::vector<Shared> shared;
+    shared.reserve(slots.size());
     for (std::size_t c = 0; c < slots.size(); ++c) {
+        const auto [x, y] = map_.centre(slots[c]);
+        v[c] = Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
         const MapCell& cell = map_.cell(slots[c]);
         if (cell.observations > 0)
-            shared.push_back({c, regressors(slots[c]), medians[c] - cell.height,
-                              variances[c] + std::max<double>(cell.variance, kMinVariance)});
+            shared.push_back({c, medians[c] - cell.height, variances[c] + std::max<double>(cell.variance, kMinVariance)});
     }
     if (shared.size() < kMinAlignCells) return;
     // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the
@@ -247,19 +245,24 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     auto fit = [&] {
         Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
         Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-        for (const Shared& s : shared)
-            if (s.inlier) normal += s.v * s.v.transpose() / s.variance, rhs += s.v * s.difference / s.variance;
+        for (const Shared& s : shared) {
+            if (!s.inlier) continue;
+            const Eigen::Vector3d weighted = v[s.index] / s.variance;
+            normal.noalias() += weighted * v[s.index].transpose();
+            rhs += weighted * s.difference;
+        }
         return Eigen::Vector3d(normal.ldlt().solve(rhs));
     };
     Eigen::Vector3d plane = fit();
     // Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and
     // their disagreement joins their own variance.
     std::vector<double> deviations;
-    for (const Shared& s : shared) deviations.push_back(std::abs(s.difference - plane.dot(s.v)));
+    deviations.reserve(shared.size());
+    for (const Shared& s : shared) deviations.push_back(std::abs(s.difference - plane.dot(v[s.index])));
     const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
     std::size_t inliers = 0;
     for (Shared& s : shared) {
-        const double residual = s.difference - plane.dot(s.v);
+        const double residual = s.difference - plane.dot(v[s.index]);
         s.inlier = std::abs(residual) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
         if (!s.inlier) variances[s.index] += residual * residual;
         inliers += s.inlier;
@@ -271,15 +274,14 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     double excess = 0.0, squares = 0.0;
     for (const Shared& s : shared) {
         if (!s.inlier) continue;
-        const double residual = s.difference - plane.dot(s.v);
+        const double residual = s.difference - plane.dot(v[s.index]);
         excess += residual * residual - s.variance;
-        squares += s.v.tail<2>().squaredNorm();
+        squares += v[s.index].tail<2>().squaredNorm();
     }
     const double per_square_metre = squares > 0.0 ? std::max(0.0, excess) / squares : 0.0;
     for (std::size_t c = 0; c < slots.size(); ++c) {
-        const Eigen::Vector3d v = regressors(slots[c]);
-        medians[c] -= plane.dot(v);
-        variances[c] += per_square_metre * v.tail<2>().squaredNorm();
+        medians[c] -= plane.dot(v[c]);
+        variances[c] += per_square_metre * v[c].tail<2>().squaredNorm();
     }
 }
 
