@@ -170,7 +170,8 @@ def _birdseye_inputs(line: dict, cfg):
         return None
     points = io.read(source)
     result = Estimator(cfg).process(points, line["motion"]["speed"], line["motion"]["yaw_rate"])
-    if line["ground"]["plane"] is not None and not np.allclose(result.plane, line["ground"]["plane"], atol=1e-5):
+    plane = line["ground"]["plane"]
+    if plane is not None and (result.plane is None or not np.allclose(result.plane, plane, atol=1e-5)):
         print(f"{source}: the ground plane differs from the line's; give the run's config (--config)", file=sys.stderr)
     base, finite = reference.to_base_frame(points, cfg)
     return base, np.asarray(result.ground_mask)[finite]
