@@ -279,7 +279,8 @@ def print_bumps(results: list[dict]) -> None:
     for r in (r for r in results if r["scenario"].group == "bumps"):
         errors = [summarise([r], m)["bump"] for m in FUSION]
         rows.append([f"{r['scenario'].bump_height * 100:.0f}"] + [
-            f"{np.sqrt(np.mean(np.square(e))) * 100:.2f} / {np.max(np.abs(e)) * 100:.2f}" if e else "–" for e in errors])
+            f"{np.sqrt(np.mean(np.square(e))) * 100:.2f} / {np.max(np.abs(e)) * 100:.2f}" if e else "–"
+            for e in errors])
     if rows:
         print("## Bump height error by height (cm, RMSE / max over frames and wheels)\n")
         print(md_table(["bump cm", *FUSION], rows) + "\n")
@@ -291,11 +292,12 @@ def print_classes(results: list[dict]) -> None:
         cells = []
         for method in FUSION:
             seq, gd = sequence_class(r[method], method)
-            cells += [seq or "declined", f"{gd * 1e6:.0f}" if gd else "–", "".join(f["class"] or "·" for f in r[method])]
+            frames = "".join(f["class"] or "·" for f in r[method])
+            cells += [seq or "declined", f"{gd * 1e6:.0f}" if gd else "–", frames]
         rows.append([r["scenario"].name, r["scenario"].sensor, *cells])
     print("## Per sequence (vehicle result; frame classes in order, · = declined)\n")
-    print(md_table(["scenario", "sensor"] + [f"{m}: {h}" for m in FUSION for h in ("class", "G_d(n0) 10⁻⁶ m³", "frames")],
-                   rows) + "\n")
+    headers = [f"{m}: {h}" for m in FUSION for h in ("class", "G_d(n0) 10⁻⁶ m³", "frames")]
+    print(md_table(["scenario", "sensor", *headers], rows) + "\n")
 
 
 def print_ranges(results: list[dict]) -> None:
@@ -314,7 +316,8 @@ def print_ranges(results: list[dict]) -> None:
             resolved = f"{1 / (2 * max(spacing, 0.1)):.2f}" if np.isfinite(spacing) else "–"
             rows.append([sensor, f"{lo}–{hi} m", f"{np.mean(backed):.2f}",
                          f"{spacing:.2f}" if np.isfinite(spacing) else "–", resolved,
-                         f"{np.median(error) * 100:.2f}" if error else "–", f"{np.mean([s[i]['backed'] for s in fused]):.2f}"])
+                         f"{np.median(error) * 100:.2f}" if error else "–",
+                         f"{np.mean([s[i]['backed'] for s in fused]):.2f}"])
     print("## What one frame resolves, by distance ahead (classes A–F, both paths, both wheels)\n")
     print(md_table(["sensor", "ahead", "bins backed by points", "median spacing of points (m)",
                     "resolvable up to (cycles/m)", "profile RMSE (cm)",

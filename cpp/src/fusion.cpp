@@ -236,7 +236,8 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
         v[c] = Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
         const MapCell& cell = map_.cell(slots[c]);
         if (cell.observations > 0)
-            shared.push_back({c, medians[c] - cell.height, variances[c] + std::max<double>(cell.variance, kMinVariance)});
+            shared.push_back({c, medians[c] - cell.height,
+                              variances[c] + std::max<double>(cell.variance, kMinVariance)});
     }
     if (shared.size() < kMinAlignCells) return;
     // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the

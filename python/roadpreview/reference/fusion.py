@@ -176,7 +176,8 @@ class FusedMap:
             plane = fit(inlier)
         residual = difference - v @ plane
         squares = np.sum(offsets[shared[inlier]] ** 2)
-        per_square_metre = max(0.0, float(np.sum(residual[inlier] ** 2 - total[inlier]))) / squares if squares > 0 else 0.0
+        excess = max(0.0, float(np.sum(residual[inlier] ** 2 - total[inlier])))
+        per_square_metre = excess / squares if squares > 0 else 0.0
         return medians - regressors @ plane, variances + per_square_metre * np.sum(offsets ** 2, axis=1)
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
