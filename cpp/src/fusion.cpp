@@ -306,7 +306,9 @@ Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vect
     p.blocked.assign(bins, 0);
     if (blocked) std::copy(blocked->begin(), blocked->end(), p.blocked.begin() + static_cast<std::ptrdiff_t>(behind));
     for (std::size_t k = 0; k < bins; ++k) {
-        const double s = p.s0 + static_cast<double>(k) * pc.ds_m;
+        // (k + ½ − B)·ds, as method.md writes it (and the reference computes it): a pose half a cell off the
+        // grid then puts both on the same side of every cell boundary.
+        const double s = (static_cast<double>(k) + 0.5 - static_cast<double>(behind)) * pc.ds_m;
         p.s[k] = s;
         double sum = 0.0, variance = 0.0;
         int valid = 0;
