@@ -2,12 +2,23 @@
 
 ``roadpreview.native`` exposes the C++ core's stage functions with the call shapes of ``roadpreview.reference``
 and returns objects with the same attribute names.
+
+Property tests draw the same examples on every run (hypothesis profile "repeatable", the default here) so that
+a green suite stays green; ``HYPOTHESIS_PROFILE=explore`` draws new ones, to hunt for failures — keep what
+they find as an ``@example``.
 """
 
+import os
+
 import pytest
+from hypothesis import settings
 
 import roadpreview.native
 import roadpreview.reference
+
+settings.register_profile("repeatable", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 IMPLEMENTATIONS = [("reference", roadpreview.reference), ("cpp", roadpreview.native)]
 
