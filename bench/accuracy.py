@@ -262,8 +262,9 @@ def print_accuracy(results: list[dict]) -> None:
         name = f"classes {''.join(sorted({r['scenario'].iso_class for r in classes}))}, straight + curved"
         rows += [row(name, sensor, m, summarise(classes, m)) for m in FUSION if classes]
     bumps = [r for r in results if r["scenario"].group == "bumps"]
-    heights = "–".join(f"{r['scenario'].bump_height * 100:.0f}" for r in bumps[:: max(len(bumps) - 1, 1)])
-    rows += [row(f"bumps {heights} cm", "OS1-128", m, summarise(bumps, m), classes=False) for m in FUSION if bumps]
+    heights = sorted({f"{r['scenario'].bump_height * 100:.0f}" for r in bumps}, key=float)
+    span = f"{heights[0]}–{heights[-1]}" if len(heights) > 1 else "".join(heights)
+    rows += [row(f"bumps {span} cm", "OS1-128", m, summarise(bumps, m), classes=False) for m in FUSION if bumps]
     for group in ("scene", "slope", "calibration"):
         for r in (r for r in results if r["scenario"].group == group):
             rows += [row(r["scenario"].name, r["scenario"].sensor, m, summarise([r], m)) for m in FUSION]
