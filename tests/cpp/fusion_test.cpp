@@ -68,6 +68,26 @@ rp::Result drive(rp::Estimator& est, double speed, int frames, int points, doubl
     return r;
 }
 
+// Fuses `cloud` (base frame, already levelled, every point ground) at `pose` into `fusion`.
+void fuse_at(rp::TemporalFusion& fusion, const scenes::Cloud& cloud, const rp::Pose2& pose, double t) {
+    rp::FusionStatus status;
+    fusion.advance(1.0, 0.0, {t, pose}, status);
+    fusion.fuse(rp::points_view(cloud.data(), cloud.rows(), 3), std::vector<std::uint8_t>(cloud.rows(), 1),
+                rp::levelling_for(nullptr));
+}
+
+// Points on the flat ground z = `z`, four per 0.1 m cell, over x in [x0, x1), |y| < y_abs, with Gaussian noise.
+scenes::Cloud flat_patch(double x0, double x1, double y_abs, double z, double noise_m, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = x0 + 0.025; x < x1; x += 0.05)
+        for (double y = -y_abs + 0.025; y < y_abs; y += 0.05) pts.emplace_back(x, y, z + noise_m * gauss(rng));
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    return cloud;
+}
+
 }  // namespace
 
 TEST(ElevationMap, MovingKeepsCellsAtTheirPlaceAndForgetsThoseThatLeave) {
@@ -281,30 +301,6 @@ TEST(Fusion, AlignmentRemovesEachFramesHeaveAndTilt) {
         else EXPECT_GT(rms, 0.006);
     }
 }
-
-namespace {
-
-// Fuses `cloud` (base frame, already levelled, every point ground) at `pose` into `fusion`.
-void fuse_at(rp::TemporalFusion& fusion, const scenes::Cloud& cloud, const rp::Pose2& pose, double t) {
-    rp::FusionStatus status;
-    fusion.advance(1.0, 0.0, {t, pose}, status);
-    fusion.fuse(rp::points_view(cloud.data(), cloud.rows(), 3), std::vector<std::uint8_t>(cloud.rows(), 1),
-                rp::levelling_for(nullptr));
-}
-
-// Points on the flat ground z = `z`, four per 0.1 m cell, over x in [x0, x1), |y| < y_abs, with Gaussian noise.
-scenes::Cloud flat_patch(double x0, double x1, double y_abs, double z, double noise_m, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> gauss(0.0, noise_m);
-    std::vector<Eigen::Vector3d> pts;
-    for (double x = x0 + 0.025; x < x1; x += 0.05)
-        for (double y = -y_abs + 0.025; y < y_abs; y += 0.05) pts.emplace_back(x, y, z + gauss(rng));
-    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
-    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
-    return cloud;
-}
-
-}  // namespace
 
 TEST(Fusion, AFewSharedCellsAlongOneRingFixTheOffsetButDoNotTiltTheFrame) {
     // The map knows the flat road up to 12 m. The next frame sees it 4 cm higher (its plane fit's offset), but
