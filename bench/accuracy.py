@@ -325,6 +325,16 @@ def print_ranges(results: list[dict]) -> None:
                     f"bins backed, {FUSION[-1]} map after the sequence"], rows) + "\n")
 
 
+def run_in_pool(work, items: list, jobs: int, describe) -> list:
+    """work(item) for every item on `jobs` spawned processes, in order; progress (describe(result)) on stderr."""
+    results = []
+    with multiprocessing.get_context("spawn").Pool(jobs) as pool:
+        for r in pool.imap(work, items):
+            results.append(r)
+            print(f"[{len(results)}/{len(items)}] {describe(r)}", file=sys.stderr)
+    return results
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="three short sequences (smoke test)")
@@ -334,11 +344,7 @@ def main(argv=None) -> int:
         parser.error("--jobs must be at least 1")
     scenarios = suite(args.quick)
     start = time.perf_counter()
-    with multiprocessing.get_context("spawn").Pool(args.jobs) as pool:
-        results = []
-        for r in pool.imap(run, scenarios):
-            results.append(r)
-            print(f"[{len(results)}/{len(scenarios)}] {r['scenario'].sensor} {r['scenario'].name}", file=sys.stderr)
+    results = run_in_pool(run, scenarios, args.jobs, lambda r: f"{r['scenario'].sensor} {r['scenario'].name}")
     print("# roadpreview accuracy benchmark\n")
     print(f"- {len(scenarios)} sequences of {scenarios[0].frames if args.quick else FRAMES} frames at 10 Hz, "
           f"{SPEED_MPS:g} m/s, sensor {SENSOR_HEIGHT_M} m high; {time.perf_counter() - start:.0f} s on "

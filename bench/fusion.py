@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import multiprocessing
 import os
 import platform
 import sys
@@ -37,7 +36,7 @@ from roadpreview import sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from accuracy import BUMP_HEIGHTS_M, BUMP_X_M, CURVE_YAW_RATE_RPS, Scenario, bump_height, class_index, \
-    detrended_rms, md_table  # noqa: E402
+    detrended_rms, md_table, run_in_pool  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 OUSTER = REPO / "tests" / "data" / "ouster"
@@ -227,11 +226,7 @@ def main(argv=None) -> int:
         parser.error("--jobs and --timing-repeat must be at least 1")
     sequences = suite(args.quick)
     start = time.perf_counter()
-    with multiprocessing.get_context("spawn").Pool(args.jobs) as pool:
-        results = []
-        for r in pool.imap(run, sequences):
-            results.append(r)
-            print(f"[{len(results)}/{len(sequences)}] {r['sequence'].speed:g} m/s {r['sequence'].name}", file=sys.stderr)
+    results = run_in_pool(run, sequences, args.jobs, lambda r: f"{r['sequence'].speed:g} m/s {r['sequence'].name}")
     load = os.getloadavg()[0]
     print("# roadpreview temporal fusion benchmark\n")
     print(f"- {len(sequences)} simulated sequences of {sequences[0].scenario.frames} frames at 10 Hz, OS1-128 "
