@@ -207,10 +207,10 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
     }
-    std::vector<double> measured;
+    cell_z.clear();  // now the spreads of the cells that have one
     for (std::size_t c = 0; c < cells; ++c)
-        if (counts[c] >= 2) measured.push_back(spreads[c]);
-    const double typical = measured.empty() ? kNaN : median(measured.begin(), measured.end());
+        if (counts[c] >= 2) cell_z.push_back(spreads[c]);
+    const double typical = cell_z.empty() ? kNaN : median(cell_z.begin(), cell_z.end());
     const auto pooled = backed_variances(counts.data(), spreads.data(), cells, kPoolMaxSpread * typical);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
     std::vector<double> variances(cells);
@@ -226,6 +226,7 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     struct Shared {
         std::size_t index;
         double difference, variance;
+        double residual = 0.0;  // from the plane of the first fit
         bool inlier = true;
     };
     std::vector<Eigen::Vector3d> v(slots.size());  // (1, x, y) about the vehicle, for a well-conditioned fit
@@ -259,13 +260,15 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     // their disagreement joins their own variance.
     std::vector<double> deviations;
     deviations.reserve(shared.size());
-    for (const Shared& s : shared) deviations.push_back(std::abs(s.difference - plane.dot(v[s.index])));
+    for (Shared& s : shared) {
+        s.residual = s.difference - plane.dot(v[s.index]);
+        deviations.push_back(std::abs(s.residual));
+    }
     const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
     std::size_t inliers = 0;
     for (Shared& s : shared) {
-        const double residual = s.difference - plane.dot(v[s.index]);
-        s.inlier = std::abs(residual) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
-        if (!s.inlier) variances[s.index] += residual * residual;
+        s.inlier = std::abs(s.residual) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
+        if (!s.inlier) variances[s.index] += s.residual * s.residual;
         inliers += s.inlier;
     }
     if (inliers >= kMinAlignCells && inliers < shared.size()) plane = fit();
