@@ -25,8 +25,8 @@
 
 #include <roadpreview/roadpreview.hpp>
 
-#include "grid_radius_search.hpp"
-#include "obstacles_pcl.hpp"
+#include "obstacles/grid_radius_search.hpp"
+#include "obstacles/obstacles_pcl.hpp"
 
 namespace rp = roadpreview;
 namespace fs = std::filesystem;

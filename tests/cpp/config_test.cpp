@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include <roadpreview/config.hpp>
+#include <roadpreview/core/config.hpp>
 
 namespace rp = roadpreview;
 

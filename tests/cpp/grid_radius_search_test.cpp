@@ -12,8 +12,8 @@
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
 
-#include "column_grid.hpp"
-#include "grid_radius_search.hpp"
+#include "core/column_grid.hpp"
+#include "obstacles/grid_radius_search.hpp"
 
 namespace rp = roadpreview;
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include <roadpreview/ground.hpp>
+#include <roadpreview/ground/ground.hpp>
 
 #include "scenes.hpp"
 

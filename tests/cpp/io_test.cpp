@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include <roadpreview/io.hpp>
+#include <roadpreview/io/readers.hpp>
 
 namespace rp = roadpreview;
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
-#include <roadpreview/iri.hpp>
+#include <roadpreview/roughness/iri.hpp>
 
 namespace rp = roadpreview;
 

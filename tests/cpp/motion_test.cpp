@@ -4,7 +4,7 @@
 #include <cmath>
 #include <fstream>
 
-#include <roadpreview/motion.hpp>
+#include <roadpreview/paths/motion.hpp>
 
 namespace rp = roadpreview;
 

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include <roadpreview/io.hpp>
+#include <roadpreview/io/readers.hpp>
 #include <roadpreview/io/ouster.hpp>
 
 namespace rp = roadpreview;

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include <roadpreview/path.hpp>
+#include <roadpreview/paths/path.hpp>
 
 namespace rp = roadpreview;
 

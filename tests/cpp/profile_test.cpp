@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include <roadpreview/profile.hpp>
+#include <roadpreview/profile/profile.hpp>
 
 #include "scenes.hpp"
 

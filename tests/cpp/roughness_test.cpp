@@ -4,7 +4,7 @@
 #include <limits>
 #include <numeric>
 
-#include <roadpreview/roughness.hpp>
+#include <roadpreview/roughness/roughness.hpp>
 
 #include "scenes.hpp"
 

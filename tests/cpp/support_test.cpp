@@ -4,9 +4,9 @@
 #include <limits>
 #include <vector>
 
-#include <roadpreview/profile.hpp>
-#include <roadpreview/roughness.hpp>
-#include <roadpreview/support.hpp>
+#include <roadpreview/profile/profile.hpp>
+#include <roadpreview/roughness/roughness.hpp>
+#include <roadpreview/roughness/support.hpp>
 
 #include "scenes.hpp"
 

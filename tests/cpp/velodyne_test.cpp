@@ -6,7 +6,7 @@
 #include <cstring>
 #include <fstream>
 
-#include <roadpreview/io.hpp>
+#include <roadpreview/io/readers.hpp>
 #include <roadpreview/io/velodyne.hpp>
 
 namespace rp = roadpreview;

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "roadpreview/io.hpp"
+#include "roadpreview/io/readers.hpp"
 #include "roadpreview/io/pcap.hpp"
 
 namespace roadpreview {

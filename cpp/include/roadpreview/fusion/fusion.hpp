@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Temporal fusion (docs/method.md §7): a rolling elevation map in a local odometry frame that fuses the
+// levelled ground points of every frame, and the wheel-path profiles sampled from it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/paths/path.hpp"
+#include "roadpreview/core/points.hpp"
+#include "roadpreview/profile/profile.hpp"
+
+namespace roadpreview {
+
+/// Planar pose of the base frame in the odometry frame (m, m, rad; yaw counter-clockwise from odometry x).
+struct Pose2 {
+    double x_m = 0.0;
+    double y_m = 0.0;
+    double yaw_rad = 0.0;
+};
+
+/// What the caller knows about a frame's time and place; both optional.
+struct FrameMotion {
+    std::optional<double> timestamp_s;  ///< s; frames without one are 1/fusion.frame_rate_hz apart
+    std::optional<Pose2> pose;          ///< given pose (e.g. from a KITTI poses file); else integrated
+};
+
+/// Rigid planar motion at constant speed and yaw rate for dt seconds (an arc; a line when ω·dt = 0).
+Pose2 integrate_motion(const Pose2& pose, double speed_mps, double yaw_rate_rps, double dt_s);
+
+/// Pose of a 3×4 row-major [R | t] matrix (KITTI poses) seen from above: t's x, y and the heading of R's x axis.
+Pose2 pose_from_matrix(const double (&m)[12]);
+
+/// One planar pose per line of a KITTI poses file (12 numbers, a 3×4 row-major [R | t] each); throws
+/// std::runtime_error naming the file and line for a line that is not 12 finite numbers.
+std::vector<Pose2> read_kitti_poses(const std::string& path);
+
+struct MapCell {
+    float height = 0.0f;           ///< m, fused height (levelled frames)
+    float variance = 0.0f;         ///< m², estimated variance of `height`
+    std::int32_t observations = 0; ///< frames fused into the cell; 0 = empty
+    std::int32_t points = 0;       ///< points fused into the cell
+    std::int32_t last_update = 0;  ///< frame number of the last update (age = current frame − this)
+};
+
+/// A square grid of side `length_m` centred near the vehicle, cells `cell_m` wide, aligned with the odometry
+/// axes. Cell (i, j) covers [i·cell, (i+1)·cell) × [j·cell, (j+1)·cell) and lives in slot (i mod n, j mod n):
+/// moving the map clears the slots of the cells that enter and copies nothing (a circular buffer).
+class ElevationMap {
+public:
+    ElevationMap(double cell_m, double length_m);
+
+    /// Centres the window on (x, y); cells that leave it are forgotten.
+    void move_to(double x_m, double y_m);
+    void clear();
+
+    /// The cell at (x, y), nullptr outside the window. An empty cell has observations == 0.
+    MapCell* at(double x_m, double y_m);
+    const MapCell* at(double x_m, double y_m) const;
+    /// Slot of the cell at (x, y), or −1 outside the window.
+    std::int64_t slot(double x_m, double y_m) const;
+    MapCell& cell(std::int64_t slot) { return cells_[static_cast<std::size_t>(slot)]; }
+    const MapCell& cell(std::int64_t slot) const { return cells_[static_cast<std::size_t>(slot)]; }
+    /// Odometry x, y of the centre of the cell in this slot.
+    std::array<double, 2> centre(std::int64_t slot) const;
+
+    std::int64_t side() const { return n_; }
+    double cell_m() const { return cell_; }
+    std::size_t bytes() const { return cells_.size() * sizeof(MapCell); }
+
+private:
+    void clear_rows(std::int64_t first, std::int64_t last, bool along_x);
+
+    double cell_;
+    std::int64_t n_;
+    std::int64_t i0_ = 0, j0_ = 0;  // global index of the window's first row and column
+    std::vector<MapCell> cells_;
+};
+
+struct FusionStatus {
+    FusionMethod method = FusionMethod::None;
+    std::int64_t frames = 0;     ///< frames fused since the last reset
+    double coverage = 0.0;       ///< fraction of both profiles' bins ahead (0 ≤ s < preview) with map data
+    double frame_coverage = 0.0; ///< the same, counting only cells this frame observed
+    std::string reset;           ///< why the map was cleared before this frame; empty when it was not
+    Pose2 pose;                  ///< the vehicle in the odometry frame
+};
+
+/// The map plus the vehicle's pose and clock; one per Estimator.
+class TemporalFusion {
+public:
+    explicit TemporalFusion(const Config& cfg);
+
+    void reset();
+    /// Moves the vehicle to this frame's pose and the map with it. Resets the map (saying why in
+    /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
+    void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
+    /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map.
+    void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L);
+    /// Both wheels' profiles sampled from the map along the paths, from −fusion.behind_m to the preview length;
+    /// `blocked` (bins 0 ≤ s < preview) as in build_profiles. Fills status.coverage and frame_coverage.
+    WheelProfiles profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status) const;
+
+    const ElevationMap& map() const { return map_; }
+    /// Frames fused since the last reset (0: the map is empty).
+    std::int64_t frames() const { return fused_; }
+    const Pose2& pose() const { return pose_; }
+
+private:
+    /// Removes from the frame's cell medians the plane of their differences to the map (method.md §7).
+    void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
+               std::vector<double>& medians) const;
+    Profile sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
+                   std::size_t& ahead, std::size_t& ahead_now) const;
+
+    Config cfg_;
+    ElevationMap map_;
+    Pose2 pose_;
+    std::optional<double> last_time_;
+    std::int32_t frame_ = 0;  // frames seen (the cells' clock)
+    std::int64_t fused_ = 0;
+    bool started_ = false;
+    std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
+    std::vector<double> z_;
+};
+
+}  // namespace roadpreview

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Stage 1 — ground: iterative PCA plane fit (the paper's method) or PCL RANSAC, on ROI points.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/core/points.hpp"
+
+namespace roadpreview {
+
+/// Plane a·x + b·y + c·z + d = 0 with (a, b, c) a unit normal and c > 0 (pointing up).
+using Plane = std::array<double, 4>;
+
+/// Signed height of p above the plane (positive on the side the normal points to).
+inline double height_above(const Plane& pl, double x, double y, double z) {
+    return pl[0] * x + pl[1] * y + pl[2] * z + pl[3];
+}
+
+/// PCA plane of the points (normal = eigenvector of the smallest covariance eigenvalue, through the mean).
+/// `mask`, if given, selects the rows used. Returns nullopt for fewer than 3 points or a degenerate fit.
+std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t>* mask = nullptr);
+
+struct GroundFit {
+    std::vector<std::uint8_t> mask;  ///< 1 = ground, one entry per point given
+    std::optional<Plane> plane;      ///< nullopt: no ground found
+    std::int64_t count = 0;          ///< ground points
+};
+
+/// Ground among base-frame `points` by `cfg.method`; only points in the front ROI can be ground.
+/// The mask has one entry per point given.
+GroundFit fit_ground(PointsView points, const GroundConfig& cfg);
+
+}  // namespace roadpreview

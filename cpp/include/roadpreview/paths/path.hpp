@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Stage 2 — wheel paths from speed and yaw rate (nonholonomic rigid motion about the ICR).
+//
+// ICR at (0, y_icr) with y_icr = V/ω for every sign of V and ω (left turn forward: y_icr > 0).
+// Wheels at y = ±track/2: r_left = |y_icr − track/2|, r_right = |y_icr + track/2| — for a left turn
+// that is r − track/2 (inner) and r + track/2 (outer); for a right turn the other way round.
+#pragma once
+
+#include <optional>
+
+#include "roadpreview/core/config.hpp"
+
+namespace roadpreview {
+
+enum class PathStatus { Arc, Straight, Stopped };
+enum class Wheel { Left, Right };
+
+struct WheelPaths {
+    PathStatus status = PathStatus::Stopped;
+    double direction = 0.0;     ///< +1 forward, −1 reversing (looks behind), 0 stopped
+    double rotation = 0.0;      ///< sign(ω): the sense in which the wheels sweep about the ICR
+    double icr_y = 0.0;         ///< m, Arc only
+    double left_radius = 0.0;   ///< m, Arc only
+    double right_radius = 0.0;  ///< m, Arc only
+    double track_width = 0.0;   ///< m
+
+    double wheel_y(Wheel w) const { return w == Wheel::Left ? 0.5 * track_width : -0.5 * track_width; }
+    double radius(Wheel w) const { return w == Wheel::Left ? left_radius : right_radius; }
+};
+
+/// Throws std::invalid_argument for non-finite speed or yaw rate.
+WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width, const PathConfig& cfg);
+
+/// Arc length s ≥ 0 travelled by wheel `w` until it is beside (x, y), if (x, y) lies in that wheel's
+/// corridor (within tire_width/2 of its path) ahead of it in the direction of travel; nullopt otherwise.
+std::optional<double> arc_length(const WheelPaths& p, Wheel w, double x, double y, double tire_width);
+
+const char* to_string(PathStatus s);
+
+}  // namespace roadpreview

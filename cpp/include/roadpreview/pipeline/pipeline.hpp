@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The pipeline: points → ground → wheel paths → obstacles → profiles → roughness, one frame per process() call.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <type_traits>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/fusion/fusion.hpp"
+#include "roadpreview/ground/ground.hpp"
+#include "roadpreview/obstacles/obstacles.hpp"
+#include "roadpreview/paths/path.hpp"
+#include "roadpreview/core/points.hpp"
+#include "roadpreview/profile/profile.hpp"
+#include "roadpreview/roughness/roughness.hpp"
+
+namespace roadpreview {
+
+struct PointCounts {
+    std::int64_t input = 0;   ///< rows given
+    std::int64_t finite = 0;  ///< rows with finite x, y, z
+    std::int64_t roi = 0;     ///< finite rows inside the front region of interest
+    std::int64_t ground = 0;  ///< ROI rows classified as ground
+};
+
+struct TimingMs {
+    double ground = 0.0;  ///< includes the frame transform and ROI crop
+    double path = 0.0;
+    double profile = 0.0;
+    double roughness = 0.0;
+    double obstacles = 0.0;  ///< clustering and the wheel-path crossings
+    double fusion = 0.0;     ///< moving the map and fusing the frame (sampling the map counts as profile)
+    double total = 0.0;
+};
+
+struct Result {
+    std::int64_t frame = 0;  ///< 0-based count of process() calls on this estimator
+    std::string source;      ///< where the points came from (file name), may be empty
+    std::optional<double> timestamp;  ///< s, when the caller knows it
+    double speed_mps = 0.0;           ///< the motion the paths were planned from
+    double yaw_rate_rps = 0.0;
+    PointCounts points;
+    GroundMethod ground_method = GroundMethod::Pca;
+    std::vector<std::uint8_t> ground_mask;  ///< one entry per input row, 1 = ground
+    std::optional<Plane> plane;             ///< base frame; nullopt when no ground was found
+    WheelPaths path;
+    Profile left, right;
+    Roughness vehicle;
+    std::optional<std::vector<Cluster>> obstacles;  ///< every cluster (base frame); nullopt: clustering is off
+    std::vector<std::int32_t> cluster_labels;        ///< one entry per input row: its cluster's id, −1 for none
+    TimingMs timing_ms;
+    std::string reason;  ///< why profiles are empty ("vehicle stopped", "no ground", ...); empty otherwise
+    /// Where the yaw rate came from ("option", "motion", "imu", "default"), set by the caller; when set, the
+    /// output line's `path` is an object for every motion status and carries it (docs/output.md).
+    std::string yaw_rate_source;
+    std::optional<FusionStatus> fusion;  ///< nullopt when fusion.method is "none" (docs/method.md §7)
+};
+
+/// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;
+/// not thread-safe — use one Estimator per thread.
+class Estimator {
+public:
+    explicit Estimator(const Config& cfg = Config{});  ///< throws std::invalid_argument on a bad config
+    ~Estimator();
+    Estimator(Estimator&&) noexcept;
+    Estimator& operator=(Estimator&&) noexcept;
+
+    /// speed in m/s (negative when reversing), yaw rate in rad/s (positive turning left).
+    /// Throws std::invalid_argument for non-finite speed or yaw rate.
+    Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source = {});
+    /// The same with the frame's timestamp (copied to the result) and, optionally, its pose for the fusion.
+    Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                   const FrameMotion& motion);
+
+    /// Forgets the fused map, the pose and the clock (the frame counter keeps counting).
+    void reset();
+
+    /// Any row-major float Eigen matrix, map or ref with 3 or more columns (N×3, N×4 KITTI), read in place.
+    template <typename Derived>
+    Result process(const Eigen::DenseBase<Derived>& points, double speed_mps, double yaw_rate_rps,
+                   const std::string& source = {}, const FrameMotion& motion = {}) {
+        static_assert(std::is_same_v<typename Derived::Scalar, float>, "points must be float32");
+        static_assert(Derived::IsRowMajor || Derived::ColsAtCompileTime == 1, "points must be row-major");
+        if (points.cols() < 3) throw std::invalid_argument("points need at least 3 columns (x, y, z)");
+        const auto& m = points.derived();
+        return process(points_view(m.data(), m.rows(), m.outerStride()), speed_mps, yaw_rate_rps, source, motion);
+    }
+
+    const Config& config() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// One output line (JSON object, no newline) as documented in docs/output.md.
+std::string result_to_json(const Result& r);
+
+}  // namespace roadpreview

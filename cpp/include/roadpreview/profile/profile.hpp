@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Stage 3 — wheel-path height profiles: ground points in each wheel's corridor, binned along arc length,
+// with the count and spread of the points behind each bin (for the noise-aware roughness).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/ground/ground.hpp"
+#include "roadpreview/obstacles/obstacles.hpp"
+#include "roadpreview/paths/path.hpp"
+#include "roadpreview/core/points.hpp"
+#include "roadpreview/roughness/roughness.hpp"
+
+namespace roadpreview {
+
+struct Profile {
+    double s0 = 0.0;  ///< m, centre of the first bin
+    double ds = 0.0;  ///< m, bin width
+    std::vector<double> s;             ///< m, bin centres
+    std::vector<double> z;             ///< m, median height per bin (levelled), NaN where missing
+    std::vector<std::int32_t> count;   ///< points per bin (0 for interpolated bins)
+    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points
+    Roughness roughness;
+    std::vector<std::uint8_t> blocked;  ///< 1 where an obstacle covers the bin (z is NaN there), docs/method.md §5
+    std::optional<std::vector<PathObstacle>> obstacles;  ///< in this wheel's path; nullopt: clustering is off
+};
+
+/// Rotation about the base origin that takes the plane normal onto +z along the shortest arc, row-major.
+struct Levelling {
+    double R[3][3];
+
+    std::array<double, 3> apply(double x, double y, double z) const {
+        return {R[0][0] * x + R[0][1] * y + R[0][2] * z, R[1][0] * x + R[1][1] * y + R[1][2] * z,
+                R[2][0] * x + R[2][1] * y + R[2][2] * z};
+    }
+};
+Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
+
+/// Bins per profile, K = ceil(preview_length / ds) (docs/method.md §3).
+std::size_t bin_count(const ProfileConfig& cfg);
+
+/// Profiles of both wheels from ground points (base frame) selected by `mask`.
+struct WheelProfiles {
+    Profile left, right;
+};
+/// Each wheel's bins covered by obstacles (see blocked_bins): their z is NaN and gap filling does not cross them.
+struct BlockedBins {
+    std::vector<std::uint8_t> left, right;
+};
+WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                             const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
+                             const BlockedBins* blocked = nullptr);
+
+/// Linear interpolation across interior runs of NaN no longer than max_gap_m. With `blocked`, a blocked bin
+/// counts as missing and a run holding one is left as it is: nothing is interpolated across an obstacle.
+void fill_gaps(std::vector<double>& z, double ds, double max_gap_m, const std::vector<std::uint8_t>* blocked = nullptr);
+
+}  // namespace roadpreview

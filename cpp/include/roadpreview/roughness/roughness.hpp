@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Stage 4 — roughness: one-sided displacement PSD of a profile and its ISO 8608 class (docs/method.md §4);
+// noise-aware when the points behind the bins are known (docs/noise-aware-roughness.md); the IRI beside it.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/roughness/iri.hpp"
+#include "roadpreview/roughness/support.hpp"
+
+namespace roadpreview {
+
+struct Profile;
+
+inline constexpr double kIsoN0 = 0.1;  ///< ISO 8608 reference spatial frequency, cycles/m
+inline constexpr char kIsoClasses[] = "ABCDEFGH";
+
+/// One-sided displacement PSD; n[0] = 0 (the DC ordinate) and n[k] = k/(N·ds).
+struct Spectrum {
+    std::vector<double> n;    ///< cycles/m
+    std::vector<double> psd;  ///< G_d(n), m³
+};
+
+/// Detrend (least-squares line), periodic Hann window with power correction, FFT, one-sided PSD.
+/// Parseval: Σ psd·Δn = mean((x·w)²) / mean(w²) for the detrended profile x.
+Spectrum displacement_psd(const double* z, std::size_t count, double ds);
+
+struct Roughness {
+    std::optional<char> iso_class;  ///< 'A'..'H'; nullopt when the data do not support a class
+    double gd_n0 = 0.0;             ///< m³, G_d(n0) of the w = 2 fit
+    double gd_n0_free = 0.0;        ///< m³, G_d(n0) of the free-waviness fit
+    double waviness = 0.0;          ///< w of the free fit
+    double band_lo = 0.0, band_hi = 0.0;  ///< cycles/m, band actually used (0, 0 when none)
+    Spectrum spectrum;
+    std::vector<double> octave_centers;   ///< cycles/m
+    std::vector<double> octave_gd;        ///< m³, mean G_d in each ISO 8608 octave band
+    std::string reason;                   ///< empty when classified
+    double confidence = 0.0;              ///< probability that the class is right, given the fit's spread
+    std::vector<double> noise_psd;        ///< m³, expected PSD of the bin errors on the grid n; empty: unknown
+    std::optional<double> noise_floor;    ///< m³, mean of noise_psd over the analysis band
+    std::optional<double> backed_fraction;  ///< bins of the stretch that hold points; nullopt: unknown
+    std::string band_limit;               ///< what set the band's upper edge: requested, nyquist, sampling, noise
+    Iri iri;                              ///< International Roughness Index of the same profile (§6)
+};
+
+/// ISO 8608 class of G_d(n0) in m³ (limits at the geometric midpoints; a limit belongs to the rougher class).
+char iso_class(double gd_n0_m3);
+
+/// Steps 6–9 of §4 on a spectrum of a stretch `length_m` long; with `support` (and cfg.noise_aware) the band
+/// and fit of docs/noise-aware-roughness.md.
+Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg,
+                            const StretchSupport* support = nullptr);
+
+/// The whole of §4 on a profile with NaN for missing bins (no point statistics: not noise-aware).
+Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg);
+
+/// The whole of §4 on a profile, noise-aware from its count and spread.
+Roughness analyze_roughness(const Profile& profile, const RoughnessConfig& cfg);
+
+/// Both wheels over the longest stretch valid in both, PSDs averaged (not noise-aware).
+Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
+                            const RoughnessConfig& cfg);
+
+/// Both wheels, noise-aware with the mean of the two profiles' support.
+Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg);
+
+/// Probability that the true G_d(n0) lies in iso_class(gd_n0) for a normal error of ln G_d(n0) of this variance.
+double class_confidence(double gd_n0_m3, double log_variance);
+
+/// Half-open [first, last) of the longest run of finite values (the first on ties).
+std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z);
+
+}  // namespace roadpreview

@@ -1,0 +1,259 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/core/config.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+// Type errors then name the offending field (/track_width); the setting is part of nlohmann's ABI tag.
+#define JSON_DIAGNOSTICS 1
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+namespace roadpreview {
+
+using nlohmann::json;
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
+                                                min_cycles, min_band_points, noise_aware, min_resolved_fraction)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
+                                                min_cluster_points, max_cluster_points, ground_search_m,
+                                                safety_margin_m, min_height_m)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m)
+
+const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
+
+void to_json(json& j, const GroundMethod& m) { j = to_string(m); }
+void from_json(const json& j, GroundMethod& m) {
+    const auto name = j.get<std::string>();
+    if (name == "pca") {
+        m = GroundMethod::Pca;
+    } else if (name == "ransac") {
+        m = GroundMethod::Ransac;
+    } else {
+        throw std::invalid_argument("ground.method must be \"pca\" or \"ransac\", got \"" + name + "\"");
+    }
+}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_m, roi_x_max_m, roi_y_abs_max_m,
+                                                pca_iterations, pca_threshold_m, ransac_distance_m,
+                                                ransac_max_tilt_deg, ransac_max_iterations, ransac_seed)
+
+const char* to_string(FusionMethod method) {
+    switch (method) {
+        case FusionMethod::None: return "none";
+        case FusionMethod::Ema: return "ema";
+        case FusionMethod::Kalman: return "kalman";
+    }
+    return "?";
+}
+
+void to_json(json& j, const FusionMethod& m) { j = to_string(m); }
+void from_json(const json& j, FusionMethod& m) {
+    const auto name = j.get<std::string>();
+    for (const FusionMethod candidate : {FusionMethod::None, FusionMethod::Ema, FusionMethod::Kalman})
+        if (name == to_string(candidate)) return void(m = candidate);
+    throw std::invalid_argument("fusion.method must be \"none\", \"ema\" or \"kalman\", got \"" + name + "\"");
+}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cell_m, map_length_m, point_noise_m,
+                                                frame_rate_hz, max_time_gap_s, behind_m, align,
+                                                align_tilt_sigma)
+
+void to_json(json& j, const Config& c) {
+    j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
+             {"extrinsics", c.extrinsics ? json(*c.extrinsics) : json(nullptr)},
+             {"track_width", c.track_width},
+             {"tire_width", c.tire_width},
+             {"ground", c.ground},
+             {"path", c.path},
+             {"profile", c.profile},
+             {"roughness", c.roughness},
+             {"obstacles", c.obstacles},
+             {"iri", c.iri},
+             {"fusion", c.fusion}};
+}
+
+void from_json(const json& j, Config& c) {
+    const Config defaults;
+    if (j.contains("sensor_height") && !j["sensor_height"].is_null()) c.sensor_height = j["sensor_height"].get<double>();
+    if (j.contains("extrinsics") && !j["extrinsics"].is_null()) c.extrinsics = j["extrinsics"].get<Extrinsics>();
+    c.track_width = j.value("track_width", defaults.track_width);
+    c.tire_width = j.value("tire_width", defaults.tire_width);
+    c.ground = j.value("ground", defaults.ground);
+    c.path = j.value("path", defaults.path);
+    c.profile = j.value("profile", defaults.profile);
+    c.roughness = j.value("roughness", defaults.roughness);
+    c.obstacles = j.value("obstacles", defaults.obstacles);
+    c.iri = j.value("iri", defaults.iri);
+    c.fusion = j.value("fusion", defaults.fusion);
+}
+
+namespace {
+
+// Unknown keys are almost always typos; the defaults' own JSON is the list of known ones.
+void reject_unknown_keys(const json& given, const json& known, const std::string& where) {
+    if (!given.is_object()) throw std::invalid_argument(where + " must be a JSON object");
+    for (const auto& [key, value] : given.items()) {
+        if (!known.contains(key)) throw std::invalid_argument("unknown config field " + where + "." + key);
+        if (value.is_object() && known[key].is_object()) reject_unknown_keys(value, known[key], where + "." + key);
+    }
+}
+
+void require(bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("invalid config: " + what);
+}
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+}  // namespace
+
+void validate(const Config& c) {
+    require(!(c.sensor_height && c.extrinsics), "set sensor_height or extrinsics, not both");
+    if (c.sensor_height) require(std::isfinite(*c.sensor_height), "sensor_height must be finite");
+    if (c.extrinsics) {
+        const Extrinsics& e = *c.extrinsics;
+        for (double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad})
+            require(std::isfinite(v), "extrinsics must be finite");
+    }
+    require(positive(c.track_width), "track_width must be > 0 m");
+    require(positive(c.tire_width), "tire_width must be > 0 m");
+    require(c.tire_width < c.track_width, "tire_width must be smaller than track_width");
+
+    const GroundConfig& g = c.ground;
+    require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
+            "ground.roi_x_min_m must be < ground.roi_x_max_m");
+    require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
+    require(g.pca_iterations >= 1, "ground.pca_iterations must be >= 1");
+    require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
+    require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
+    require(positive(g.ransac_max_tilt_deg) && g.ransac_max_tilt_deg < 90.0,
+            "ground.ransac_max_tilt_deg must be in (0, 90)");
+    require(g.ransac_max_iterations >= 1, "ground.ransac_max_iterations must be >= 1");
+
+    require(positive(c.path.straight_radius_m), "path.straight_radius_m must be > 0");
+    require(std::isfinite(c.path.stopped_speed_mps) && c.path.stopped_speed_mps >= 0.0,
+            "path.stopped_speed_mps must be >= 0");
+
+    const ProfileConfig& p = c.profile;
+    require(positive(p.ds_m), "profile.ds_m must be > 0");
+    require(positive(p.preview_length_m) && p.preview_length_m >= p.ds_m,
+            "profile.preview_length_m must be >= profile.ds_m");
+    require(p.preview_length_m / p.ds_m <= 1e6, "profile.preview_length_m / profile.ds_m must be <= 1e6 bins");
+    require(std::isfinite(p.max_gap_m) && p.max_gap_m >= 0.0, "profile.max_gap_m must be >= 0");
+
+    const RoughnessConfig& r = c.roughness;
+    require(positive(r.band_min_cpm) && std::isfinite(r.band_max_cpm) && r.band_min_cpm < r.band_max_cpm,
+            "roughness.band_min_cpm must be > 0 and < roughness.band_max_cpm");
+    require(positive(r.min_length_m), "roughness.min_length_m must be > 0");
+    require(std::isfinite(r.min_cycles) && r.min_cycles >= 1.0, "roughness.min_cycles must be >= 1");
+    require(r.min_band_points >= 2, "roughness.min_band_points must be >= 2");
+
+    const ObstaclesConfig& o = c.obstacles;
+    require(std::isfinite(o.voxel_m) && (o.voxel_m == 0.0 || o.voxel_m >= 0.01),
+            "obstacles.voxel_m must be 0 (no voxels) or >= 0.01");
+    require(positive(o.cluster_tolerance_m), "obstacles.cluster_tolerance_m must be > 0");
+    require(o.min_cluster_points >= 1, "obstacles.min_cluster_points must be >= 1");
+    require(o.max_cluster_points >= o.min_cluster_points,
+            "obstacles.max_cluster_points must be >= obstacles.min_cluster_points");
+    require(std::isfinite(o.safety_margin_m) && o.safety_margin_m >= 0.0, "obstacles.safety_margin_m must be >= 0");
+    require(std::isfinite(o.ground_search_m) && o.ground_search_m >= 0.0, "obstacles.ground_search_m must be >= 0");
+    require(std::isfinite(o.min_height_m), "obstacles.min_height_m must be finite");
+
+    require(std::isfinite(r.min_resolved_fraction) && r.min_resolved_fraction > 0.0 && r.min_resolved_fraction <= 1.0,
+            "roughness.min_resolved_fraction must be in (0, 1]");
+
+    require(std::isfinite(c.iri.min_length_m) && c.iri.min_length_m >= 0.0, "iri.min_length_m must be >= 0");
+
+    const FusionConfig& f = c.fusion;
+    require(std::isfinite(f.alpha) && f.alpha > 0.0 && f.alpha <= 1.0, "fusion.alpha must be in (0, 1]");
+    require(std::isfinite(f.cell_m) && f.cell_m >= 0.01, "fusion.cell_m must be >= 0.01");
+    require(std::isfinite(f.map_length_m) && f.map_length_m >= 2.0 * (p.preview_length_m + f.behind_m) &&
+                f.map_length_m / f.cell_m <= 4000.0,
+            "fusion.map_length_m must be >= 2 x (profile.preview_length_m + fusion.behind_m) and <= 4000 cells");
+    require(positive(f.point_noise_m), "fusion.point_noise_m must be > 0");
+    require(positive(f.frame_rate_hz), "fusion.frame_rate_hz must be > 0");
+    require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
+    require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
+    require(positive(f.align_tilt_sigma), "fusion.align_tilt_sigma must be > 0");
+}
+
+Extrinsics effective_extrinsics(const Config& c) {
+    if (c.extrinsics) return *c.extrinsics;
+    Extrinsics e;
+    if (c.sensor_height) e.z_m = *c.sensor_height;
+    return e;
+}
+
+Config config_from_json(const std::string& text, const std::string& source) {
+    try {
+        const json j = json::parse(text);
+        Config known;
+        known.extrinsics = Extrinsics{};  // so the nested extrinsics keys are known too
+        reject_unknown_keys(j, json(known), "config");
+        Config cfg = j.get<Config>();
+        validate(cfg);
+        return cfg;
+    } catch (const json::exception& e) {
+        throw std::invalid_argument(source + ": " + e.what());
+    } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(source + ": " + e.what());
+    }
+}
+
+std::string config_to_json(const Config& cfg) { return json(cfg).dump(); }
+
+namespace {
+
+// YAML scalars carry no type; read them as JSON would (bool, integer, number), quoted ones as strings.
+json yaml_to_json(const YAML::Node& node) {
+    switch (node.Type()) {
+        case YAML::NodeType::Sequence: {
+            json out = json::array();
+            for (const auto& item : node) out.push_back(yaml_to_json(item));
+            return out;
+        }
+        case YAML::NodeType::Map: {
+            json out = json::object();
+            for (const auto& kv : node) out[kv.first.as<std::string>()] = yaml_to_json(kv.second);
+            return out;
+        }
+        case YAML::NodeType::Scalar: {
+            if (node.Tag() == "!") return node.Scalar();
+            bool b;
+            long long i;
+            double d;
+            if (YAML::convert<bool>::decode(node, b)) return b;
+            if (YAML::convert<long long>::decode(node, i)) return i;
+            if (YAML::convert<double>::decode(node, d)) return d;
+            return node.Scalar();
+        }
+        default:
+            return nullptr;
+    }
+}
+
+bool is_yaml(const std::string& path) {
+    const auto dot = path.find_last_of('.');
+    const std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+    return ext == ".yaml" || ext == ".yml";
+}
+
+}  // namespace
+
+Config config_from_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::invalid_argument(path + ": cannot open config file");
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!is_yaml(path)) return config_from_json(text.str(), path);
+    try {
+        return config_from_json(yaml_to_json(YAML::Load(text.str())).dump(), path);
+    } catch (const YAML::Exception& e) {
+        throw std::invalid_argument(path + ": not valid YAML: " + e.what());
+    }
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,358 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/fusion/fusion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <limits>
+#include <stdexcept>
+
+#include "core/median.hpp"
+#include "roadpreview/roughness/support.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kMedianVarianceFactor = M_PI / 2;  // Var(median of n Gaussians) ≈ (π/2)σ²/n
+constexpr double kMinVariance = 1e-12;              // m²; keeps a noise-free cell's Kalman gain defined
+constexpr std::size_t kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
+constexpr double kMadToSigma = 1.4826;        // σ of a Gaussian from its median absolute deviation
+constexpr double kOutlierSigmas = 3.0;        // cells farther than this from the alignment plane are outliers
+constexpr double kPoolMaxSpread = 3.0;        // × the median spread: cells spread wider stay out of the pool
+
+std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_t>(std::floor(v / cell)); }
+
+std::int64_t wrap(std::int64_t i, std::int64_t n) { return ((i % n) + n) % n; }
+
+void fuse_cell(MapCell& c, double z, double r, std::int32_t points, std::int32_t frame, const FusionConfig& cfg) {
+    if (c.observations == 0) {
+        c.height = static_cast<float>(z);
+        c.variance = static_cast<float>(r);
+    } else if (cfg.method == FusionMethod::Ema) {
+        const double a = cfg.alpha, h = c.height, p = c.variance;
+        c.height = static_cast<float>(a * z + (1.0 - a) * h);
+        c.variance = static_cast<float>(a * a * r + (1.0 - a) * (1.0 - a) * p);
+    } else {  // Kalman: a static height observed with variance r
+        const double p = c.variance, gain = p / (p + r);
+        c.height = static_cast<float>(c.height + gain * (z - c.height));
+        c.variance = static_cast<float>(p * r / (p + r));
+    }
+    ++c.observations;
+    c.points += points;
+    c.last_update = frame;
+}
+
+// The spread that makes the roughness stage's bin variance ((π/2)·spread²/count, or spread²/2 for two points)
+// equal the map's variance v of the bin; one point: unknown (the stage pools the others).
+double spread_for_variance(double v, std::int32_t count) {
+    if (count >= 3) return std::sqrt(v * count / kMedianVarianceFactor);
+    if (count == 2) return std::sqrt(2.0 * v);
+    return kNaN;
+}
+
+}  // namespace
+
+Pose2 integrate_motion(const Pose2& p, double v, double w, double dt) {
+    const double turn = w * dt;
+    if (turn == 0.0) return {p.x_m + v * dt * std::cos(p.yaw_rad), p.y_m + v * dt * std::sin(p.yaw_rad), p.yaw_rad};
+    const double radius = v / w, yaw = p.yaw_rad + turn;
+    return {p.x_m + radius * (std::sin(yaw) - std::sin(p.yaw_rad)),
+            p.y_m + radius * (std::cos(p.yaw_rad) - std::cos(yaw)), yaw};
+}
+
+Pose2 pose_from_matrix(const double (&m)[12]) { return {m[3], m[7], std::atan2(m[4], m[0])}; }
+
+std::vector<Pose2> read_kitti_poses(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open poses file");
+    std::vector<Pose2> poses;
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        std::istringstream fields(line);
+        double m[12];
+        int read = 0;
+        while (read < 12 && fields >> m[read] && std::isfinite(m[read])) ++read;
+        std::string rest;
+        if (read != 12 || (fields >> rest))
+            throw std::runtime_error(path + ":" + std::to_string(number) + ": a pose needs 12 finite numbers (3x4 [R|t])");
+        poses.push_back(pose_from_matrix(m));
+    }
+    return poses;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+ElevationMap::ElevationMap(double cell_m, double length_m)
+    : cell_(cell_m), n_(static_cast<std::int64_t>(std::ceil(length_m / cell_m - 1e-9))) {
+    cells_.assign(static_cast<std::size_t>(n_ * n_), MapCell{});
+    i0_ = j0_ = -n_ / 2;
+}
+
+void ElevationMap::clear() { std::fill(cells_.begin(), cells_.end(), MapCell{}); }
+
+void ElevationMap::clear_rows(std::int64_t first, std::int64_t last, bool along_x) {
+    for (std::int64_t g = first; g < last; ++g) {
+        const std::int64_t k = wrap(g, n_);
+        for (std::int64_t o = 0; o < n_; ++o) cells_[static_cast<std::size_t>(along_x ? k * n_ + o : o * n_ + k)] = {};
+    }
+}
+
+void ElevationMap::move_to(double x_m, double y_m) {
+    const std::int64_t i0 = floor_index(x_m, cell_) - n_ / 2, j0 = floor_index(y_m, cell_) - n_ / 2;
+    if (std::abs(i0 - i0_) >= n_ || std::abs(j0 - j0_) >= n_) {
+        clear();
+    } else {  // the rows and columns that enter take the slots of those that leave
+        if (i0 > i0_) clear_rows(i0_ + n_, i0 + n_, true);
+        if (i0 < i0_) clear_rows(i0, i0_, true);
+        if (j0 > j0_) clear_rows(j0_ + n_, j0 + n_, false);
+        if (j0 < j0_) clear_rows(j0, j0_, false);
+    }
+    i0_ = i0;
+    j0_ = j0;
+}
+
+std::int64_t ElevationMap::slot(double x_m, double y_m) const {
+    const std::int64_t i = floor_index(x_m, cell_), j = floor_index(y_m, cell_);
+    if (i < i0_ || i >= i0_ + n_ || j < j0_ || j >= j0_ + n_) return -1;
+    return wrap(i, n_) * n_ + wrap(j, n_);
+}
+
+std::array<double, 2> ElevationMap::centre(std::int64_t slot) const {
+    const std::int64_t i = i0_ + wrap(slot / n_ - i0_, n_), j = j0_ + wrap(slot % n_ - j0_, n_);
+    return {(static_cast<double>(i) + 0.5) * cell_, (static_cast<double>(j) + 0.5) * cell_};
+}
+
+MapCell* ElevationMap::at(double x_m, double y_m) {
+    const std::int64_t k = slot(x_m, y_m);
+    return k < 0 ? nullptr : &cells_[static_cast<std::size_t>(k)];
+}
+
+const MapCell* ElevationMap::at(double x_m, double y_m) const { return const_cast<ElevationMap*>(this)->at(x_m, y_m); }
+
+// ---------------------------------------------------------------------------------------------------------
+TemporalFusion::TemporalFusion(const Config& cfg)
+    : cfg_(cfg), map_(cfg.fusion.cell_m, cfg.fusion.map_length_m) {
+    head_.assign(static_cast<std::size_t>(map_.side() * map_.side()), -1);
+}
+
+void TemporalFusion::reset() {
+    map_.clear();
+    pose_ = {};
+    last_time_.reset();
+    fused_ = 0;
+    started_ = false;
+}
+
+void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status) {
+    status.method = cfg_.fusion.method;
+    double dt = started_ ? 1.0 / cfg_.fusion.frame_rate_hz : 0.0;
+    if (motion.timestamp_s && last_time_) {
+        dt = *motion.timestamp_s - *last_time_;
+        char text[96] = "";
+        if (dt < 0.0) std::snprintf(text, sizeof text, "time went back by %.3f s", -dt);
+        if (dt > cfg_.fusion.max_time_gap_s) std::snprintf(text, sizeof text, "time gap of %.3f s", dt);
+        if (text[0]) {
+            reset();
+            status.reset = text;
+            dt = 0.0;
+        }
+    }
+    if (motion.timestamp_s) last_time_ = motion.timestamp_s;
+    if (motion.pose) {
+        pose_ = *motion.pose;
+    } else if (started_) {
+        pose_ = integrate_motion(pose_, speed_mps, yaw_rate_rps, dt);
+    }
+    started_ = true;
+    ++frame_;
+    map_.move_to(pose_.x_m, pose_.y_m);
+    status.pose = pose_;
+    status.frames = fused_;
+}
+
+void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L) {
+    const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
+    next_.assign(static_cast<std::size_t>(points.rows()), -1);
+    std::vector<std::int64_t> touched;
+    z_.resize(static_cast<std::size_t>(points.rows()));
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
+        if (!mask[static_cast<std::size_t>(i)]) continue;
+        const auto [x, y, z] = L.apply(points(i, 0), points(i, 1), points(i, 2));
+        const std::int64_t k = map_.slot(pose_.x_m + cos_yaw * x - sin_yaw * y, pose_.y_m + sin_yaw * x + cos_yaw * y);
+        if (k < 0) continue;
+        auto& head = head_[static_cast<std::size_t>(k)];
+        if (head < 0) touched.push_back(k);
+        next_[static_cast<std::size_t>(i)] = head;
+        head = static_cast<std::int32_t>(i);
+        z_[static_cast<std::size_t>(i)] = z;
+    }
+    // Per cell: the median of its points, their count and spread; then each median's variance as the
+    // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance, pooled
+    // without the cells spread over kPoolMaxSpread × the median spread — the foot of a wall or a car counts
+    // as ground up to 0.2 m high and says nothing of the road's noise).
+    const std::size_t cells = touched.size();
+    std::vector<double> medians(cells), spreads(cells), cell_z;
+    std::vector<std::int32_t> counts(cells);
+    for (std::size_t c = 0; c < cells; ++c) {
+        cell_z.clear();
+        auto& head = head_[static_cast<std::size_t>(touched[c])];
+        for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) cell_z.push_back(z_[static_cast<std::size_t>(i)]);
+        head = -1;
+        counts[c] = static_cast<std::int32_t>(cell_z.size());
+        spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
+        medians[c] = median(cell_z.begin(), cell_z.end());
+    }
+    cell_z.clear();  // now the spreads of the cells that have one
+    for (std::size_t c = 0; c < cells; ++c)
+        if (counts[c] >= 2) cell_z.push_back(spreads[c]);
+    const double typical = cell_z.empty() ? kNaN : median(cell_z.begin(), cell_z.end());
+    const auto pooled = backed_variances(counts.data(), spreads.data(), cells, kPoolMaxSpread * typical);
+    const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
+    std::vector<double> variances(cells);
+    for (std::size_t c = 0; c < cells; ++c) variances[c] = std::max(pooled ? (*pooled)[c] : single_point, kMinVariance);
+    if (cfg_.fusion.align) align(touched, variances, medians);
+    for (std::size_t c = 0; c < cells; ++c)
+        fuse_cell(map_.cell(touched[c]), medians[c], variances[c], counts[c], frame_, cfg_.fusion);
+    ++fused_;
+}
+
+void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
+                           std::vector<double>& medians) const {
+    struct Shared {
+        std::size_t index;
+        double difference, variance;
+        double residual = 0.0;  // from the plane of the first fit
+        bool inlier = true;
+    };
+    std::vector<Eigen::Vector3d> v(slots.size());  // (1, x, y) about the vehicle, for a well-conditioned fit
+    std::vector<Shared> shared;
+    shared.reserve(slots.size());
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        const auto [x, y] = map_.centre(slots[c]);
+        v[c] = Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
+        const MapCell& cell = map_.cell(slots[c]);
+        if (cell.observations > 0)
+            shared.push_back({c, medians[c] - cell.height,
+                              variances[c] + std::max<double>(cell.variance, kMinVariance)});
+    }
+    if (shared.size() < kMinAlignCells) return;
+    // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the
+    // slopes: a few shared cells along one ring fix the offset but must not tilt the whole frame.
+    const double prior = 1.0 / (cfg_.fusion.align_tilt_sigma * cfg_.fusion.align_tilt_sigma);
+    auto fit = [&] {
+        Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
+        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+        for (const Shared& s : shared) {
+            if (!s.inlier) continue;
+            const Eigen::Vector3d weighted = v[s.index] / s.variance;
+            normal.noalias() += weighted * v[s.index].transpose();
+            rhs += weighted * s.difference;
+        }
+        return Eigen::Vector3d(normal.ldlt().solve(rhs));
+    };
+    Eigen::Vector3d plane = fit();
+    // Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and
+    // their disagreement joins their own variance.
+    std::vector<double> deviations;
+    deviations.reserve(shared.size());
+    for (Shared& s : shared) {
+        s.residual = s.difference - plane.dot(v[s.index]);
+        deviations.push_back(std::abs(s.residual));
+    }
+    const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
+    std::size_t inliers = 0;
+    for (Shared& s : shared) {
+        s.inlier = std::abs(s.residual) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
+        if (!s.inlier) variances[s.index] += s.residual * s.residual;
+        inliers += s.inlier;
+    }
+    if (inliers >= kMinAlignCells && inliers < shared.size()) plane = fit();
+    // Disagreement of the rest beyond their variances (seams between frames, per-beam calibration offsets)
+    // is noise the variances missed. It grows with range like an angular error, so it is modelled as
+    // a·d² (d the cell's distance from the vehicle) and a·d² joins every cell's variance.
+    double excess = 0.0, squares = 0.0;
+    for (const Shared& s : shared) {
+        if (!s.inlier) continue;
+        const double residual = s.difference - plane.dot(v[s.index]);
+        excess += residual * residual - s.variance;
+        squares += v[s.index].tail<2>().squaredNorm();
+    }
+    const double per_square_metre = squares > 0.0 ? std::max(0.0, excess) / squares : 0.0;
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+        medians[c] -= plane.dot(v[c]);
+        variances[c] += per_square_metre * v[c].tail<2>().squaredNorm();
+    }
+}
+
+Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
+                               std::size_t& ahead, std::size_t& ahead_now) const {
+    const ProfileConfig& pc = cfg_.profile;
+    const std::size_t bins_ahead = bin_count(pc);
+    const auto behind = static_cast<std::size_t>(std::ceil(cfg_.fusion.behind_m / pc.ds_m - 1e-9));
+    const std::size_t bins = behind + bins_ahead;
+    const int lanes = std::max(1, static_cast<int>(std::lround(cfg_.tire_width / map_.cell_m())));
+    const double c = std::cos(pose_.yaw_rad), sn = std::sin(pose_.yaw_rad);
+    const double y_w = paths.wheel_y(w), r_w = paths.radius(w);
+
+    Profile p;
+    p.ds = pc.ds_m;
+    p.s0 = (0.5 - static_cast<double>(behind)) * pc.ds_m;
+    p.s.resize(bins);
+    p.z.assign(bins, kNaN);
+    p.count.assign(bins, 0);
+    p.spread.assign(bins, kNaN);
+    p.blocked.assign(bins, 0);
+    if (blocked) std::copy(blocked->begin(), blocked->end(), p.blocked.begin() + static_cast<std::ptrdiff_t>(behind));
+    for (std::size_t k = 0; k < bins; ++k) {
+        // (k + ½ − B)·ds, as method.md writes it (and the reference computes it): a pose half a cell off the
+        // grid then puts both on the same side of every cell boundary.
+        const double s = (static_cast<double>(k) + 0.5 - static_cast<double>(behind)) * pc.ds_m;
+        p.s[k] = s;
+        double sum = 0.0, variance = 0.0;
+        int valid = 0;
+        bool now = false;
+        for (int lane = 0; lane < lanes; ++lane) {  // lanes across the tire, one cell apart
+            const double offset = (lane + 0.5) * cfg_.tire_width / lanes - 0.5 * cfg_.tire_width;
+            double x, y;
+            if (paths.status == PathStatus::Straight) {
+                x = paths.direction * s, y = y_w + offset;
+            } else {  // rotate the wheel about the ICR by s / r_w in the sense of rotation; offset radially
+                if (r_w <= 0.0) continue;
+                const double phi = paths.rotation * s / r_w, u = (y_w - paths.icr_y) / r_w, r = r_w + offset;
+                x = -std::sin(phi) * u * r, y = paths.icr_y + std::cos(phi) * u * r;
+            }
+            const MapCell* cell = map_.at(pose_.x_m + c * x - sn * y, pose_.y_m + sn * x + c * y);
+            if (!cell || cell->observations == 0) continue;
+            sum += cell->height, variance += cell->variance, ++valid;
+            p.count[k] += cell->points;
+            now = now || cell->last_update == frame_;
+        }
+        if (valid == 0) continue;
+        if (k >= behind) ahead += 1, ahead_now += now ? 1 : 0;
+        if (p.blocked[k]) continue;  // an obstacle's points are not road
+        p.z[k] = sum / valid;
+        p.spread[k] = spread_for_variance(variance / (valid * valid), p.count[k]);
+    }
+    fill_gaps(p.z, pc.ds_m, pc.max_gap_m, &p.blocked);
+    return p;
+}
+
+WheelProfiles TemporalFusion::profiles(const WheelPaths& paths, const BlockedBins* blocked,
+                                       FusionStatus& status) const {
+    WheelProfiles out;
+    std::size_t ahead = 0, ahead_now = 0;
+    out.left = sample(paths, Wheel::Left, blocked ? &blocked->left : nullptr, ahead, ahead_now);
+    out.right = sample(paths, Wheel::Right, blocked ? &blocked->right : nullptr, ahead, ahead_now);
+    const double total = 2.0 * static_cast<double>(bin_count(cfg_.profile));
+    status.coverage = static_cast<double>(ahead) / total;
+    status.frame_coverage = static_cast<double>(ahead_now) / total;
+    status.frames = fused_;
+    return out;
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,346 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/obstacles/obstacles.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+
+#include <pcl/segmentation/extract_clusters.h>
+
+#include "core/column_grid.hpp"
+#include "obstacles/grid_radius_search.hpp"
+#include "core/median.hpp"
+#include "obstacles/obstacles_pcl.hpp"
+#include "roadpreview/profile/profile.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using Groups = std::vector<pcl::Indices>;  // clusters as ascending point indices
+
+// PCL's Euclidean cluster extraction of the cloud's points (radius searches in a grid of columns).
+std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, double tolerance) {
+    std::vector<pcl::PointIndices> clusters;
+    if (cloud->empty()) return clusters;
+    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+    extraction.setSearchMethod(pcl::make_shared<GridRadiusSearch>(tolerance));
+    extraction.setClusterTolerance(tolerance);
+    extraction.setMinClusterSize(1);  // the size limits count points, applied after voxels are expanded
+    extraction.setMaxClusterSize(std::numeric_limits<pcl::uindex_t>::max());
+    extraction.setInputCloud(cloud);
+    extraction.extract(clusters);
+    return clusters;
+}
+
+// What is clustered: the centroid of each occupied voxel (each candidate itself when the voxel edge is 0),
+// and the representative of each candidate (by its position in the candidate list).
+struct Representatives {
+    Cloud::Ptr cloud = pcl::make_shared<Cloud>();
+    std::vector<std::int32_t> of;
+};
+
+using Voxel = std::array<std::int64_t, 3>;  // voxel indices in x, y, z
+
+// floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index; the integer
+// conversion and its correction below zero spare a call of std::floor per coordinate.
+std::int64_t voxel_index(float v, double edge) {
+    const double q = std::clamp(static_cast<double>(v) / edge, -1e15, 1e15);
+    const auto truncated = static_cast<std::int64_t>(q);
+    return truncated - (q < static_cast<double>(truncated) ? 1 : 0);
+}
+
+// Stable counting sort of `order` by key(k) in [0, buckets).
+template <class Key>
+void counting_sort(std::vector<std::int32_t>& order, std::size_t buckets, Key key) {
+    std::vector<std::uint32_t> next(buckets + 1, 0);
+    for (const auto k : order) ++next[key(k) + 1];
+    for (std::size_t b = 0; b < buckets; ++b) next[b + 1] += next[b];
+    std::vector<std::int32_t> sorted(order.size());
+    for (const auto k : order) sorted[next[key(k)]++] = k;
+    order = std::move(sorted);
+}
+
+// Positions 0 … n−1 ordered by voxel, each voxel's ascending: counting sorts by z, then by the (x, y) column
+// when the spans are small (the ROI bounds x and y); one comparison sort otherwise.
+std::vector<std::int32_t> voxel_order(const std::vector<Voxel>& voxel) {
+    std::vector<std::int32_t> order(voxel.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<std::int32_t>(k);
+    Voxel lo = voxel.front(), hi = voxel.front();
+    for (const Voxel& v : voxel)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+    const auto span = [&](int a) { return static_cast<std::uint64_t>(hi[a] - lo[a]) + 1; };
+    const std::uint64_t most = 4 * voxel.size() + 4096;
+    if (span(2) <= most && span(0) <= most && span(1) <= most / span(0)) {
+        const auto offset = [&](std::int32_t k, int a) { return static_cast<std::size_t>(voxel[static_cast<std::size_t>(k)][a] - lo[a]); };
+        counting_sort(order, span(2), [&](std::int32_t k) { return offset(k, 2); });
+        counting_sort(order, span(0) * span(1), [&](std::int32_t k) { return offset(k, 0) * span(1) + offset(k, 1); });
+    } else {
+        std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+            return std::tie(voxel[static_cast<std::size_t>(a)], a) < std::tie(voxel[static_cast<std::size_t>(b)], b);
+        });
+    }
+    return order;
+}
+
+// The voxel centroids, each the mean of its candidates in ascending order (double precision).
+Representatives voxel_centroids(PointsView pts, const pcl::Indices& candidates, double edge) {
+    Representatives r;
+    if (candidates.empty()) return r;
+    std::vector<Voxel> voxel(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        for (int a = 0; a < 3; ++a) voxel[k][a] = voxel_index(pts(candidates[k], a), edge);
+    const std::vector<std::int32_t> order = voxel_order(voxel);
+    r.of.resize(candidates.size());
+    for (std::size_t first = 0, last = 0; first < order.size(); first = last) {
+        const Voxel& v = voxel[static_cast<std::size_t>(order[first])];
+        Vec3 sum{};
+        for (last = first; last < order.size() && voxel[static_cast<std::size_t>(order[last])] == v; ++last) {
+            const auto k = static_cast<std::size_t>(order[last]);
+            for (int a = 0; a < 3; ++a) sum[a] += pts(candidates[k], a);
+            r.of[k] = static_cast<std::int32_t>(r.cloud->size());
+        }
+        const double n = static_cast<double>(last - first);
+        r.cloud->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
+                                         static_cast<float>(sum[2] / n)));
+    }
+    return r;
+}
+
+Representatives representatives(PointsView pts, const pcl::Indices& candidates, double voxel_edge) {
+    if (voxel_edge > 0.0) return voxel_centroids(pts, candidates, voxel_edge);
+    Representatives r;
+    for (const auto i : candidates) {
+        r.of.push_back(static_cast<std::int32_t>(r.cloud->size()));
+        r.cloud->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
+    }
+    return r;
+}
+
+// Cluster id per candidate (−1: none): PCL's Euclidean clusters of the representatives, each candidate joining
+// its representative's; clusters outside the size limits (in points) dropped, the rest ranked nearest first
+// (smallest x of their points), ties by their lowest point index.
+std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+    const Representatives reps = representatives(pts, candidates, cfg.voxel_m);
+    const std::vector<pcl::PointIndices> components = euclidean_clusters(reps.cloud, cfg.cluster_tolerance_m);
+    std::vector<std::int32_t> component_of(reps.cloud->size());
+    for (std::size_t c = 0; c < components.size(); ++c)
+        for (const auto r : components[c].indices) component_of[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(c);
+    struct Extent {
+        std::int64_t count = 0;
+        float x_min = std::numeric_limits<float>::infinity();
+        pcl::index_t first = std::numeric_limits<pcl::index_t>::max();
+        bool operator<(const Extent& o) const { return std::tie(x_min, first) < std::tie(o.x_min, o.first); }
+    };
+    std::vector<Extent> extent(components.size());
+    std::vector<std::int32_t> label(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        label[k] = component_of[static_cast<std::size_t>(reps.of[k])];
+        Extent& e = extent[static_cast<std::size_t>(label[k])];
+        ++e.count;
+        e.x_min = std::min(e.x_min, pts(candidates[k], 0));
+        e.first = std::min(e.first, candidates[k]);
+    }
+    std::vector<std::int32_t> kept;
+    for (std::size_t c = 0; c < extent.size(); ++c)
+        if (extent[c].count >= cfg.min_cluster_points && extent[c].count <= cfg.max_cluster_points)
+            kept.push_back(static_cast<std::int32_t>(c));
+    std::sort(kept.begin(), kept.end(), [&](std::int32_t a, std::int32_t b) { return extent[a] < extent[b]; });
+    std::vector<std::int32_t> id(components.size(), -1);
+    for (std::size_t rank = 0; rank < kept.size(); ++rank) id[static_cast<std::size_t>(kept[rank])] = static_cast<std::int32_t>(rank);
+    for (auto& l : label) l = id[static_cast<std::size_t>(l)];
+    return label;
+}
+
+// Cluster id per point (−1: none) of the `candidates` among `points` points.
+std::vector<std::int32_t> point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+    std::vector<std::int32_t> label(static_cast<std::size_t>(pts.rows()), -1);
+    const std::vector<std::int32_t> of_candidate = candidate_labels(pts, candidates, cfg);
+    for (std::size_t k = 0; k < candidates.size(); ++k) label[static_cast<std::size_t>(candidates[k])] = of_candidate[k];
+    return label;
+}
+
+// Each cluster's points, ascending.
+Groups groups_of(const std::vector<std::int32_t>& label) {
+    Groups groups;
+    for (std::size_t i = 0; i < label.size(); ++i) {
+        if (label[i] < 0) continue;
+        if (static_cast<std::size_t>(label[i]) >= groups.size()) groups.resize(static_cast<std::size_t>(label[i]) + 1);
+        groups[static_cast<std::size_t>(label[i])].push_back(static_cast<pcl::index_t>(i));
+    }
+    return groups;
+}
+
+// The box about the vertical axis along the principal horizontal directions: yaw = ½·atan2(2c_xy, c_xx − c_yy).
+OrientedBox oriented_box(PointsView pts, const pcl::Indices& members, const Vec3& mean) {
+    double cxx = 0.0, cyy = 0.0, cxy = 0.0;
+    for (const auto i : members) {
+        const double dx = pts(i, 0) - mean[0], dy = pts(i, 1) - mean[1];
+        cxx += dx * dx, cyy += dy * dy, cxy += dx * dy;
+    }
+    OrientedBox box;
+    box.yaw = 0.5 * std::atan2(2.0 * cxy + 0.0, cxx - cyy);  // + 0.0: −0 would give −π/2
+    const double c = std::cos(box.yaw), s = std::sin(box.yaw);
+    double u_lo = kInf, u_hi = -kInf, v_lo = kInf, v_hi = -kInf, z_lo = kInf, z_hi = -kInf;
+    for (const auto i : members) {
+        const double dx = pts(i, 0) - mean[0], dy = pts(i, 1) - mean[1], z = pts(i, 2);
+        const double u = c * dx + s * dy, v = -s * dx + c * dy;
+        u_lo = std::min(u_lo, u), u_hi = std::max(u_hi, u);
+        v_lo = std::min(v_lo, v), v_hi = std::max(v_hi, v);
+        z_lo = std::min(z_lo, z), z_hi = std::max(z_hi, z);
+    }
+    const double u_mid = 0.5 * (u_lo + u_hi), v_mid = 0.5 * (v_lo + v_hi);
+    box.center = {mean[0] + c * u_mid - s * v_mid, mean[1] + s * u_mid + c * v_mid, 0.5 * (z_lo + z_hi)};
+    box.size = {u_hi - u_lo, v_hi - v_lo, z_hi - z_lo};
+    return box;
+}
+
+// Count, centroid, axis-aligned and oriented boxes of one group.
+Cluster describe(PointsView pts, const pcl::Indices& members) {
+    Cluster c;
+    c.count = static_cast<std::int32_t>(members.size());
+    c.aabb_min = {kInf, kInf, kInf};
+    c.aabb_max = {-kInf, -kInf, -kInf};
+    Vec3 sum{};
+    for (const auto i : members) {
+        for (int a = 0; a < 3; ++a) {
+            const double v = pts(i, a);
+            sum[a] += v;
+            c.aabb_min[a] = std::min(c.aabb_min[a], v);
+            c.aabb_max[a] = std::max(c.aabb_max[a], v);
+        }
+    }
+    for (int a = 0; a < 3; ++a) c.centroid[a] = sum[a] / static_cast<double>(members.size());
+    c.obb = oriented_box(pts, members, c.centroid);
+    return c;
+}
+
+// The ground points in columns 1 m wide, to find those around a cluster in O(nearby).
+ColumnGrid ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground) {
+    std::vector<ColumnGrid::Point> points;
+    for (Eigen::Index i = 0; i < pts.rows(); ++i)
+        if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+    return ColumnGrid(std::move(points), 1.0);
+}
+
+// Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
+double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach) {
+    const double x_lo = c.aabb_min[0] - reach, x_hi = c.aabb_max[0] + reach;
+    const double y_lo = c.aabb_min[1] - reach, y_hi = c.aabb_max[1] + reach;
+    std::vector<double> h;
+    ground.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](const ColumnGrid::Point& q) {
+        if (q.x >= x_lo && q.x <= x_hi && q.y >= y_lo && q.y <= y_hi) h.push_back(height_above(plane, q.x, q.y, q.z));
+    });
+    return h.empty() ? 0.0 : median(h.begin(), h.end());
+}
+
+Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const std::vector<std::uint8_t>& ground,
+                        const Plane& plane, const ObstaclesConfig& cfg) {
+    const Groups groups = groups_of(label);
+    Clustering out;
+    out.label = std::move(label);
+    const ColumnGrid ground_grid = ground_columns(pts, ground);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        Cluster c = describe(pts, groups[g]);
+        c.id = static_cast<std::int32_t>(g);
+        c.ground_offset = local_ground(ground_grid, plane, c, cfg.ground_search_m);
+        double top = -kInf;
+        for (const auto i : groups[g]) top = std::max(top, height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2)));
+        c.height = top - c.ground_offset;
+        out.clusters.push_back(c);
+    }
+    return out;
+}
+
+}  // namespace
+
+Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
+                          const ObstaclesConfig& cfg) {
+    pcl::Indices candidates;
+    for (std::size_t i = 0; i < ground_mask.size(); ++i)
+        if (!ground_mask[i]) candidates.push_back(static_cast<pcl::index_t>(i));
+    return describe_all(roi.view(), point_labels(roi.view(), candidates, cfg), ground_mask, plane, cfg);
+}
+
+Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
+                          const GroundConfig& roi_cfg, const ObstaclesConfig& cfg) {
+    if (ground_mask.size() != static_cast<std::size_t>(points.rows()))
+        throw std::invalid_argument("ground_mask has " + std::to_string(ground_mask.size()) + " entries for " +
+                                    std::to_string(points.rows()) + " points");
+    RoiCloud roi;
+    crop_roi(points, to_rigid_transform(Extrinsics{}), roi_cfg, roi);  // the points are in the base frame already
+    std::vector<std::uint8_t> roi_ground(static_cast<std::size_t>(roi.size()));
+    for (std::size_t i = 0; i < roi_ground.size(); ++i) roi_ground[i] = ground_mask[static_cast<std::size_t>(roi.input_index[i])];
+    Clustering in_roi = find_obstacles(roi, roi_ground, plane, cfg);
+    Clustering out;
+    out.clusters = std::move(in_roi.clusters);
+    out.label.assign(ground_mask.size(), -1);
+    for (std::size_t i = 0; i < in_roi.label.size(); ++i) out.label[static_cast<std::size_t>(roi.input_index[i])] = in_roi.label[i];
+    return out;
+}
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr cluster_representatives(PointsView points, const pcl::Indices& candidates,
+                                                            double voxel_m) {
+    return representatives(points, candidates, voxel_m).cloud;
+}
+
+std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfig& cfg) {
+    pcl::Indices finite;
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (points.row(i).allFinite()) finite.push_back(static_cast<pcl::index_t>(i));
+    return point_labels(points, finite, cfg);
+}
+
+std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
+                                          const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
+                                          double preview_length_m, const ObstaclesConfig& cfg) {
+    if (clustering.label.size() != static_cast<std::size_t>(points.rows()))
+        throw std::invalid_argument("wheel_obstacles: " + std::to_string(clustering.label.size()) + " labels for " +
+                                    std::to_string(points.rows()) + " points");
+    const double corridor = tire_width + 2.0 * cfg.safety_margin_m;
+    std::vector<PathObstacle> spans(clustering.clusters.size(), PathObstacle{0, kInf, -kInf, -kInf});
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const std::int32_t id = clustering.label[static_cast<std::size_t>(i)];
+        if (id < 0) continue;
+        if (static_cast<std::size_t>(id) >= spans.size())
+            throw std::invalid_argument("wheel_obstacles: label " + std::to_string(id) + " names no cluster");
+        const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+        const auto p = L.apply(x, y, z);
+        const auto s = arc_length(paths, w, p[0], p[1], corridor);
+        if (!s || *s >= preview_length_m) continue;
+        PathObstacle& span = spans[static_cast<std::size_t>(id)];
+        span.s_start = std::min(span.s_start, *s);
+        span.s_end = std::max(span.s_end, *s);
+        span.height = std::max(span.height, height_above(plane, x, y, z));
+    }
+    std::vector<PathObstacle> out;
+    for (std::size_t k = 0; k < spans.size(); ++k) {
+        if (spans[k].s_start > spans[k].s_end) continue;  // no point in the corridor
+        const double height = spans[k].height - clustering.clusters[k].ground_offset;
+        if (height < cfg.min_height_m) continue;  // ground the ground fit missed (a rising road, a ramp)
+        out.push_back({static_cast<std::int32_t>(k), spans[k].s_start, spans[k].s_end, height});
+    }
+    std::stable_sort(out.begin(), out.end(), [](const PathObstacle& a, const PathObstacle& b) { return a.s_start < b.s_start; });
+    return out;
+}
+
+std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds,
+                                       double margin_m) {
+    std::vector<std::uint8_t> blocked(bins, 0);
+    if (bins == 0) return blocked;
+    const double last = static_cast<double>(bins - 1);
+    for (const PathObstacle& o : obstacles) {
+        if (!(o.s_start <= o.s_end) || !std::isfinite(o.s_start) || !std::isfinite(o.s_end))
+            throw std::invalid_argument("blocked_bins: an obstacle needs finite s_start <= s_end");
+        // Bin k = [k·ds, (k+1)·ds) overlaps [a, b] for floor(a/ds) ≤ k ≤ floor(b/ds).
+        const auto bin = [&](double s) { return static_cast<std::ptrdiff_t>(std::clamp(std::floor(s / ds), 0.0, last)); };
+        std::fill(blocked.begin() + bin(o.s_start - margin_m), blocked.begin() + bin(o.s_end + margin_m) + 1, 1);
+    }
+    return blocked;
+}
+
+}  // namespace roadpreview

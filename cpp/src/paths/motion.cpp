@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/paths/motion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "roadpreview/core/frames.hpp"
+
+namespace roadpreview {
+namespace {
+
+std::vector<std::string> split_csv(const std::string& line) {
+    std::vector<std::string> cells;
+    std::stringstream in(line);
+    std::string cell;
+    while (std::getline(in, cell, ',')) {
+        const auto first = cell.find_first_not_of(" \t\r");
+        const auto last = cell.find_last_not_of(" \t\r");
+        cells.push_back(first == std::string::npos ? "" : cell.substr(first, last - first + 1));
+    }
+    return cells;
+}
+
+bool skipped(const std::string& line) {
+    const auto first = line.find_first_not_of(" \t\r");
+    return first == std::string::npos || line[first] == '#';
+}
+
+}  // namespace
+
+MotionTable MotionTable::read_csv(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open motion file");
+    const auto fail = [&](int line, const std::string& what) {
+        throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
+    };
+    MotionTable table;
+    table.source_ = path;
+    std::string line;
+    int number = 0;
+    std::vector<int> column;  // index of t, speed, yaw_rate in a row
+    while (std::getline(in, line)) {
+        ++number;
+        if (skipped(line)) continue;
+        const auto cells = split_csv(line);
+        if (column.empty()) {
+            for (const char* name : {"t", "speed", "yaw_rate"}) {
+                const auto it = std::find(cells.begin(), cells.end(), name);
+                if (it == cells.end()) fail(number, std::string("the header has no column '") + name + "' (need t,speed,yaw_rate)");
+                column.push_back(static_cast<int>(it - cells.begin()));
+            }
+            continue;
+        }
+        double v[3];
+        for (int k = 0; k < 3; ++k) {
+            const auto c = static_cast<std::size_t>(column[static_cast<std::size_t>(k)]);
+            char* end = nullptr;
+            v[k] = c < cells.size() ? std::strtod(cells[c].c_str(), &end) : NAN;
+            if (c >= cells.size() || end == cells[c].c_str() || *end != '\0' || !std::isfinite(v[k]))
+                fail(number, "expected a finite number in every column, got \"" + line + "\"");
+        }
+        if (!table.t_.empty() && v[0] <= table.t_.back()) fail(number, "t must increase from row to row");
+        table.t_.push_back(v[0]);
+        table.speed_.push_back(v[1]);
+        table.yaw_rate_.push_back(v[2]);
+    }
+    if (column.empty() || table.t_.size() < 2) fail(number, "need a header t,speed,yaw_rate and at least two rows");
+    return table;
+}
+
+Motion MotionTable::at(double t) const {
+    if (!(t >= t_.front() && t <= t_.back())) {
+        std::ostringstream msg;
+        msg.precision(15);
+        msg << source_ << ": frame time " << t << " s lies outside the motion table's span [" << t_.front() << ", "
+            << t_.back() << "] s (the t column must use the frames' clock)";
+        throw std::runtime_error(msg.str());
+    }
+    const auto hi = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
+    const std::size_t i = std::min(hi, t_.size() - 1) - 1;
+    const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
+    return {speed_[i] + w * (speed_[i + 1] - speed_[i]), yaw_rate_[i] + w * (yaw_rate_[i + 1] - yaw_rate_[i])};
+}
+
+std::optional<double> imu_yaw_rate(const std::vector<ImuSample>& samples, const Extrinsics& sensor_in_base) {
+    if (samples.empty()) return std::nullopt;
+    double mean[3] = {0, 0, 0};
+    for (const ImuSample& s : samples)
+        for (int k = 0; k < 3; ++k) mean[k] += s.angular_velocity[static_cast<std::size_t>(k)] / samples.size();
+    const RigidTransform T = to_rigid_transform(sensor_in_base);
+    return T.R[2][0] * mean[0] + T.R[2][1] * mean[1] + T.R[2][2] * mean[2];
+}
+
+}  // namespace roadpreview

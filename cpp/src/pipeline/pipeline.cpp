@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/pipeline/pipeline.hpp"
+
+#include <chrono>
+#include <limits>
+#include <stdexcept>
+
+#include "roadpreview/core/frames.hpp"
+#include "ground/ground_pcl.hpp"
+#include "obstacles/obstacles_pcl.hpp"
+#include "core/roi_cloud.hpp"
+
+namespace roadpreview {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point& mark) {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - mark).count();
+    mark = now;
+    return ms;
+}
+
+// Why no profile can be built for this frame, or empty when one can. A fused map that holds data stands in
+// for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
+std::string blocking_reason(const Result& r, bool map_has_data) {
+    if (!map_has_data && r.points.finite == 0) return "no finite points";
+    if (!map_has_data && !r.plane) return "no ground";
+    if (r.path.status == PathStatus::Stopped) return "vehicle stopped";
+    return {};
+}
+
+void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
+    p.ds = cfg.profile.ds_m;
+    p.s0 = 0.5 * cfg.profile.ds_m;
+    p.roughness.reason = reason;
+    p.roughness.iri.reason = reason;
+    if (cfg.obstacles.enabled) p.obstacles.emplace();
+}
+
+// Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
+Clustering cluster_frame(const RoiCloud& roi, const GroundFit& ground, const ObstaclesConfig& cfg, Result& r) {
+    Clustering clustering;
+    if (r.plane) clustering = find_obstacles(roi, ground.mask, *r.plane, cfg);
+    for (std::size_t i = 0; i < clustering.label.size(); ++i)
+        if (clustering.label[i] >= 0) r.cluster_labels[static_cast<std::size_t>(roi.input_index[i])] = clustering.label[i];
+    r.obstacles = clustering.clusters;
+    return clustering;
+}
+
+// The obstacles in each wheel's path and the profile bins they block.
+struct PathCrossings {
+    std::vector<PathObstacle> left, right;
+    BlockedBins blocked;
+};
+
+PathCrossings cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result& r, const Levelling& L,
+                          const Config& cfg) {
+    PathCrossings out;
+    auto cross = [&](Wheel w, std::vector<PathObstacle>& obstacles, std::vector<std::uint8_t>& blocked) {
+        obstacles = wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width,
+                                    cfg.profile.preview_length_m, cfg.obstacles);
+        blocked = blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m);
+    };
+    cross(Wheel::Left, out.left, out.blocked.left);
+    cross(Wheel::Right, out.right, out.blocked.right);
+    return out;
+}
+
+}  // namespace
+
+struct Estimator::Impl {
+    Config cfg;
+    RigidTransform sensor_to_base;
+    RoiCloud roi;  // reused across frames
+    std::int64_t frames = 0;
+    std::optional<TemporalFusion> fusion;  // only with fusion.method other than "none"
+};
+
+Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
+    validate(cfg);
+    impl_->cfg = cfg;
+    impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
+    if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
+}
+
+void Estimator::reset() {
+    if (impl_->fusion) impl_->fusion->reset();
+}
+
+Estimator::~Estimator() = default;
+Estimator::Estimator(Estimator&&) noexcept = default;
+Estimator& Estimator::operator=(Estimator&&) noexcept = default;
+
+const Config& Estimator::config() const { return impl_->cfg; }
+
+Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
+    return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
+}
+
+Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                          const FrameMotion& motion) {
+    const Config& cfg = impl_->cfg;
+    if (points.rows() > std::numeric_limits<std::int32_t>::max())
+        throw std::invalid_argument("too many points in one frame: " + std::to_string(points.rows()));
+    auto mark = Clock::now();
+    const auto start = mark;
+    Result r;
+    r.path = plan_paths(speed_mps, yaw_rate_rps, cfg.track_width, cfg.path);  // validates the motion first
+    r.timing_ms.path = ms_since(mark);
+    r.frame = impl_->frames++;
+    r.source = source;
+    r.speed_mps = speed_mps;
+    r.yaw_rate_rps = yaw_rate_rps;
+    r.ground_method = cfg.ground.method;
+    r.timestamp = motion.timestamp_s;
+    TemporalFusion* fusion = impl_->fusion ? &*impl_->fusion : nullptr;
+    if (fusion) fusion->advance(speed_mps, yaw_rate_rps, motion, r.fusion.emplace());
+    r.timing_ms.fusion = ms_since(mark);
+
+    RoiCloud& roi = impl_->roi;
+    crop_roi(points, impl_->sensor_to_base, cfg.ground, roi);
+    const GroundFit ground = fit_ground(roi, cfg.ground);
+    r.points = {points.rows(), roi.finite, roi.size(), ground.count};
+    r.plane = ground.plane;
+    r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
+    for (std::size_t i = 0; i < ground.mask.size(); ++i)
+        if (ground.mask[i]) r.ground_mask[static_cast<std::size_t>(roi.input_index[i])] = 1;
+    r.timing_ms.ground = ms_since(mark);
+
+    r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
+    Clustering clustering;
+    if (cfg.obstacles.enabled) clustering = cluster_frame(roi, ground, cfg.obstacles, r);
+    r.timing_ms.obstacles = ms_since(mark);
+
+    const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
+    // Stopped: the same view again and again is not new evidence, so the map holds.
+    if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
+    r.timing_ms.fusion += ms_since(mark);
+    r.reason = blocking_reason(r, fusion && fusion->frames() > 0);
+    if (!r.reason.empty()) {
+        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
+        r.vehicle.reason = r.reason;
+        r.vehicle.iri.reason = r.reason;
+        r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        return r;
+    }
+    std::optional<PathCrossings> crossings;  // none without a plane (profiles from the map): nothing in the way
+    if (cfg.obstacles.enabled && r.plane) crossings = cross_paths(roi, clustering, r, L, cfg);
+    r.timing_ms.obstacles += ms_since(mark);
+
+    const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
+    WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
+                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked);
+    r.left = std::move(wheels.left);
+    r.right = std::move(wheels.right);
+    if (cfg.obstacles.enabled) {
+        r.left.obstacles = crossings ? std::move(crossings->left) : std::vector<PathObstacle>{};
+        r.right.obstacles = crossings ? std::move(crossings->right) : std::vector<PathObstacle>{};
+    }
+    r.timing_ms.profile = ms_since(mark);
+
+    for (Profile* p : {&r.left, &r.right}) {
+        p->roughness = analyze_roughness(*p, cfg.roughness);
+        p->roughness.iri = profile_iri(p->z, cfg.profile.ds_m, cfg.iri);
+    }
+    r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
+    r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);
+    r.timing_ms.roughness = ms_since(mark);
+    r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return r;
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/roughness/iri.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "roadpreview/roughness/roughness.hpp"
+
+namespace roadpreview {
+namespace {
+
+// Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
+constexpr double kK1 = 653.0, kK2 = 63.3, kC = 6.0, kMu = 0.15;
+constexpr double kSpeedMps = 80.0 / 3.6;
+constexpr double kBaseLengthM = 0.25;  // the moving average that stands in for the tyre's envelope
+constexpr double kInitLengthM = 11.0;  // the initial state takes the profile's mean slope over this length
+
+using Matrix4 = Eigen::Matrix4d;
+using Vector4 = Eigen::Vector4d;
+
+// Exact discrete step over ds for a slope held constant over it: ST = exp(A·dt), PR = A⁻¹(ST − I)·B.
+void transition(double ds, Matrix4& st, Vector4& pr) {
+    Matrix4 a;
+    a << 0.0, 1.0, 0.0, 0.0,
+         -kK2, -kC, kK2, kC,
+         0.0, 0.0, 0.0, 1.0,
+         kK2 / kMu, kC / kMu, -(kK1 + kK2) / kMu, -kC / kMu;
+    const Vector4 b(0.0, 0.0, 0.0, kK1 / kMu);
+    st = (a * (ds / kSpeedMps)).exp();
+    pr = a.partialPivLu().solve((st - Matrix4::Identity()) * b);
+}
+
+std::size_t moving_average_samples(double ds) {
+    return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(kBaseLengthM / ds + 0.5 + 1e-9)));
+}
+
+}  // namespace
+
+std::vector<double> iri_rectified_slope(const double* z, std::size_t count, double ds) {
+    if (!(ds > 0.0)) throw std::invalid_argument("iri: ds must be > 0");
+    const std::size_t k = moving_average_samples(ds);
+    if (count <= k) return {};
+    const auto a = std::min(static_cast<std::size_t>(std::lround(kInitLengthM / ds)), count - 1);
+    const double initial = (z[a] - z[0]) / (static_cast<double>(a) * ds);
+    Vector4 state(initial, 0.0, initial, 0.0);
+    Matrix4 st;
+    Vector4 pr;
+    transition(ds, st, pr);
+    std::vector<double> out(count - k);
+    for (std::size_t i = 0; i + k < count; ++i) {
+        const double slope = (z[i + k] - z[i]) / (static_cast<double>(k) * ds);  // of the k-sample average
+        state = st * state + pr * slope;
+        out[i] = std::abs(state[0] - state[2]);
+    }
+    return out;
+}
+
+double iri(const double* z, std::size_t count, double ds) {
+    const std::vector<double> rs = iri_rectified_slope(z, count, ds);
+    if (rs.empty()) throw std::invalid_argument("iri: the profile is shorter than the moving average");
+    double sum = 0.0;
+    for (double v : rs) sum += v;
+    return 1000.0 * sum / static_cast<double>(rs.size());
+}
+
+Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
+    Iri out;
+    const auto [first, last] = longest_valid_stretch(z);
+    if (last == first) {
+        out.reason = "no valid profile";
+        return out;
+    }
+    out.length_m = static_cast<double>(last - first - 1) * ds;
+    if (out.length_m < cfg.min_length_m - 1e-9 || last - first <= moving_average_samples(ds)) {
+        out.reason = "valid stretch too short for IRI";
+        return out;
+    }
+    out.value = iri(z.data() + first, last - first, ds);
+    return out;
+}
+
+Iri vehicle_iri(const Iri& left, const Iri& right) {
+    Iri out;
+    if (!left.value || !right.value) {
+        out.reason = !left.reason.empty() ? left.reason : right.reason;
+        return out;
+    }
+    out.value = 0.5 * (*left.value + *right.value);
+    out.length_m = std::min(left.length_m, right.length_m);
+    return out;
+}
+
+}  // namespace roadpreview

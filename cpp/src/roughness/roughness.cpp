@@ -1,0 +1,376 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/roughness/roughness.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <stdexcept>
+
+#include <unsupported/Eigen/FFT>
+
+#include "roadpreview/profile/profile.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kEulerGamma = 0.57721566490153286;  // bias of the log of an exponential variable
+constexpr double kClassLimits[] = {32e-6, 128e-6, 512e-6, 2048e-6, 8192e-6, 32768e-6, 131072e-6};  // m³
+constexpr double kBandEdgeTolerance = 1e-9;  // relative; keeps ordinates that sit on a band edge
+constexpr int kWhittleIterations = 60;       // Fisher-scoring steps of the noise-aware fit
+constexpr double kMaxWhittleStep = 1.0;      // in ln G(n0): scoring overshoots when it starts far from the optimum
+// Variance of ln G_d(n0) from M ordinates of a Hann-windowed stretch is factor/M. Neighbouring ordinates are
+// correlated (DFT coefficients −2/3 at lag 1, 1/6 at lag 2, so periodogram ordinates 4/9 and 1/36):
+// log regression: (π²/6)·(1 + 2·[Li₂(4/9) + Li₂(1/36)]/ζ(2)); likelihood fit: 1 + 2·(4/9 + 1/36).
+constexpr double kLogFitVariance = M_PI * M_PI / 6.0 * 1.6504918528873;
+constexpr double kWhittleVariance = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0);
+const std::string kNoiseUnknown = "noise floor unknown";
+const std::string kNoiseDominates = "noise dominates the band";
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Removes the least-squares line over the sample index (equivalent to a line in s).
+std::vector<double> detrended(const double* z, std::size_t n) {
+    const double mid = 0.5 * static_cast<double>(n - 1);
+    double mean = 0.0, sxx = 0.0, sxz = 0.0;
+    for (std::size_t j = 0; j < n; ++j) mean += z[j];
+    mean /= static_cast<double>(n);
+    for (std::size_t j = 0; j < n; ++j) {
+        const double dj = static_cast<double>(j) - mid;
+        sxx += dj * dj;
+        sxz += dj * (z[j] - mean);
+    }
+    const double slope = sxz / sxx;
+    std::vector<double> x(n);
+    for (std::size_t j = 0; j < n; ++j) x[j] = z[j] - mean - slope * (static_cast<double>(j) - mid);
+    return x;
+}
+
+bool is_finite(double v) { return std::isfinite(v); }
+
+// Longest run where pred(k) holds, first on ties.
+template <typename Pred>
+std::pair<std::size_t, std::size_t> longest_run(std::size_t size, Pred pred) {
+    std::size_t best_first = 0, best_last = 0, first = 0;
+    for (std::size_t k = 0; k <= size; ++k) {
+        if (k < size && pred(k)) continue;
+        if (k - first > best_last - best_first) best_first = first, best_last = k;
+        first = k + 1;
+    }
+    return {best_first, best_last};
+}
+
+Roughness declined(std::string reason) {
+    Roughness r;
+    r.reason = std::move(reason);
+    return r;
+}
+
+// ISO 8608 octave bands, centres 2^m cycles/m, m = −6 … 2, limits centre/√2 ≤ n < centre·√2.
+void octave_bands(Roughness& r) {
+    for (int m = -6; m <= 2; ++m) {
+        const double centre = std::ldexp(1.0, m), lo = centre / std::sqrt(2.0), hi = centre * std::sqrt(2.0);
+        double sum = 0.0;
+        int count = 0;
+        for (std::size_t k = 1; k < r.spectrum.n.size(); ++k) {
+            if (r.spectrum.n[k] >= lo && r.spectrum.n[k] < hi) sum += r.spectrum.psd[k], ++count;
+        }
+        if (count == 0) continue;
+        r.octave_centers.push_back(centre);
+        r.octave_gd.push_back(sum / count);
+    }
+}
+
+// ln G = A − w·ln(n/n0) by least squares; returns {w = 2 intercept, free intercept, free w}.
+struct LogFit {
+    double ln_g0_w2, ln_g0_free, waviness;
+};
+LogFit fit_log_line(const std::vector<double>& x, const std::vector<double>& y) {
+    const double m = static_cast<double>(x.size());
+    double mx = 0.0, my = 0.0, w2 = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i], w2 += y[i] + 2.0 * x[i];
+    mx /= m, my /= m, w2 /= m;
+    double sxx = 0.0, sxy = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) sxx += (x[i] - mx) * (x[i] - mx), sxy += (x[i] - mx) * (y[i] - my);
+    const double slope = sxy / sxx;
+    return {w2, my - slope * mx, -slope};
+}
+
+}  // namespace
+
+Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
+    if (count < 2) throw std::invalid_argument("displacement_psd needs at least 2 samples");
+    std::vector<double> x = detrended(z, count);
+    const double N = static_cast<double>(count);
+    double power = 0.0;  // N·U, U = mean of the squared window
+    for (std::size_t j = 0; j < count; ++j) {
+        const double w = 0.5 * (1.0 - std::cos(2.0 * M_PI * static_cast<double>(j) / N));  // periodic Hann
+        x[j] *= w;
+        power += w * w;
+    }
+    std::vector<std::complex<double>> X;
+    Eigen::FFT<double> fft;
+    fft.fwd(X, x);
+
+    Spectrum sp;
+    const std::size_t half = count / 2;
+    sp.n.resize(half + 1);
+    sp.psd.resize(half + 1);
+    for (std::size_t k = 0; k <= half; ++k) {
+        const bool unpaired = k == 0 || 2 * k == count;  // DC and Nyquist have no mirror ordinate
+        sp.n[k] = static_cast<double>(k) / (N * ds);
+        sp.psd[k] = (unpaired ? 1.0 : 2.0) * std::norm(X[k]) * ds / power;
+    }
+    return sp;
+}
+
+char iso_class(double gd_n0_m3) {
+    int k = 0;
+    for (double limit : kClassLimits) k += gd_n0_m3 >= limit ? 1 : 0;
+    return kIsoClasses[k];
+}
+
+namespace {
+
+using Indices = std::vector<std::size_t>;
+
+struct Fit {
+    double gd_n0 = 0.0;
+    double log_variance = 0.0;  // of ln gd_n0
+    double waviness = kNaN, gd_n0_free = kNaN;
+    std::string reason;
+    bool noise_bound = false;  // the noise dominates: gd_n0 is the upper bound of the fit without noise
+};
+
+// The w = 2 log fit and the free-w fit of ln y over the ordinates; x = ln(n/n0).
+LogFit log_fit_over(const Spectrum& sp, const Indices& used, const std::vector<double>* log_y = nullptr) {
+    std::vector<double> x, y;
+    for (std::size_t i = 0; i < used.size(); ++i) {
+        x.push_back(std::log(sp.n[used[i]] / kIsoN0));
+        y.push_back(log_y ? (*log_y)[i] : std::log(sp.psd[used[i]]));
+    }
+    return fit_log_line(x, y);
+}
+
+Fit log_fit(const Spectrum& sp, const Indices& used) {
+    const LogFit f = log_fit_over(sp, used);
+    return {std::exp(f.ln_g0_w2 + kEulerGamma), kLogFitVariance / static_cast<double>(used.size()), f.waviness,
+            std::exp(f.ln_g0_free + kEulerGamma), {}, false};
+}
+
+// Maximum of the Whittle likelihood of exponential ordinates with E[G_k] = S_k + N_k, S_k = Φ_k·G(n0)(n_k/n0)^−2:
+// Fisher scoring in θ = ln G(n0) from the log-regression estimate, θ ← θ + Σw(G/E − 1)/Σw², w_k = S_k/E[G_k],
+// each step at most ±1.
+// Returns G(n0); `share` gets w_k at the optimum.
+double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<double>& resolved,
+                   const std::vector<double>* noise, std::vector<double>& share) {
+    const std::size_t m = used.size();
+    std::vector<double> shape(m), floor(m, 0.0);
+    for (std::size_t i = 0; i < m; ++i) {
+        shape[i] = resolved[used[i]] * std::pow(sp.n[used[i]] / kIsoN0, -2.0);
+        if (noise) floor[i] = (*noise)[used[i]];
+    }
+    double theta = std::log(std::max(std::exp(log_fit_over(sp, used).ln_g0_w2 + kEulerGamma), DBL_MIN));
+    share.assign(m, 0.0);
+    for (int it = 0; it < kWhittleIterations; ++it) {
+        double information = 0.0, score = 0.0;
+        for (std::size_t i = 0; i < m; ++i) {
+            const double expected = std::exp(theta) * shape[i] + floor[i];
+            const double w = std::exp(theta) * shape[i] / expected;
+            information += w * w;
+            score += w * (sp.psd[used[i]] / expected - 1.0);
+        }
+        if (information < 1e-12) break;  // the signal has vanished below the noise
+        theta += std::clamp(score / information, -kMaxWhittleStep, kMaxWhittleStep);
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+        const double signal = std::exp(theta) * shape[i];
+        share[i] = signal / (signal + floor[i]);
+    }
+    return std::exp(theta);
+}
+
+// docs/noise-aware-roughness.md §4–5: the likelihood fit with the noise PSD while its effective number of
+// signal-dominated ordinates Σw² reaches min_band_points, the free fit on the noise-corrected logs of the
+// ordinates the signal dominates; else the fit without noise bounds the road from above: class A or nothing.
+Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const StretchSupport& support,
+                    const RoughnessConfig& cfg) {
+    Fit fit;
+    if (!support.noise) {
+        fit.reason = kNoiseUnknown;
+        return fit;
+    }
+    std::vector<double> share;
+    const double gd = whittle_fit(sp, used, support.resolved, &*support.noise, share);
+    double effective = 0.0;
+    for (double w : share) effective += w * w;
+    if (effective >= cfg.min_band_points) {
+        fit.gd_n0 = gd, fit.log_variance = kWhittleVariance / effective;
+        Indices strong;
+        std::vector<double> corrected;
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            if (share[i] < 0.5) continue;
+            strong.push_back(used[i]);
+            corrected.push_back(std::log(sp.psd[used[i]]) - std::log(support.resolved[used[i]] / share[i]));
+        }
+        if (strong.size() >= 2) {
+            const LogFit f = log_fit_over(sp, strong, &corrected);
+            fit.waviness = f.waviness, fit.gd_n0_free = std::exp(f.ln_g0_free + kEulerGamma);
+        }
+        return fit;
+    }
+    fit.noise_bound = true;
+    fit.gd_n0 = whittle_fit(sp, used, support.resolved, nullptr, share);
+    if (iso_class(fit.gd_n0) != 'A') {
+        fit.reason = kNoiseDominates;
+        return fit;
+    }
+    const LogFit f = log_fit_over(sp, used);
+    fit.log_variance = kWhittleVariance / static_cast<double>(used.size());
+    fit.waviness = f.waviness, fit.gd_n0_free = std::exp(f.ln_g0_free + kEulerGamma);
+    return fit;
+}
+
+}  // namespace
+
+double class_confidence(double gd_n0_m3, double log_variance) {
+    const int k = static_cast<int>(std::string(kIsoClasses).find(iso_class(gd_n0_m3)));
+    if (gd_n0_m3 <= 0.0) return 1.0;
+    const double sigma = std::sqrt(log_variance);
+    const auto below = [&](double limit) {  // P(true value < limit)
+        return 0.5 * std::erfc((std::log(gd_n0_m3) - std::log(limit)) / (sigma * std::sqrt(2.0)));
+    };
+    const double upper = k < 7 ? below(kClassLimits[k]) : 1.0;
+    const double lower = k > 0 ? below(kClassLimits[k - 1]) : 0.0;
+    return upper - lower;
+}
+
+Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg,
+                            const StretchSupport* support) {
+    Roughness r;
+    r.spectrum = std::move(spectrum);
+    const Spectrum& sp = r.spectrum;
+    octave_bands(r);
+    const double lo = std::max(cfg.band_min_cpm, cfg.min_cycles / length_m);
+    const double nyquist = 0.5 / ds;
+    double hi = std::min(cfg.band_max_cpm, nyquist);
+    r.band_limit = cfg.band_max_cpm <= nyquist ? "requested" : "nyquist";
+    Indices used;
+    for (std::size_t k = 1; k < sp.n.size(); ++k)
+        if (sp.n[k] >= lo * (1.0 - kBandEdgeTolerance) && sp.n[k] <= hi * (1.0 + kBandEdgeTolerance)) used.push_back(k);
+    if (support) {
+        r.backed_fraction = support->backed_fraction;
+        if (support->noise) {
+            r.noise_psd = *support->noise;
+            double sum = 0.0;
+            for (std::size_t k : used) sum += r.noise_psd[k];
+            if (!used.empty()) r.noise_floor = sum / static_cast<double>(used.size());
+        }
+    }
+    const bool noise_aware = support && cfg.noise_aware;
+    if (noise_aware && !used.empty()) {  // up to the first ordinate the sampling no longer resolves
+        std::size_t keep = 0;
+        while (keep < used.size() && support->resolved[used[keep]] >= cfg.min_resolved_fraction) ++keep;
+        if (keep < used.size()) {
+            hi = keep > 0 ? sp.n[used[keep - 1]] : lo;
+            used.resize(keep);
+            r.band_limit = "sampling";
+        }
+    }
+    if (lo >= hi || static_cast<int>(used.size()) < cfg.min_band_points) {
+        r.reason = "too few PSD ordinates in band";
+        return r;
+    }
+    const Fit fit = noise_aware ? noise_aware_fit(sp, used, *support, cfg) : log_fit(sp, used);
+    if (fit.noise_bound) r.band_limit = "noise";
+    if (!fit.reason.empty()) {
+        r.reason = fit.reason;
+        return r;
+    }
+    r.band_lo = lo, r.band_hi = hi;
+    r.gd_n0 = fit.gd_n0;
+    r.gd_n0_free = fit.gd_n0_free;
+    r.waviness = fit.waviness;
+    r.iso_class = iso_class(r.gd_n0);
+    r.confidence = class_confidence(r.gd_n0, fit.log_variance);
+    return r;
+}
+
+std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z) {
+    return longest_run(z.size(), [&](std::size_t k) { return is_finite(z[k]); });
+}
+
+namespace {
+std::string stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
+    if (samples == 0) return "no valid profile";
+    if (static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return "valid stretch too short";
+    return {};
+}
+}  // namespace
+
+Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg) {
+    const auto [first, last] = longest_valid_stretch(z);
+    if (auto problem = stretch_problem(last - first, ds, cfg); !problem.empty()) return declined(problem);
+    const double length = static_cast<double>(last - first) * ds;
+    return classify_spectrum(displacement_psd(z.data() + first, last - first, ds), length, ds, cfg);
+}
+
+namespace {
+void require_support(const Profile& p) {
+    if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
+        throw std::invalid_argument("profile count and spread must have one entry per bin");
+}
+
+// Longest run of bins valid in both profiles, first on ties.
+std::pair<std::size_t, std::size_t> common_stretch(const std::vector<double>& z_left, const std::vector<double>& z_right) {
+    if (z_left.size() != z_right.size()) throw std::invalid_argument("left and right profiles differ in length");
+    return longest_run(z_left.size(), [&](std::size_t k) { return is_finite(z_left[k]) && is_finite(z_right[k]); });
+}
+
+Spectrum mean_spectrum(const std::vector<double>& z_left, const std::vector<double>& z_right, std::size_t first,
+                       std::size_t last, double ds) {
+    Spectrum mean = displacement_psd(z_left.data() + first, last - first, ds);
+    const Spectrum right = displacement_psd(z_right.data() + first, last - first, ds);
+    for (std::size_t k = 0; k < mean.psd.size(); ++k) mean.psd[k] = 0.5 * (mean.psd[k] + right.psd[k]);
+    return mean;
+}
+}  // namespace
+
+Roughness analyze_roughness(const Profile& p, const RoughnessConfig& cfg) {
+    require_support(p);
+    const auto [first, last] = longest_valid_stretch(p.z);
+    if (auto problem = stretch_problem(last - first, p.ds, cfg); !problem.empty()) return declined(problem);
+    Spectrum sp = displacement_psd(p.z.data() + first, last - first, p.ds);
+    const StretchSupport support = stretch_support(p.count, p.spread, first, last, p.ds, sp.n);
+    return classify_spectrum(std::move(sp), static_cast<double>(last - first) * p.ds, p.ds, cfg, &support);
+}
+
+Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
+                            const RoughnessConfig& cfg) {
+    if (z_left.empty() || z_right.empty()) return declined("no valid profile");
+    const auto [first, last] = common_stretch(z_left, z_right);
+    if (auto problem = stretch_problem(last - first, ds, cfg); !problem.empty()) return declined(problem);
+    return classify_spectrum(mean_spectrum(z_left, z_right, first, last, ds), static_cast<double>(last - first) * ds,
+                             ds, cfg);
+}
+
+Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg) {
+    if (left.z.empty() || right.z.empty()) return declined("no valid profile");
+    require_support(left);
+    require_support(right);
+    const auto [first, last] = common_stretch(left.z, right.z);
+    if (auto problem = stretch_problem(last - first, left.ds, cfg); !problem.empty()) return declined(problem);
+    Spectrum sp = mean_spectrum(left.z, right.z, first, last, left.ds);
+    StretchSupport support = stretch_support(left.count, left.spread, first, last, left.ds, sp.n);
+    const StretchSupport other = stretch_support(right.count, right.spread, first, last, right.ds, sp.n);
+    if (support.noise && other.noise) {
+        for (std::size_t k = 0; k < support.noise->size(); ++k) (*support.noise)[k] = 0.5 * ((*support.noise)[k] + (*other.noise)[k]);
+    } else {
+        support.noise.reset();
+    }
+    for (std::size_t k = 0; k < support.resolved.size(); ++k) support.resolved[k] = 0.5 * (support.resolved[k] + other.resolved[k]);
+    support.backed_fraction = 0.5 * (support.backed_fraction + other.backed_fraction);
+    return classify_spectrum(std::move(sp), static_cast<double>(last - first) * left.ds, left.ds, cfg, &support);
+}
+
+}  // namespace roadpreview
