@@ -1,28 +1,43 @@
 #!/usr/bin/env bash
-# Fuzzes the packet decoders with libFuzzer for SECONDS (default 300) and prints libFuzzer's final counts.
-# Needs clang and libFuzzer (Debian: clang, libclang-rt-14-dev); not part of test.sh.
+# Fuzzes every parser with libFuzzer (AddressSanitizer + UBSan) and prints a table of executions and findings.
+#   scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     (default 120 s each, all targets; 2 run at a time)
+# Installs clang and libFuzzer's runtime with apt-get when missing; not part of test.sh. Corpora grow in
+# build/fuzz/corpus/<target> (seeded from tests/data by fuzz/seed_corpora.py); findings land in
+# build/fuzz/findings/<target>/ and make the script exit 1.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-SECONDS_TO_RUN="${1:-300}"
+SECONDS_PER_TARGET="${1:-120}"
+shift || true
+ALL_TARGETS=(packet_decoders pcap ouster_metadata velodyne_calibration pcd kitti_bin config csv)
+TARGETS=("${@:-${ALL_TARGETS[@]}}")
 cd "$ROOT"
-CXX=clang++ cmake -S fuzz -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build/fuzz
-mkdir -p build/fuzz/corpus
-# Seeds: real packets behind a selector byte (python3 reads the bundled pcaps; stdlib only).
-python3 - <<'PY'
-import struct, pathlib
-out = pathlib.Path("build/fuzz/corpus")
-seeds = {0: "OS-1-32-G_v2.1.1_1024x10.pcap", 3: "OS-1-128_v2.3.0_1024x10_lb_n3.pcap",
-         5: "../velodyne/velodyne_example.pcap", 7: "../velodyne/hdl32_example.pcap"}
-for pick, name in seeds.items():
-    data = pathlib.Path("tests/data/ouster", name).read_bytes()
-    off, n = 24, 0
-    while off + 16 <= len(data) and n < 4:
-        incl = struct.unpack_from("<I", data, off + 8)[0]
-        payload = data[off + 16 + 42: off + 16 + incl]
-        off += 16 + incl
-        if len(payload) > 1000:
-            (out / f"seed_{pick}_{n}").write_bytes(bytes([pick, 1]) + payload)
-            n += 1
-PY
-build/fuzz/packet_decoders_fuzz -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 build/fuzz/corpus 2>&1 | tail -25
+
+if ! command -v clang++ >/dev/null || ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends clang libclang-rt-14-dev >/dev/null
+fi
+CC=clang CXX=clang++ cmake -S fuzz -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build build/fuzz -j "$(nproc)" --target "${TARGETS[@]/%/_fuzz}"
+python3 fuzz/seed_corpora.py tests/data build/fuzz/corpus
+
+run_target() {
+    local target="$1" work="build/fuzz/work/$1"
+    mkdir -p "$work" "build/fuzz/findings/$target"
+    # Each target runs in its own folder: the parsers read scratch files written there.
+    (cd "$work" && "../../${target}_fuzz" -max_total_time="$SECONDS_PER_TARGET" -max_len=65536 -rss_limit_mb=2048 \
+        -print_final_stats=1 -artifact_prefix="../../findings/$target/" "../../corpus/$target" >log.txt 2>&1) || true
+}
+export -f run_target
+export SECONDS_PER_TARGET
+printf '%s\n' "${TARGETS[@]}" | xargs -P "$(nproc)" -I{} bash -c 'run_target {}'
+
+printf '| target | executions | corpus | findings |\n|---|---|---|---|\n'
+total=0 findings=0
+for target in "${TARGETS[@]}"; do
+    log="build/fuzz/work/$target/log.txt"
+    runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{print $2}' | tail -1)
+    found=$(find "build/fuzz/findings/$target" -type f | wc -l)
+    printf '| %s | %s | %s | %s |\n' "$target" "${runs:-?}" "$(ls "build/fuzz/corpus/$target" | wc -l)" "$found"
+    total=$((total + ${runs:-0})) findings=$((findings + found))
+done
+printf '| total | %s | | %s |\n' "$total" "$findings"
+[ "$findings" -eq 0 ] || { echo "findings: see build/fuzz/findings/ and build/fuzz/work/*/log.txt" >&2; exit 1; }

@@ -101,5 +101,7 @@ TEST(Config, YamlAndJsonFilesGiveTheSameConfig) {
     EXPECT_THROW(rp::config_from_file(yaml), std::invalid_argument);
     std::ofstream(yaml) << "track_width: wide\n";
     expect_rejected_file(yaml, "track_width");
+    std::ofstream(yaml) << "sensor_height: 1\xd8\xc8" "3\nground:\n  method: ransac\n";  // found by config_fuzz
+    expect_rejected_file(yaml, "not UTF-8");
     EXPECT_THROW(rp::config_from_file((dir / "absent.yaml").string()), std::invalid_argument);
 }

@@ -249,11 +249,15 @@ Config config_from_file(const std::string& path) {
     std::stringstream text;
     text << in.rdbuf();
     if (!is_yaml(path)) return config_from_json(text.str(), path);
+    std::string json_text;
     try {
-        return config_from_json(yaml_to_json(YAML::Load(text.str())).dump(), path);
+        json_text = yaml_to_json(YAML::Load(text.str())).dump();
     } catch (const YAML::Exception& e) {
         throw std::invalid_argument(path + ": not valid YAML: " + e.what());
+    } catch (const nlohmann::json::type_error&) {  // dump() meets a string that is not UTF-8
+        throw std::invalid_argument(path + ": not valid YAML: the text is not UTF-8");
     }
+    return config_from_json(json_text, path);
 }
 
 }  // namespace roadpreview

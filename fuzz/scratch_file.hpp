@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The file parsers read paths, so each fuzz input is written to a scratch file first (one per process, in
+// the fuzzer's working directory, reused for every input).
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+#include <unistd.h>
+
+namespace roadpreview_fuzz {
+
+/// Writes `data` to a file named scratch_<pid><suffix> and returns its path.
+inline std::string scratch_file(const std::uint8_t* data, std::size_t size, const std::string& suffix) {
+    static const std::string base = "scratch_" + std::to_string(getpid());
+    const std::string path = base + suffix;
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) std::abort();
+    if (size && std::fwrite(data, 1, size, f) != size) std::abort();
+    std::fclose(f);
+    return path;
+}
+
+/// Runs `parse`; the errors a parser documents (std::runtime_error for bad files, std::invalid_argument for bad
+/// values) are expected. Anything else escapes to libFuzzer as a finding: a crash, a sanitizer report, or an
+/// exception of another type (std::bad_alloc from a size taken on trust, a library's internal exception).
+template <typename Parse>
+void expect_clean_errors(Parse parse) {
+    try {
+        parse();
+    } catch (const std::runtime_error&) {
+    } catch (const std::invalid_argument&) {
+    }
+}
+
+}  // namespace roadpreview_fuzz
