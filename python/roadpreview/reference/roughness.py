@@ -61,8 +61,8 @@ class Roughness:
 
 def iso_class(gd_n0: float) -> str:
     """ISO 8608 class of G_d(n0) in m³; a value exactly on a limit belongs to the rougher class."""
-    if np.isnan(gd_n0):
-        raise ValueError("gd_n0 is NaN")
+    if not np.isfinite(gd_n0) or gd_n0 < 0:
+        raise ValueError(f"gd_n0 must be finite and >= 0 m³, got {gd_n0}")
     return ISO_CLASSES[int(np.count_nonzero(gd_n0 >= ISO_CLASS_LIMITS))]
 
 
@@ -293,3 +293,24 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, 
     right = Support.of(count_right, spread_right, start, stop, ds, n)
     support = Support.mean(left, right) if left is not None and right is not None else None
     return classify_psd(n, (psd_left + psd_right) / 2, (stop - start) * ds, ds, cfg, support)
+
+
+def vehicle_from_wheels(vehicle: Roughness, left: Roughness, right: Roughness) -> Roughness:
+    """The vehicle's class stands where both wheels' do (method.md §4, "Vehicle"): a declined wheel declines it;
+    two classified wheels with a declined common stretch give it the mean of their G_d(n0)."""
+    if left.iso_class is None or right.iso_class is None:
+        vehicle.iso_class, vehicle.gd_n0, vehicle.gd_n0_free, vehicle.waviness = None, None, None, None
+        vehicle.band, vehicle.confidence = None, None
+        which = "both wheels" if left.iso_class is None and right.iso_class is None else \
+            "left wheel" if left.iso_class is None else "right wheel"
+        vehicle.reason = f"{which} declined"
+        return vehicle
+    if vehicle.iso_class is not None:
+        return vehicle
+    vehicle.gd_n0 = (left.gd_n0 + right.gd_n0) / 2
+    vehicle.iso_class = iso_class(vehicle.gd_n0)
+    vehicle.gd_n0_free = vehicle.waviness = None
+    vehicle.confidence = min(left.confidence, right.confidence)
+    vehicle.band = (min(left.band[0], right.band[0]), max(left.band[1], right.band[1]))
+    vehicle.band_limit, vehicle.reason = "wheels", None
+    return vehicle
