@@ -119,6 +119,7 @@ TEST(CloudFiles, SequenceBreaks) {
     EXPECT_EQ(check("a/000009.bin", "b/000010.bin"), "another folder");
     EXPECT_EQ(check("a/000002.bin", "a/spvnas_000000.bin"), "another file name pattern");
     EXPECT_EQ(check("a/scan_7.pcd", "a/scan_8.pcd"), "");
+    EXPECT_EQ(check("a/scan.0008.ply", "a/scan.0009.ply"), "");
     step = 0;  // nuScenes names carry microseconds: steps of about 50,000
     EXPECT_EQ(check("a/n015__LIDAR_TOP__1532402927647951.pcd.bin", "a/n015__LIDAR_TOP__1532402927697951.pcd.bin"), "");
     EXPECT_EQ(check("a/n015__LIDAR_TOP__1532402927697951.pcd.bin", "a/n015__LIDAR_TOP__1532402927748120.pcd.bin"), "");

@@ -130,11 +130,11 @@ TEST(Iri, WheelIriReportsItsBackingAndDeclinesWhereItCannotBeTrusted) {
     EXPECT_DOUBLE_EQ(*trusted.value, rp::iri(dense.z.data(), dense.z.size(), kDs));
     EXPECT_DOUBLE_EQ(*trusted.backed_fraction, 1.0);
 
-    const rp::Profile sparse = sine_profile(3, true);  // two bins in three interpolated
+    const rp::Profile sparse = sine_profile(5, true);  // four bins in five interpolated
     const rp::Iri thin = rp::wheel_iri(sparse, sparse.roughness, cfg);
     EXPECT_FALSE(thin.value);
     EXPECT_EQ(thin.reason, rp::kIriTooSparse);
-    EXPECT_NEAR(*thin.backed_fraction, 67.0 / 200.0, 1e-12);
+    EXPECT_NEAR(*thin.backed_fraction, 40.0 / 200.0, 1e-12);
     EXPECT_NEAR(thin.length_m, 19.9, 1e-9);
 
     const rp::Profile declined = sine_profile(1, false);
@@ -144,5 +144,7 @@ TEST(Iri, WheelIriReportsItsBackingAndDeclinesWhereItCannotBeTrusted) {
 
     const rp::Iri mean = rp::vehicle_iri(trusted, thin);
     EXPECT_FALSE(mean.value);
-    EXPECT_NEAR(*mean.backed_fraction, 0.5 * (1.0 + 67.0 / 200.0), 1e-12);
+    EXPECT_NEAR(*mean.backed_fraction, 0.5 * (1.0 + 40.0 / 200.0), 1e-12);
+    const rp::Profile third = sine_profile(3, true);  // 67 of 200 bins backed: above the default 0.25
+    EXPECT_TRUE(rp::wheel_iri(third, third.roughness, cfg).value);
 }

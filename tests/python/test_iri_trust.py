@@ -22,10 +22,11 @@ def test_a_densely_backed_classified_wheel_has_its_iri():
 
 
 def test_a_mostly_interpolated_stretch_gives_no_iri_but_says_how_much_was_backed():
-    result = wheel_iri(Z, counts(3), DS, "C")
+    result = wheel_iri(Z, counts(5), DS, "C")
     assert result.value is None and result.reason == TOO_SPARSE
-    assert result.backed_fraction == pytest.approx(67 / 200) and result.length == pytest.approx(19.9)
-    assert wheel_iri(Z, counts(3), DS, "C", rp.Config(iri={"min_backed_fraction": 0.3})).value is not None
+    assert result.backed_fraction == pytest.approx(40 / 200) and result.length == pytest.approx(19.9)
+    assert wheel_iri(Z, counts(5), DS, "C", rp.Config(iri={"min_backed_fraction": 0.2})).value is not None
+    assert wheel_iri(Z, counts(3), DS, "C").value is not None  # 67 of 200 bins backed
 
 
 def test_a_declined_class_declines_the_iri():
@@ -60,6 +61,6 @@ def test_pipeline_results_never_contradict(speed, yaw_rate):
         assert (res.vehicle.iso_class is not None) == all(w.iso_class is not None for w in wheels)
         for w in wheels:
             if w.iri.value is not None:
-                assert w.iso_class is not None and w.iri.backed_fraction >= 0.5
+                assert w.iso_class is not None and w.iri.backed_fraction >= 0.25
         if res.vehicle.iri.value is not None:
             assert res.vehicle.iso_class is not None
