@@ -241,7 +241,10 @@ def test_a_200_byte_pcd_claiming_2e8_points_fails_without_allocating(tmp_path):
     assert pcd.stat().st_size == 200
     status, err, peak_mb = peak_of_cli("run", pcd, "--speed", 5)
     assert status == 1 and "liar.pcd" in err and "declares 200000000 points" in err
-    assert peak_mb < 50, f"{peak_mb:.0f} MB"  # PCL alone would allocate 2.4 GB
+    # The CLI's start-up (its shared libraries) is the same with --version; rejecting the header adds next to
+    # nothing to it (PCL alone would allocate 2.4 GB). bench/bad_headers.py reports the absolute figures.
+    _, _, baseline_mb = peak_of_cli("--version")
+    assert peak_mb - baseline_mb < 5, f"{peak_mb:.0f} MB against {baseline_mb:.0f} MB for --version"
 
 
 @pytest.mark.parametrize("width, problem", [("-5", "WIDTH"), ("4e9", "WIDTH")])
