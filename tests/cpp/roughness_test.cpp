@@ -154,16 +154,20 @@ rp::Roughness classified(double gd_n0, double confidence, double lo, double hi) 
 }
 }  // namespace
 
-TEST(Roughness, VehicleClassStandsOnlyWhereBothWheelsHaveOne) {
+TEST(Roughness, VehicleClassNeverContradictsBothWheels) {
     rp::Roughness declined;
     declined.reason = "noise dominates the band";
     rp::Roughness vehicle = classified(300e-6, 0.7, 0.1, 2.0);  // the common stretch fitted: C
     rp::reconcile_vehicle(vehicle, declined, declined);
     EXPECT_FALSE(vehicle.iso_class);
     EXPECT_EQ(vehicle.reason, "both wheels declined");
-    vehicle = classified(300e-6, 0.7, 0.1, 2.0);
+    vehicle = classified(300e-6, 0.7, 0.1, 2.0);  // one wheel classified: the vehicle's own fit stands
     rp::reconcile_vehicle(vehicle, classified(200e-6, 0.8, 0.1, 2.0), declined);
-    EXPECT_EQ(vehicle.reason, "right wheel declined");
+    EXPECT_EQ(*vehicle.iso_class, 'C');
+    rp::Roughness noisy = declined;  // ... and so does its decline
+    rp::reconcile_vehicle(noisy, classified(200e-6, 0.8, 0.1, 2.0), declined);
+    EXPECT_FALSE(noisy.iso_class);
+    EXPECT_EQ(noisy.reason, "noise dominates the band");
 
     rp::Roughness short_common;  // both wheels classified, their common stretch too short
     short_common.reason = "valid stretch too short";

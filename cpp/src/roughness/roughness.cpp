@@ -299,15 +299,13 @@ Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const
 }
 
 void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughness& right) {
-    if (!left.iso_class || !right.iso_class) {
+    if (!left.iso_class && !right.iso_class) {
         vehicle.iso_class.reset();
         vehicle.band_lo = vehicle.band_hi = 0.0;
-        vehicle.reason = !left.iso_class && !right.iso_class ? "both wheels declined"
-                         : !left.iso_class                   ? "left wheel declined"
-                                                             : "right wheel declined";
+        vehicle.reason = "both wheels declined";
         return;
     }
-    if (vehicle.iso_class) return;
+    if (vehicle.iso_class || !left.iso_class || !right.iso_class) return;  // one wheel alone: the fit decides
     vehicle.gd_n0 = 0.5 * (left.gd_n0 + right.gd_n0);
     vehicle.gd_n0_free = vehicle.waviness = kNaN;
     vehicle.iso_class = iso_class(vehicle.gd_n0);

@@ -296,16 +296,15 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, 
 
 
 def vehicle_from_wheels(vehicle: Roughness, left: Roughness, right: Roughness) -> Roughness:
-    """The vehicle's class stands where both wheels' do (method.md §4, "Vehicle"): a declined wheel declines it;
-    two classified wheels with a declined common stretch give it the mean of their G_d(n0)."""
-    if left.iso_class is None or right.iso_class is None:
+    """The vehicle's class never contradicts both wheels (method.md §4, "Vehicle"): two declined wheels decline
+    it; two classified wheels with a declined common stretch give it the mean of their G_d(n0); with one wheel
+    classified its own fit stands."""
+    if left.iso_class is None and right.iso_class is None:
         vehicle.iso_class, vehicle.gd_n0, vehicle.gd_n0_free, vehicle.waviness = None, None, None, None
         vehicle.band, vehicle.confidence = None, None
-        which = "both wheels" if left.iso_class is None and right.iso_class is None else \
-            "left wheel" if left.iso_class is None else "right wheel"
-        vehicle.reason = f"{which} declined"
+        vehicle.reason = "both wheels declined"
         return vehicle
-    if vehicle.iso_class is not None:
+    if vehicle.iso_class is not None or left.iso_class is None or right.iso_class is None:
         return vehicle
     vehicle.gd_n0 = (left.gd_n0 + right.gd_n0) / 2
     vehicle.iso_class = iso_class(vehicle.gd_n0)
