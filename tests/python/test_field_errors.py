@@ -36,3 +36,15 @@ def test_big_endian_points_give_the_native_result():
     assert swapped["roughness"]["left"]["class"] == native["roughness"]["left"]["class"]
     big64 = est.process(points.astype(">f8"), 5.0, 0.0).to_dict()
     assert big64["points"] == native["points"]
+
+
+def test_a_flat_noiseless_road_is_class_a_in_both_implementations():
+    """Zero PSD and zero noise made the likelihood fit 0/0: G_d(n0) was NaN, read as 'A' only by accident."""
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(1, 40, 20000), -rng.uniform(0.2, 3.2, 20000)
+    points = np.column_stack([x, y, np.full(len(x), -1.8)]).astype(np.float32)
+    cfg = rp.Config(sensor_height=1.8)
+    cpp = rp.Estimator(cfg).process(points, 5.0, 0.0)
+    ref = rp.reference.process(points, 5.0, 0.0, cfg)
+    assert cpp.right.roughness.iso_class == ref.right.roughness.iso_class == "A"
+    assert math.isfinite(cpp.right.roughness.gd_n0) and math.isfinite(ref.right.roughness.gd_n0)
