@@ -178,16 +178,16 @@ double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<do
         double information = 0.0, score = 0.0;
         for (std::size_t i = 0; i < m; ++i) {
             const double expected = std::exp(theta) * shape[i] + floor[i];
-            const double w = std::exp(theta) * shape[i] / expected;
+            const double w = expected > 0.0 ? std::exp(theta) * shape[i] / expected : 0.0;  // flat and noiseless: 0
             information += w * w;
-            score += w * (sp.psd[used[i]] / expected - 1.0);
+            if (w > 0.0) score += w * (sp.psd[used[i]] / expected - 1.0);
         }
         if (information < 1e-12) break;  // the signal has vanished below the noise
         theta += std::clamp(score / information, -kMaxWhittleStep, kMaxWhittleStep);
     }
     for (std::size_t i = 0; i < m; ++i) {
         const double signal = std::exp(theta) * shape[i];
-        share[i] = signal / (signal + floor[i]);
+        share[i] = signal + floor[i] > 0.0 ? signal / (signal + floor[i]) : 0.0;
     }
     return std::exp(theta);
 }

@@ -169,14 +169,19 @@ def _whittle_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, resolved: np.
     theta = math.log(max(_fit_w2(n[used], _log_psd(g)), np.finfo(float).tiny))
     for _ in range(WHITTLE_ITERATIONS):
         expected = math.exp(theta) * shape + floor
-        share = math.exp(theta) * shape / expected
+        share = _ratio(math.exp(theta) * shape, expected)
         information = float(np.sum(share**2))
         if information < 1e-12:  # the signal has vanished below the noise
             break
-        step = float(np.sum(share * (g / expected - 1))) / information
+        step = float(np.sum(share * (_ratio(g, expected) - 1))) / information
         theta += min(max(step, -MAX_WHITTLE_STEP), MAX_WHITTLE_STEP)
     signal = math.exp(theta) * shape
-    return math.exp(theta), signal / (signal + floor)
+    return math.exp(theta), _ratio(signal, signal + floor)
+
+
+def _ratio(part: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """part / whole, 0 where whole is 0 (a flat, noiseless stretch: its ordinates carry no information)."""
+    return np.divide(part, whole, out=np.zeros_like(part), where=whole > 0)
 
 
 def _noise_aware_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, support: Support, cfg: Config) -> _Fit:
