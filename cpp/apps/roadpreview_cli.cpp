@@ -2,12 +2,15 @@
 // roadpreview — command-line front end: `roadpreview run INPUT... [options]` writes one JSON line per frame;
 // `roadpreview info INPUT...` describes a recording.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <optional>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 
@@ -89,10 +92,15 @@ std::pair<std::int64_t, std::int64_t> parse_frame_range(const std::string& text)
             v = std::stoll(part, &used);
         } catch (const std::exception&) {
         }
-        if (used != part.size() || v < 0) throw std::invalid_argument("--frames " + text + ": expected A:B with A, B >= 0");
+        if (used != part.size() || v < 0)
+            throw std::invalid_argument("--frames " + text + ": expected A, A:B, A: or :B with A, B >= 0");
         return v;
     };
-    if (colon == std::string::npos) throw std::invalid_argument("--frames " + text + ": expected A:B, A: or :B");
+    if (colon == std::string::npos) {  // "A": that one frame
+        const std::int64_t a = number(text, -1);
+        if (a == kAll) throw std::invalid_argument("--frames " + text + ": frame index too large");
+        return {a, a + 1};
+    }
     const auto range = std::make_pair(number(text.substr(0, colon), 0), number(text.substr(colon + 1), kAll));
     if (range.first >= range.second) throw std::invalid_argument("--frames " + text + ": A must be smaller than B");
     return range;
@@ -108,6 +116,7 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
+    if (!f.sequence_break.empty() && i > 0) decode += ", new sequence (" + f.sequence_break + ")";
     std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
                  counter.c_str(), frame_label(f).c_str(), static_cast<long long>(r.points.input),
                  static_cast<long long>(r.points.ground), obstacles_of(r).c_str(), class_of(r.left.roughness).c_str(),
@@ -116,11 +125,64 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
 }
 
 void report_source(const rp::SourceInfo& s) {
-    if (s.format == "files") return;
-    std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
-                 s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
-                 s.metadata.empty() ? "" : ", ", s.metadata.c_str());
+    if (s.format != "files")
+        std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
+                     s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
+                     s.metadata.empty() ? "" : ", ", s.metadata.c_str());
     for (const auto& note : s.notes) std::fprintf(stderr, "roadpreview: %s\n", note.c_str());
+}
+
+// What the summary line at the end of a run counts: classes, why classes were declined, the vehicle's IRI.
+struct RunSummary {
+    std::map<std::string, int> classes, declined;
+    std::vector<double> ms, iri_m_per_km;
+
+    void add(const rp::Result& r) {
+        ++classes[class_of(r.vehicle)];
+        for (const rp::Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle})
+            if (!x->iso_class) ++declined[x->reason.empty() ? "no reason given" : x->reason];
+        if (r.vehicle.iri.value) iri_m_per_km.push_back(*r.vehicle.iri.value);
+        ms.push_back(r.timing_ms.total);
+    }
+
+    static double median(std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    }
+
+    void print() const {
+        std::fprintf(stderr, "roadpreview: %zu frame(s), pipeline median %.2f ms, max %.2f ms; vehicle classes:",
+                     ms.size(), median(ms), *std::max_element(ms.begin(), ms.end()));
+        for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
+        if (iri_m_per_km.empty()) std::fprintf(stderr, "; vehicle IRI: none");
+        else
+            std::fprintf(stderr, "; vehicle IRI median %.2f m/km (%zu of %zu frames)", median(iri_m_per_km),
+                         iri_m_per_km.size(), ms.size());
+        if (!declined.empty()) std::fprintf(stderr, "; declined classes (L, R, vehicle):");
+        const char* separator = " ";
+        for (const auto& [reason, n] : declined)
+            std::fprintf(stderr, "%s%s ×%d", std::exchange(separator, ", "), reason.c_str(), n);
+        std::fprintf(stderr, "\n");
+    }
+};
+
+// A frame file that does not continue the previous one's sequence (another folder, name pattern or a jump in
+// its numbering) starts the fusion map afresh; the output line says why.
+void note_sequence(const rp::Frame& f, rp::Result& r) {
+    if (r.fusion) r.fusion->reset = "new sequence: " + f.sequence_break;
+}
+
+// A run that writes nothing fails, and leaves no empty output file behind.
+[[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!o.output.empty() && fs::is_regular_file(o.output, ec) && fs::file_size(o.output, ec) == 0)
+        fs::remove(o.output, ec);
+    std::string where = first > 0 ? " from index " + std::to_string(first) + " on (the input has " +
+                                        std::to_string(frames_seen) + ")"
+                                  : " in the input";
+    throw std::runtime_error(o.inputs[0] + (o.inputs.size() > 1 ? " ..." : "") + ": no frames" + where +
+                             "; nothing was written");
 }
 
 // Speed and yaw rate of one frame, and where the yaw rate came from.
@@ -129,12 +191,19 @@ struct FrameMotion {
     std::string yaw_rate_source;
 };
 
+// The frame's own timestamp (pcaps), else index / --frame-rate for file inputs, else none.
+std::optional<double> frame_time(const rp::Frame& f, std::int64_t index, double frame_rate_hz) {
+    if (f.timestamp) return f.timestamp;
+    if (frame_rate_hz > 0.0) return static_cast<double>(index) / frame_rate_hz;
+    return std::nullopt;
+}
+
 FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::optional<rp::MotionTable>& table,
-                       const rp::Frame& f, const rp::Config& cfg) {
+                       const rp::Frame& f, std::optional<double> t, const rp::Config& cfg) {
     if (table) {
-        if (!f.timestamp) throw std::runtime_error(f.source + ": frame has no timestamp to look up in " + table->source() +
-                                                   " (use --frame-rate for file inputs)");
-        return {table->at(*f.timestamp), "motion"};
+        if (!t) throw std::runtime_error(f.source + ": frame has no timestamp to look up in " + table->source() +
+                                         " (use --frame-rate for file inputs)");
+        return {table->at(*t), "motion"};
     }
     if (run.count("--yaw-rate")) return {{o.speed, o.yaw_rate}, "option"};
     if (const auto imu = rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(cfg))) return {{o.speed, *imu}, "imu"};
@@ -162,41 +231,33 @@ int run(const RunOptions& o, const CLI::App& app) {
     }
     std::ostream& out = o.output.empty() ? std::cout : file;
 
-    std::map<std::string, int> classes;
-    std::vector<double> ms;
+    RunSummary summary;
     std::int64_t index = 0;
     for (; index < last; ++index) {
         std::optional<rp::Frame> frame = source->next();
         if (!frame) break;
         if (index == 0 && !o.quiet) report_source(source->info());
         if (index < first) continue;
-        const FrameMotion m = motion_for(o, app, table, *frame, cfg);
-        rp::FrameMotion at{frame->timestamp, std::nullopt};
-        if (!at.timestamp_s && o.frame_rate > 0.0) at.timestamp_s = static_cast<double>(index) / o.frame_rate;
+        rp::FrameMotion at{frame_time(*frame, index, o.frame_rate), std::nullopt};
+        const FrameMotion m = motion_for(o, app, table, *frame, at.timestamp_s, cfg);
         if (!o.poses_file.empty()) {
             if (index >= static_cast<std::int64_t>(poses.size()))
                 throw std::runtime_error(o.poses_file + ": no pose for frame " + std::to_string(index) + " (it has " +
                                          std::to_string(poses.size()) + ")");
             at.pose = poses[static_cast<std::size_t>(index)];
         }
+        const bool new_sequence = !frame->sequence_break.empty() && index > first;
+        if (new_sequence) est.reset();
         rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
         r.yaw_rate_source = m.yaw_rate_source;
+        if (new_sequence) note_sequence(*frame, r);
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
-        ++classes[class_of(r.vehicle)];
-        ms.push_back(r.timing_ms.total);
+        summary.add(r);
         if (!o.quiet) report_frame(static_cast<std::size_t>(index), total, *frame, r);
     }
-    if (ms.empty())
-        throw std::runtime_error(o.inputs[0] + ": no frames" +
-                                 (first > 0 ? " from index " + std::to_string(first) + " on (it has " +
-                                                  std::to_string(index) + ")"
-                                            : std::string()));
-    std::sort(ms.begin(), ms.end());
-    std::fprintf(stderr, "roadpreview: %zu frame(s), pipeline median %.2f ms, max %.2f ms; vehicle classes:", ms.size(),
-                 ms[ms.size() / 2], ms.back());
-    for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
-    std::fprintf(stderr, "\n");
+    if (summary.ms.empty()) nothing_written(o, first, index);
+    summary.print();
     return 0;
 }
 
@@ -245,6 +306,29 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
     return 0;
 }
 
+// A number > 0 and finite; CLI11's PositiveNumber would print its range as 4.9e-324 to 1.8e308.
+CLI::Validator positive_finite() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v <= 0.0)
+                return "expected a number > 0, got " + text;
+            return {};
+        },
+        "> 0");
+}
+
+// Usage errors exit with 2 (argparse's and CLI11's convention); --help and --version with 0.
+int parse_command_line(CLI::App& app, int argc, char** argv) {
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int status = app.exit(e);
+        return status == 0 ? 0 : 2;
+    }
+    return -1;
+}
+
 void add_source_options(CLI::App* cmd, rp::SourceOptions& s) {
     cmd->add_option("--meta", s.meta, "Ouster metadata JSON (default: found next to the pcap by name)");
     cmd->add_option("--sensor-model", s.sensor_model, "Velodyne model: VLP-16, VLP-32C, HDL-32E, HDL-64E (default: from the packets)");
@@ -264,14 +348,22 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     RunOptions o;
-    CLI::App* run_cmd = app.add_subcommand("run", "Process KITTI .bin / .pcd frames (files or directories) or a pcap recording");
-    run_cmd->add_option("INPUT", o.inputs, "Frame files, or directories of them (sorted by name), or one Ouster/Velodyne .pcap")->required();
+    CLI::App* run_cmd =
+        app.add_subcommand("run", "Process .bin / .pcd / .ply frames (files or directories) or pcap recordings");
+    run_cmd->add_option("INPUT", o.inputs,
+                        "Frame files, or directories of them (sorted by name), or Ouster/Velodyne .pcap recordings "
+                        "(several: one drive split into files, in time order)")
+        ->required();
     auto* speed = run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)");
     auto* yaw = run_cmd->add_option("--yaw-rate", o.yaw_rate,
                                     "Yaw rate ω in rad/s (positive turning left); default: the Ouster IMU's gyro if the pcap has one, else 0");
     auto* motion = run_cmd->add_option("--motion", o.motion_file, "CSV with columns t,speed,yaw_rate, interpolated at each frame's timestamp");
     motion->excludes(speed)->excludes(yaw);
-    run_cmd->add_option("--frames", o.frames, "Frames A:B of the input (0-based, B excluded; A: or :B)");
+    run_cmd->add_option("--frames", o.frames,
+                        "Frames A:B of the input (0-based, B excluded; A: or :B; A alone: that frame)");
+    run_cmd->add_option("--columns", o.source.columns,
+                        "Raw float32 .bin files: values per point, x y z first (default 5 for *.pcd.bin, else 4)")
+        ->check(CLI::Range(3, 64));
     add_source_options(run_cmd, o.source);
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height, "Sensor height above the ground, m");
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
@@ -283,9 +375,9 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
     run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
     run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_finite());
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
-        ->check(CLI::PositiveNumber);  // pcap frames carry their own timestamps
+        ->check(positive_finite());  // pcap frames carry their own timestamps
     run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")
         ->check(CLI::IsMember({"none", "ema", "kalman"}));
     run_cmd->add_option("--alpha", o.alpha, "EMA fusion: weight of the newest frame, (0, 1] (default 0.5)")
@@ -302,7 +394,7 @@ int main(int argc, char** argv) {
     info_cmd->add_option("INPUT", info_inputs, "One pcap, or frame files / directories")->required();
     add_source_options(info_cmd, info_options);
 
-    CLI11_PARSE(app, argc, argv);
+    if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
         return run(o, *run_cmd);

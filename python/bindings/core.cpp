@@ -78,7 +78,9 @@ rp::PointsView points_from(const py::handle& obj, py::object& holder, const char
     const char kind = a.dtype().kind();
     if (kind != 'f' || (a.itemsize() != 4 && a.itemsize() != 8))
         throw py::type_error(std::string(name) + " must be float32 or float64, got " + std::string(py::str(a.dtype())));
-    const bool in_place = a.itemsize() == 4 && a.strides(1) == 4 && a.strides(0) > 0 && a.strides(0) % 4 == 0;
+    // Non-native byte order (a big-endian '>f4' array on this machine) is converted by the copy below.
+    const bool native = a.dtype().attr("isnative").cast<bool>();
+    const bool in_place = native && a.itemsize() == 4 && a.strides(1) == 4 && a.strides(0) > 0 && a.strides(0) % 4 == 0;
     if (in_place) {
         holder = a;
         return rp::points_view(static_cast<const float*>(a.data()), a.shape(0), a.strides(0) / 4);
@@ -176,6 +178,8 @@ void bind_results(py::module_& m) {
     py::class_<rp::Iri>(m, "Iri", "International Roughness Index of one profile (or the mean of both wheels)")
         .def_property_readonly("value", [](const rp::Iri& i) { return optional_value(i.value); }, "m/km, or None with .reason")
         .def_readonly("length", &rp::Iri::length_m, "m, the stretch it covers")
+        .def_property_readonly("backed_fraction", [](const rp::Iri& i) { return optional_value(i.backed_fraction); },
+                               "bins of the stretch that hold points (the rest interpolated), or None when unknown")
         .def_property_readonly("reason", [](const rp::Iri& i) -> py::object {
             return i.reason.empty() ? py::object(py::none()) : py::object(py::str(i.reason));
         });
@@ -503,13 +507,13 @@ PYBIND11_MODULE(_core, m) {
     bind_estimator(m);
     bind_stages(m);
     bind_io(m);
-    m.def("read_frame", [](const std::string& path) {
-        rp::Frame f = rp::read_frame(path);
+    m.def("read_frame", [](const std::string& path, int columns) {
+        rp::Frame f = rp::read_frame(path, columns);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));
         rp::PointMatrix* raw = owner.get();
         py::capsule free_when_done(owner.release(), [](void* p) { delete static_cast<rp::PointMatrix*>(p); });
         return py::array_t<float>({raw->rows(), Eigen::Index(4)}, raw->data(), free_when_done);
-    }, py::arg("path"), "N×4 float32 (x, y, z, intensity) of a KITTI .bin or .pcd file");
+    }, py::arg("path"), py::arg("columns") = 0, "N×4 float32 (x, y, z, intensity) of a KITTI .bin or .pcd file");
     m.def("expand_inputs", &rp::expand_inputs);
     m.def("default_config_json", [] { return rp::config_to_json(rp::Config{}); });
     m.def("validate_config", [](const std::string& json) { config_from(json); });

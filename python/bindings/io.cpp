@@ -49,6 +49,8 @@ void bind_io(py::module_& m) {
                                        {Eigen::Index(4 * sizeof(float)), Eigen::Index(sizeof(float))}, f.points.data(), self));
         }, "(N, 4) float32: x, y, z (m, sensor frame) and intensity (reflectivity; 0 when none)")
         .def_readonly("source", &rp::Frame::source)
+        .def_readonly("sequence_break", &rp::Frame::sequence_break,
+                      "files: why this frame does not continue the previous file's sequence; empty when it does")
         .def_readonly("timestamp", &rp::Frame::timestamp, "s (pcaps: capture time of the first packet, UNIX epoch), or None")
         .def_readonly("frame_id", &rp::Frame::frame_id, "Ouster frame id, Velodyne sweep count, or index of the file")
         .def_property_readonly("point_times", [](py::object self) {
@@ -94,8 +96,9 @@ void bind_io(py::module_& m) {
         .def_property_readonly("info", [](const rp::FrameSource& s) { return info_dict(s.info()); });
 
     m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
-                            const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets) {
-        rp::SourceOptions o{meta, sensor_model, calibration, cut_angle_deg, lidar_port, skip_bad_packets};
+                            const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets,
+                            int columns) {
+        rp::SourceOptions o{meta, sensor_model, calibration, cut_angle_deg, lidar_port, skip_bad_packets, columns};
         return rp::open_frames(inputs, o);
     });
     m.def("imu_yaw_rate", [](const rp::Frame& f, const std::string& config_json) {

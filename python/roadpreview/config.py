@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional
@@ -69,6 +70,7 @@ class RoughnessConfig:
 @dataclass
 class IriConfig:
     min_length_m: float = 11.0  #: shortest valid stretch whose IRI is computed (ASTM E1926's 11 m lead-in)
+    min_backed_fraction: float = 0.25  #: fewest bins of the stretch holding points (the rest interpolated)
 
 
 @dataclass
@@ -175,7 +177,21 @@ class Config:
         return dataclasses.asdict(self)
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict())
+        data = self.to_dict()
+        _require_finite(data, "Config")
+        return json.dumps(data)
+
+
+def _require_finite(data: Any, where: str) -> None:
+    """ValueError naming the field for NaN or ±Inf (JSON cannot carry them, and no field accepts them)."""
+    if isinstance(data, dict):
+        for key, value in data.items():
+            _require_finite(value, f"{where}.{key}")
+    elif isinstance(data, (list, tuple)):
+        for i, value in enumerate(data):
+            _require_finite(value, f"{where}[{i}]")
+    elif isinstance(data, float) and not math.isfinite(data):
+        raise ValueError(f"invalid config: {where} must be finite, got {data}")
 
 
 def _stage_from_dict(cls: type, data: dict[str, Any], name: str) -> Any:

@@ -16,12 +16,15 @@ from ._native import core
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def read(path: PathLike) -> np.ndarray:
-    """Points of a KITTI ``.bin`` (float32 x, y, z, intensity) or ``.pcd`` file as an (N, 4) float32 array.
+def read(path: PathLike, columns: int = 0) -> np.ndarray:
+    """Points of a frame file as an (N, 4) float32 array: x, y, z, intensity (0 when the file has none).
 
-    Raises RuntimeError naming the file when it is missing, truncated or corrupt.
+    ``.bin``: raw little-endian float32, ``columns`` values per point (default 5 for nuScenes ``*.pcd.bin``,
+    else 4 as KITTI); ``.pcd`` (any encoding); ``.ply`` (ascii, binary little or big endian).
+    Raises RuntimeError naming the file when it is missing, truncated or corrupt, or when its header declares
+    more data than the file holds.
     """
-    return core().read_frame(os.fspath(path))
+    return core().read_frame(os.fspath(path), int(columns))
 
 
 def expand(inputs: list[str]) -> list[str]:
@@ -31,10 +34,12 @@ def expand(inputs: list[str]) -> list[str]:
 
 def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = None, *,  # noqa: A001
          sensor_model: Optional[str] = None, calibration: Optional[PathLike] = None, cut_angle_deg: float = 0.0,
-         lidar_port: int = 0, skip_bad_packets: bool = False):
+         lidar_port: int = 0, skip_bad_packets: bool = False, columns: int = 0):
     """An iterable of frames, decoded one at a time with constant memory (as ``roadpreview run`` reads them).
 
-    path: one ``.pcap``/``.pcapng`` recording, or ``.bin``/``.pcd`` files and directories (a list).
+    path: ``.pcap``/``.pcapng`` recordings (several: split recordings of one drive, read in order), or
+    ``.bin``/``.pcd``/``.ply`` files and directories (a list); ``columns`` as in :func:`read`. A file frame's
+    ``.sequence_break`` says why it does not continue the previous file (docs/method.md, "Inputs").
     meta: Ouster metadata JSON; by default the ``.json`` next to the pcap whose name is the pcap's name or
     its longest ``_``-separated prefix. A pcap without metadata is read as Velodyne when it holds Velodyne
     data packets; ``sensor_model`` ("VLP-16", "VLP-32C", "HDL-32E", "HDL-64E") overrides the model read from
@@ -51,7 +56,7 @@ def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = N
     paths = [path] if isinstance(path, (str, os.PathLike)) else list(path)
     return core().open_frames([os.fspath(p) for p in paths], os.fspath(meta) if meta else "", sensor_model or "",
                               os.fspath(calibration) if calibration else "", float(cut_angle_deg), int(lidar_port),
-                              bool(skip_bad_packets))
+                              bool(skip_bad_packets), int(columns))
 
 
 def imu_yaw_rate(frame, cfg=None) -> Optional[float]:

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <roadpreview/profile/profile.hpp>
 #include <roadpreview/roughness/iri.hpp>
 
 namespace rp = roadpreview;
@@ -102,4 +103,48 @@ TEST(Iri, ProfileIriTakesTheLongestStretchOrDeclines) {
     const rp::Iri mean = rp::vehicle_iri(iri, rp::profile_iri(std::vector<double>(400, 0.0), kDs, cfg));
     EXPECT_DOUBLE_EQ(*mean.value, 0.5 * *iri.value);
     EXPECT_EQ(rp::vehicle_iri(iri, short_one).reason, short_one.reason);
+}
+
+namespace {
+
+// A 20 m profile with points in every `backed_every`-th bin, classified or not.
+rp::Profile sine_profile(int backed_every, bool classified) {
+    rp::Profile p;
+    p.ds = kDs;
+    for (int k = 0; k < 200; ++k) {
+        p.z.push_back(0.01 * std::sin(0.3 * k));
+        p.count.push_back(k % backed_every == 0 ? 3 : 0);
+    }
+    if (classified) p.roughness.iso_class = 'C';
+    else p.roughness.reason = "noise dominates the band";
+    return p;
+}
+
+}  // namespace
+
+TEST(Iri, WheelIriReportsItsBackingAndDeclinesWhereItCannotBeTrusted) {
+    rp::IriConfig cfg;
+    const rp::Profile dense = sine_profile(1, true);
+    const rp::Iri trusted = rp::wheel_iri(dense, dense.roughness, cfg);
+    ASSERT_TRUE(trusted.value) << trusted.reason;
+    EXPECT_DOUBLE_EQ(*trusted.value, rp::iri(dense.z.data(), dense.z.size(), kDs));
+    EXPECT_DOUBLE_EQ(*trusted.backed_fraction, 1.0);
+
+    const rp::Profile sparse = sine_profile(5, true);  // four bins in five interpolated
+    const rp::Iri thin = rp::wheel_iri(sparse, sparse.roughness, cfg);
+    EXPECT_FALSE(thin.value);
+    EXPECT_EQ(thin.reason, rp::kIriTooSparse);
+    EXPECT_NEAR(*thin.backed_fraction, 40.0 / 200.0, 1e-12);
+    EXPECT_NEAR(thin.length_m, 19.9, 1e-9);
+
+    const rp::Profile declined = sine_profile(1, false);
+    const rp::Iri no_class = rp::wheel_iri(declined, declined.roughness, cfg);
+    EXPECT_FALSE(no_class.value);
+    EXPECT_EQ(no_class.reason, rp::kIriClassDeclined);
+
+    const rp::Iri mean = rp::vehicle_iri(trusted, thin);
+    EXPECT_FALSE(mean.value);
+    EXPECT_NEAR(*mean.backed_fraction, 0.5 * (1.0 + 40.0 / 200.0), 1e-12);
+    const rp::Profile third = sine_profile(3, true);  // 67 of 200 bins backed: above the default 0.25
+    EXPECT_TRUE(rp::wheel_iri(third, third.roughness, cfg).value);
 }

@@ -135,3 +135,53 @@ TEST(Roughness, OctaveBandsAverageTheOrdinatesInsideThem) {
     }
     EXPECT_DOUBLE_EQ(r.octave_centers.back(), 4.0);  // 4 cycles/m band: 2.83 … 5 (Nyquist)
 }
+
+TEST(Roughness, IsoClassRejectsValuesThatAreNoPsd) {
+    EXPECT_THROW(rp::iso_class(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+    EXPECT_THROW(rp::iso_class(-1.0), std::invalid_argument);
+    EXPECT_THROW(rp::iso_class(std::numeric_limits<double>::infinity()), std::invalid_argument);
+    EXPECT_EQ(rp::iso_class(0.0), 'A');
+}
+
+namespace {
+rp::Roughness classified(double gd_n0, double confidence, double lo, double hi) {
+    rp::Roughness r;
+    r.gd_n0 = gd_n0;
+    r.iso_class = rp::iso_class(gd_n0);
+    r.confidence = confidence;
+    r.band_lo = lo, r.band_hi = hi;
+    return r;
+}
+}  // namespace
+
+TEST(Roughness, VehicleClassNeverContradictsBothWheels) {
+    rp::Roughness declined;
+    declined.reason = "noise dominates the band";
+    rp::Roughness vehicle = classified(300e-6, 0.7, 0.1, 2.0);  // the common stretch fitted: C
+    rp::reconcile_vehicle(vehicle, declined, declined);
+    EXPECT_FALSE(vehicle.iso_class);
+    EXPECT_EQ(vehicle.reason, "both wheels declined");
+    vehicle = classified(300e-6, 0.7, 0.1, 2.0);  // one wheel classified: the vehicle's own fit stands
+    rp::reconcile_vehicle(vehicle, classified(200e-6, 0.8, 0.1, 2.0), declined);
+    EXPECT_EQ(*vehicle.iso_class, 'C');
+    rp::Roughness noisy = declined;  // ... and so does its decline
+    rp::reconcile_vehicle(noisy, classified(200e-6, 0.8, 0.1, 2.0), declined);
+    EXPECT_FALSE(noisy.iso_class);
+    EXPECT_EQ(noisy.reason, "noise dominates the band");
+
+    rp::Roughness short_common;  // both wheels classified, their common stretch too short
+    short_common.reason = "valid stretch too short";
+    rp::reconcile_vehicle(short_common, classified(200e-6, 0.8, 0.2, 2.0), classified(1000e-6, 0.6, 0.1, 4.0));
+    ASSERT_TRUE(short_common.iso_class);
+    EXPECT_DOUBLE_EQ(short_common.gd_n0, 600e-6);
+    EXPECT_EQ(*short_common.iso_class, 'D');
+    EXPECT_DOUBLE_EQ(short_common.confidence, 0.6);
+    EXPECT_EQ(short_common.band_limit, "wheels");
+    EXPECT_TRUE(short_common.reason.empty());
+    EXPECT_DOUBLE_EQ(short_common.band_lo, 0.1);
+    EXPECT_DOUBLE_EQ(short_common.band_hi, 4.0);
+
+    rp::Roughness fitted = classified(300e-6, 0.7, 0.1, 2.0);  // everything classified: the fit stands
+    rp::reconcile_vehicle(fitted, classified(200e-6, 0.8, 0.1, 2.0), classified(500e-6, 0.8, 0.1, 2.0));
+    EXPECT_DOUBLE_EQ(fitted.gd_n0, 300e-6);
+}

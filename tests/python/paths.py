@@ -9,6 +9,7 @@ REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data"
 KITTI_FRAMES = sorted((DATA / "semantickitti").glob("*.bin"))
 PCD_FILE = DATA / "pcd" / "patchwork_128ring_000000.pcd"
+NUSCENES_BIN = DATA / "nuscenes" / "n015-2018-07-24-11-22-45+0800__LIDAR_TOP__1532402927647951.pcd.bin"
 KITTI_SENSOR_HEIGHT = 1.73  # m, Velodyne HDL-64E on the KITTI car
 
 

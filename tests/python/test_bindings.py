@@ -185,13 +185,15 @@ def test_json_line_carries_the_noise_aware_fields_and_iri(est, kitti):
     d = res.to_dict()
     for side, roughness in (("left", res.left.roughness), ("right", res.right.roughness), ("vehicle", res.vehicle)):
         line = d["roughness"][side]
-        assert line["band_limit"] == roughness.band_limit in ("requested", "nyquist", "sampling", "noise")
+        assert line["band_limit"] == roughness.band_limit in ("requested", "nyquist", "sampling", "noise", "wheels")
         assert line["backed_fraction"] == pytest.approx(roughness.backed_fraction) and 0 < roughness.backed_fraction <= 1
         assert line["noise_floor"] == pytest.approx(roughness.noise_floor) and roughness.noise_floor > 0
         assert line["noise_psd"] == pytest.approx(list(roughness.noise_psd)) and len(line["noise_psd"]) == len(line["psd"])
         assert line["confidence"] == (None if roughness.iso_class is None else pytest.approx(roughness.confidence))
         assert line["iri"] == {"value": roughness.iri.value if roughness.iri.value is None else pytest.approx(roughness.iri.value),
-                               "length": pytest.approx(roughness.iri.length), "reason": roughness.iri.reason}
+                               "length": pytest.approx(roughness.iri.length), "reason": roughness.iri.reason,
+                               "backed_fraction": pytest.approx(roughness.iri.backed_fraction)}
+        assert 0 < roughness.iri.backed_fraction <= 1
     spread = d["profiles"]["left"]["spread"]
     assert len(spread) == len(res.left.z)
     assert [v is None for v in spread] == list(np.isnan(res.left.spread))

@@ -23,7 +23,9 @@ def test_directory_input_gives_one_line_per_frame_in_name_order():
     out = lines(proc.stdout)
     assert [o["source"] for o in out] == [str(p) for p in KITTI_FRAMES]
     assert [o["frame"] for o in out] == list(range(len(KITTI_FRAMES)))
-    assert len(proc.stderr.strip().splitlines()) == len(KITTI_FRAMES) + 1  # progress + summary
+    # the note on the skipped .label files, progress, summary
+    assert len(proc.stderr.strip().splitlines()) == len(KITTI_FRAMES) + 2
+    assert "skipped" in proc.stderr.splitlines()[0]
     assert "frame(s)" in proc.stderr.splitlines()[-1]
 
 

@@ -94,6 +94,9 @@ def assert_support_agrees(c, r):
 
 def assert_iri_agrees(c, r):
     assert c.reason == r.reason
+    assert (c.backed_fraction is None) == (r.backed_fraction is None)
+    if r.backed_fraction is not None:
+        assert c.backed_fraction == pytest.approx(r.backed_fraction, rel=1e-12)
     assert c.length == pytest.approx(r.length, rel=1e-12)
     assert (c.value is None) == (r.value is None)
     if r.value is not None:

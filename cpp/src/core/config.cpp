@@ -23,7 +23,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, b
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
                                                 min_cluster_points, max_cluster_points, ground_search_m,
                                                 safety_margin_m, min_height_m)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m, min_backed_fraction)
 
 const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
 
@@ -93,13 +93,37 @@ void from_json(const json& j, Config& c) {
 
 namespace {
 
-// Unknown keys are almost always typos; the defaults' own JSON is the list of known ones.
-void reject_unknown_keys(const json& given, const json& known, const std::string& where) {
+// What a field of the defaults' JSON type needs, or empty when `value` has it. Null stands for "not set" in
+// the optional fields only (sensor_height, extrinsics).
+std::string type_problem(const json& value, const json& known, bool optional) {
+    if (value.is_null()) return optional ? "" : "must not be null";
+    if (known.is_number_integer() && !(value.is_number() && value.get<double>() == std::floor(value.get<double>())))
+        return "must be a whole number";
+    if ((known.is_number() || known.is_null()) && !value.is_number()) return "must be a number";
+    if (known.is_boolean() && !value.is_boolean()) return "must be true or false";
+    if (known.is_string() && !value.is_string()) return "must be a string";
+    if (known.is_object() && !value.is_object()) return "must be an object of fields";
+    return {};
+}
+
+// Unknown keys are almost always typos; the defaults' own JSON is the list of known ones and their types (a
+// wrong type would otherwise surface as nlohmann's "[json.exception.type_error.302]" without the field's name).
+void check_fields(const json& given, const json& known, const std::string& where) {
     if (!given.is_object()) throw std::invalid_argument(where + " must be a JSON object");
     for (const auto& [key, value] : given.items()) {
         if (!known.contains(key)) throw std::invalid_argument("unknown config field " + where + "." + key);
-        if (value.is_object() && known[key].is_object()) reject_unknown_keys(value, known[key], where + "." + key);
+        const bool optional = where == "config" && (key == "sensor_height" || key == "extrinsics");
+        if (auto problem = type_problem(value, known[key], optional); !problem.empty())
+            throw std::invalid_argument(where + "." + key + " " + problem + ", got " + value.dump());
+        if (value.is_object()) check_fields(value, known[key], where + "." + key);
     }
+}
+
+// nlohmann's messages start with "[json.exception.parse_error.101] "; the rest says what and where.
+std::string json_message(const json::exception& e) {
+    const std::string what = e.what();
+    const auto end = what.find("] ");
+    return what.rfind("[json.exception.", 0) == 0 && end != std::string::npos ? what.substr(end + 2) : what;
 }
 
 void require(bool ok, const std::string& what) {
@@ -166,6 +190,9 @@ void validate(const Config& c) {
             "roughness.min_resolved_fraction must be in (0, 1]");
 
     require(std::isfinite(c.iri.min_length_m) && c.iri.min_length_m >= 0.0, "iri.min_length_m must be >= 0");
+    require(std::isfinite(c.iri.min_backed_fraction) && c.iri.min_backed_fraction >= 0.0 &&
+                c.iri.min_backed_fraction <= 1.0,
+            "iri.min_backed_fraction must be in [0, 1]");
 
     const FusionConfig& f = c.fusion;
     require(std::isfinite(f.alpha) && f.alpha > 0.0 && f.alpha <= 1.0, "fusion.alpha must be in (0, 1]");
@@ -192,12 +219,12 @@ Config config_from_json(const std::string& text, const std::string& source) {
         const json j = json::parse(text);
         Config known;
         known.extrinsics = Extrinsics{};  // so the nested extrinsics keys are known too
-        reject_unknown_keys(j, json(known), "config");
+        check_fields(j, json(known), "config");
         Config cfg = j.get<Config>();
         validate(cfg);
         return cfg;
     } catch (const json::exception& e) {
-        throw std::invalid_argument(source + ": " + e.what());
+        throw std::invalid_argument(source + ": " + json_message(e));
     } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(source + ": " + e.what());
     }

@@ -1,132 +1,185 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "roadpreview/io/readers.hpp"
 
+#include "io/cloud_files.hpp"
 #include "io/pcap_source.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 
-#include <pcl/common/io.h>
-#include <pcl/console/print.h>
-#include <pcl/io/pcd_io.h>
-#include <pcl/point_types.h>
-
 namespace roadpreview {
-namespace {
 
 namespace fs = std::filesystem;
 
-std::string extension_of(const fs::path& p) {
-    std::string ext = p.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext;
+void fail_file(const std::string& path, const std::string& what) { throw std::runtime_error(path + ": " + what); }
+
+std::uint64_t file_size(const std::string& path) {
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec) fail_file(path, "cannot read file (" + ec.message() + ")");
+    return size;
 }
+
+Frame read_raw_float32(const std::string& path, int columns) {
+    if (columns < 3)
+        fail_file(path, "a raw float32 file needs at least 3 columns (x, y, z), got " + std::to_string(columns));
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail_file(path, "cannot open file");
+    const std::uint64_t bytes = file_size(path);
+    const std::uint64_t point_bytes = static_cast<std::uint64_t>(columns) * sizeof(float);
+    if (bytes % point_bytes != 0)
+        fail_file(path, "size " + std::to_string(bytes) + " bytes is not a multiple of " + std::to_string(point_bytes) +
+                            " (" + std::to_string(columns) + " float32 values per point); the file is truncated or " +
+                            "has another number of columns (--columns)");
+    const auto rows = static_cast<Eigen::Index>(bytes / point_bytes);
+    Frame f;
+    f.source = path;
+    const auto read_into = [&](float* data) {
+        if (!in.read(reinterpret_cast<char*>(data), static_cast<std::streamsize>(bytes))) fail_file(path, "read error");
+    };
+    if (columns == 4) {  // KITTI: the file is the frame's layout
+        f.points.resize(rows, 4);
+        read_into(f.points.data());
+        return f;
+    }
+    Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> raw(rows, columns);
+    read_into(raw.data());
+    f.points.setZero(rows, 4);
+    f.points.leftCols(std::min(columns, 4)) = raw.leftCols(std::min(columns, 4));
+    return f;
+}
+
+namespace {
+
+std::string lower(std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+    return text;
+}
+
+std::string extension_of(const fs::path& p) { return lower(p.extension().string()); }
 
 bool is_frame_file(const fs::path& p) {
     const std::string ext = extension_of(p);
-    return ext == ".bin" || ext == ".pcd";
+    return ext == ".bin" || ext == ".pcd" || ext == ".ply";
 }
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-    throw std::runtime_error(path + ": " + what);
-}
-
-Frame read_kitti_bin(const std::string& path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) fail(path, "cannot open file");
-    const auto bytes = static_cast<std::size_t>(in.tellg());
-    constexpr std::size_t kPointBytes = 4 * sizeof(float);
-    if (bytes % kPointBytes != 0)
-        fail(path, "size " + std::to_string(bytes) +
-                       " bytes is not a multiple of 16 (KITTI .bin holds float32 x, y, z, intensity per point); "
-                       "the file is truncated or not a KITTI scan");
-    Frame f;
-    f.source = path;
-    f.points.resize(static_cast<Eigen::Index>(bytes / kPointBytes), 4);
-    in.seekg(0);
-    if (!in.read(reinterpret_cast<char*>(f.points.data()), static_cast<std::streamsize>(bytes)))
-        fail(path, "read error");
-    return f;
-}
-
-Frame read_pcd(const std::string& path) {
-    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are reported by our exception
-    pcl::PCLPointCloud2 blob;
-    pcl::PCDReader reader;
-    // PCL 1.13 accepts a header without FIELDS or DATA and then crashes while reading: check it first.
-    Eigen::Vector4f origin;
-    Eigen::Quaternionf orientation;
-    int version = 0, data_type = 0;
-    unsigned int data_start = 0;
-    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_start) < 0 || blob.fields.empty() ||
-        data_start == 0)
-        fail(path, "not a PCD file (no valid header with FIELDS and DATA)");
-    if (reader.read(path, blob) < 0) fail(path, "not a readable PCD file (corrupt header or data)");
-    for (const char* axis : {"x", "y", "z"})
-        if (pcl::getFieldIndex(blob, axis) < 0) fail(path, std::string("PCD file has no '") + axis + "' field");
-    const std::size_t expected = static_cast<std::size_t>(blob.width) * blob.height * blob.point_step;
-    if (blob.data.size() < expected) fail(path, "PCD data is shorter than its header declares");
-    pcl::PointCloud<pcl::PointXYZI> cloud;
-    pcl::fromPCLPointCloud2(blob, cloud);
-    const bool has_intensity = pcl::getFieldIndex(blob, "intensity") >= 0;
-    Frame f;
-    f.source = path;
-    f.points.resize(static_cast<Eigen::Index>(cloud.size()), 4);
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const auto& p = cloud[i];
-        f.points.row(static_cast<Eigen::Index>(i)) << p.x, p.y, p.z, has_intensity ? p.intensity : 0.0f;
-    }
-    return f;
+// nuScenes names its float32 x, y, z, intensity, ring sweeps *.pcd.bin.
+bool is_nuscenes_bin(const fs::path& p) {
+    const std::string name = lower(p.filename().string());
+    return name.size() > 8 && name.compare(name.size() - 8, 8, ".pcd.bin") == 0;
 }
 
 }  // namespace
 
-Frame read_frame(const std::string& path) {
-    const fs::path p(path);
-    std::error_code ec;
-    if (!fs::exists(p, ec)) fail(path, "no such file");
-    if (!fs::is_regular_file(p, ec)) fail(path, "not a regular file");
-    const std::string ext = extension_of(p);
-    if (ext == ".bin") return read_kitti_bin(path);
-    if (ext == ".pcd") return read_pcd(path);
-    fail(path, "unsupported file type '" + ext + "' (expected .bin or .pcd)");
+int raw_columns(const std::string& path, int columns) {
+    if (columns > 0) return columns;
+    return is_nuscenes_bin(fs::path(path)) ? 5 : 4;
 }
 
-std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
-    std::vector<std::string> files;
+Frame read_frame(const std::string& path, int columns) {
+    const fs::path p(path);
+    std::error_code ec;
+    if (!fs::exists(p, ec)) fail_file(path, "no such file");
+    if (!fs::is_regular_file(p, ec)) fail_file(path, "not a regular file");
+    const std::string ext = extension_of(p);
+    if (ext == ".bin") return read_raw_float32(path, raw_columns(path, columns));
+    if (columns > 0) fail_file(path, "--columns applies to raw float32 .bin files only");
+    if (ext == ".pcd") return read_pcd(path);
+    if (ext == ".ply") return read_ply(path);
+    fail_file(path, "unsupported file type '" + ext + "' (expected .bin, .pcd or .ply)");
+}
+
+InputFiles list_inputs(const std::vector<std::string>& inputs) {
+    InputFiles out;
     for (const std::string& input : inputs) {
         const fs::path p(input);
         std::error_code ec;
-        if (!fs::exists(p, ec)) fail(input, "no such file or directory");
+        if (!fs::exists(p, ec)) fail_file(input, "no such file or directory");
         if (!fs::is_directory(p, ec)) {
             if (!is_frame_file(p))
-                fail(input, "unsupported file type (expected .bin, .pcd, or a single .pcap/.pcapng recording)");
-            files.push_back(input);
+                fail_file(input, "unsupported file type (expected .bin, .pcd, .ply, or .pcap/.pcapng recordings)");
+            out.files.push_back(input);
             continue;
         }
         std::vector<std::string> found;
-        for (const auto& entry : fs::directory_iterator(p))
-            if (entry.is_regular_file() && is_frame_file(entry.path())) found.push_back(entry.path().string());
-        if (found.empty()) fail(input, "directory holds no .bin or .pcd files");
+        for (const auto& entry : fs::directory_iterator(p)) {
+            if (entry.is_regular_file(ec) && is_frame_file(entry.path())) {  // links to frame files count
+                found.push_back(entry.path().string());
+                continue;
+            }
+            const bool broken_link = entry.is_symlink(ec) && !fs::exists(entry.path(), ec);
+            out.skipped.push_back(entry.path().string() + (broken_link         ? " (broken link)"
+                                                           : entry.is_directory(ec) ? " (folder)"
+                                                                                    : ""));
+        }
+        if (found.empty()) fail_file(input, "directory holds no .bin, .pcd or .ply files");
         std::sort(found.begin(), found.end());
-        files.insert(files.end(), found.begin(), found.end());
+        out.files.insert(out.files.end(), found.begin(), found.end());
     }
-    return files;
+    std::sort(out.skipped.begin(), out.skipped.end());
+    return out;
+}
+
+std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) { return list_inputs(inputs).files; }
+
+namespace {
+
+// "seq/000123.bin" → folder "seq", prefix "", number 123, suffix "": the name without its extension (and the
+// ".pcd" of nuScenes' ".pcd.bin") split at its last run of digits.
+struct FileName {
+    std::string folder, prefix, suffix;
+    std::optional<std::int64_t> number;
+};
+
+FileName split_name(const std::string& path) {
+    const fs::path p(path);
+    std::string stem = p.stem().string();
+    if (is_nuscenes_bin(p)) stem.erase(stem.size() - 4);
+    FileName n{p.parent_path().string(), stem, extension_of(p), {}};
+    const auto last = n.prefix.find_last_of("0123456789");
+    if (last == std::string::npos) return n;
+    auto first = n.prefix.find_last_not_of("0123456789", last);
+    first = first == std::string::npos ? 0 : first + 1;
+    if (last - first + 1 > 18) return n;
+    n.number = std::stoll(n.prefix.substr(first, last - first + 1));
+    n.suffix = n.prefix.substr(last + 1) + n.suffix;
+    n.prefix.erase(first);
+    return n;
+}
+
+}  // namespace
+
+std::string sequence_break(const std::string& previous, const std::string& next, std::int64_t& step) {
+    constexpr std::int64_t kMaxStepRatio = 3;  // two dropped frames still continue a sequence
+    const FileName a = split_name(previous), b = split_name(next);
+    std::string problem;
+    if (a.folder != b.folder) problem = "another folder";
+    else if (a.prefix != b.prefix || a.suffix != b.suffix || a.number.has_value() != b.number.has_value())
+        problem = "another file name pattern";
+    else if (a.number && (*b.number <= *a.number || (step > 0 && *b.number - *a.number > kMaxStepRatio * step)))
+        problem = "frame number " + std::to_string(*a.number) + " → " + std::to_string(*b.number);
+    if (!problem.empty() || !a.number) step = 0;
+    else step = step > 0 ? std::min<std::int64_t>(step, *b.number - *a.number) : *b.number - *a.number;
+    return problem;
 }
 
 namespace {
 
-// .bin and .pcd files, one frame each; frame_id is the position in the list.
+// .bin, .pcd and .ply files, one frame each; frame_id is the position in the list.
 class FileListSource : public FrameSource {
 public:
-    explicit FileListSource(std::vector<std::string> files) : files_(std::move(files)) {}
+    FileListSource(InputFiles inputs, int columns) : inputs_(std::move(inputs)), columns_(columns) {}
 
     std::optional<Frame> next() override {
-        if (next_ == files_.size()) return std::nullopt;
-        Frame f = read_frame(files_[next_]);
+        const auto& files = inputs_.files;
+        if (next_ == files.size()) return std::nullopt;
+        Frame f = read_frame(files[next_], columns_);
+        if (next_ > 0) f.sequence_break = sequence_break(files[next_ - 1], files[next_], step_);
         f.frame_id = static_cast<std::int64_t>(next_++);
         return f;
     }
@@ -134,27 +187,39 @@ public:
     SourceInfo info() const override {
         SourceInfo i;
         i.format = "files";
+        if (!inputs_.skipped.empty()) i.notes.push_back(skipped_note(inputs_.skipped));
         return i;
     }
 
 private:
-    std::vector<std::string> files_;
+    static std::string skipped_note(const std::vector<std::string>& skipped) {
+        constexpr std::size_t kNamed = 5;
+        std::string note = "skipped " + std::to_string(skipped.size()) + " director" +
+                           (skipped.size() == 1 ? "y entry" : "y entries") + " that are not frame files:";
+        for (std::size_t i = 0; i < std::min(kNamed, skipped.size()); ++i) note += (i ? ", " : " ") + skipped[i];
+        if (skipped.size() > kNamed) note += ", ...";
+        return note;
+    }
+
+    InputFiles inputs_;
+    int columns_;
     std::size_t next_ = 0;
+    std::int64_t step_ = 0;  // of the name numbers in the current sequence
 };
 
 std::unique_ptr<FrameSource> open_pcap(const std::string& path, const SourceOptions& o) {
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) fail(path, "no such file");
+    if (!fs::is_regular_file(path, ec)) fail_file(path, "no such file");
     const bool velodyne_asked = !o.sensor_model.empty() || !o.calibration.empty();
     if (!o.meta.empty()) {
-        if (velodyne_asked) fail(path, "Ouster metadata and Velodyne options given together");
+        if (velodyne_asked) fail_file(path, "Ouster metadata and Velodyne options given together");
         return open_ouster_pcap(path, o.meta, o);
     }
     if (velodyne_asked) return open_velodyne_pcap(path, o);
     const std::string meta = find_ouster_metadata(path);
     if (!meta.empty()) return open_ouster_pcap(path, meta, o);
     if (looks_like_velodyne(path)) return open_velodyne_pcap(path, o);
-    fail(path, "holds no Velodyne data packets and no Ouster metadata JSON was found next to it (looked for " +
+    fail_file(path, "holds no Velodyne data packets and no Ouster metadata JSON was found next to it (looked for " +
                    fs::path(path).stem().string() + ".json and the names its '_'-separated prefixes give); "
                    "pass the metadata with --meta");
 }
@@ -179,11 +244,61 @@ std::string find_ouster_metadata(const std::string& pcap_path) {
     }
 }
 
+namespace {
+
+// Split recordings of one drive, read in the order given as one stream of frames. A sweep cut by the split
+// comes out as two partial frames; a recording that starts before the previous one ended is an error.
+class PcapSequenceSource : public FrameSource {
+public:
+    PcapSequenceSource(std::vector<std::string> paths, const SourceOptions& options)
+        : paths_(std::move(paths)), options_(options), current_(open_pcap(paths_[0], options)) {
+        info_ = current_->info();
+        info_.notes.push_back(std::to_string(paths_.size()) + " recordings read as one drive, in the order given");
+    }
+
+    std::optional<Frame> next() override {
+        for (;;) {
+            std::optional<Frame> f = current_->next();
+            if (f) return checked(std::move(*f));
+            if (++index_ == paths_.size()) return std::nullopt;
+            current_ = open_pcap(paths_[index_], options_);
+            const SourceInfo next_info = current_->info();
+            if (next_info.format != info_.format || next_info.sensor_model != info_.sensor_model)
+                fail_file(paths_[index_], "holds " + next_info.format + " " + next_info.sensor_model + " data but " +
+                                              paths_[0] + " holds " + info_.format + " " + info_.sensor_model);
+        }
+    }
+
+    SourceInfo info() const override { return info_; }
+
+private:
+    Frame checked(Frame f) {
+        if (f.timestamp && last_time_ && *f.timestamp < *last_time_ && last_file_ != index_)
+            fail_file(paths_[index_], "starts at " + std::to_string(*f.timestamp) + " s, before the end of " +
+                                          paths_[last_file_] + " (" + std::to_string(*last_time_) +
+                                          " s): give split recordings in time order");
+        if (f.timestamp) last_time_ = f.timestamp, last_file_ = index_;
+        return f;
+    }
+
+    std::vector<std::string> paths_;
+    SourceOptions options_;
+    std::unique_ptr<FrameSource> current_;
+    SourceInfo info_;
+    std::size_t index_ = 0, last_file_ = 0;
+    std::optional<double> last_time_;
+};
+
+}  // namespace
+
 std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
-    if (pcaps == 0) return std::make_unique<FileListSource>(expand_inputs(inputs));
-    if (inputs.size() > 1) fail(inputs[0], "give one .pcap/.pcapng recording at a time, without other inputs");
-    return open_pcap(inputs[0], options);
+    if (pcaps == 0) return std::make_unique<FileListSource>(list_inputs(inputs), options.columns);
+    if (pcaps != static_cast<std::ptrdiff_t>(inputs.size()))
+        fail_file(inputs[0], "give .pcap/.pcapng recordings or frame files, not both in one run");
+    if (options.columns > 0) fail_file(inputs[0], "--columns applies to raw float32 .bin files only");
+    if (inputs.size() == 1) return open_pcap(inputs[0], options);
+    return std::make_unique<PcapSequenceSource>(inputs, options);
 }
 
 }  // namespace roadpreview

@@ -65,7 +65,8 @@ json optional_number(const std::optional<double>& v) { return v ? number(*v) : j
 
 json iri_json(const Iri& i) {
     return {{"value", optional_number(i.value)}, {"length", i.length_m},
-            {"reason", i.reason.empty() ? json(nullptr) : json(i.reason)}};
+            {"reason", i.reason.empty() ? json(nullptr) : json(i.reason)},
+            {"backed_fraction", optional_number(i.backed_fraction)}};
 }
 
 json roughness_json(const Roughness& r) {

@@ -163,9 +163,10 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
 
     for (Profile* p : {&r.left, &r.right}) {
         p->roughness = analyze_roughness(*p, cfg.roughness);
-        p->roughness.iri = profile_iri(p->z, cfg.profile.ds_m, cfg.iri);
+        p->roughness.iri = wheel_iri(*p, p->roughness, cfg.iri);
     }
     r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
+    reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);
     r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);
     r.timing_ms.roughness = ms_since(mark);
     r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

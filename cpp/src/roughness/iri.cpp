@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/roughness.hpp"
 
 namespace roadpreview {
@@ -83,8 +84,26 @@ Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
     return out;
 }
 
+Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
+    Iri out = profile_iri(p.z, p.ds, cfg);
+    const auto [first, last] = longest_valid_stretch(p.z);
+    if (last > first && p.count.size() == p.z.size()) {
+        const auto begin = p.count.begin();
+        const auto backed = std::count_if(begin + static_cast<std::ptrdiff_t>(first),
+                                          begin + static_cast<std::ptrdiff_t>(last), [](auto c) { return c > 0; });
+        out.backed_fraction = static_cast<double>(backed) / static_cast<double>(last - first);
+    }
+    if (!out.value) return out;
+    if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = kIriTooSparse;
+    else if (!wheel.iso_class) out.reason = kIriClassDeclined;
+    if (!out.reason.empty()) out.value.reset();
+    return out;
+}
+
 Iri vehicle_iri(const Iri& left, const Iri& right) {
     Iri out;
+    if (left.backed_fraction && right.backed_fraction)
+        out.backed_fraction = 0.5 * (*left.backed_fraction + *right.backed_fraction);
     if (!left.value || !right.value) {
         out.reason = !left.reason.empty() ? left.reason : right.reason;
         return out;

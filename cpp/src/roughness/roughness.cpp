@@ -125,6 +125,8 @@ Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
 }
 
 char iso_class(double gd_n0_m3) {
+    if (!std::isfinite(gd_n0_m3) || gd_n0_m3 < 0.0)
+        throw std::invalid_argument("iso_class: G_d(n0) must be finite and >= 0 m³, got " + std::to_string(gd_n0_m3));
     int k = 0;
     for (double limit : kClassLimits) k += gd_n0_m3 >= limit ? 1 : 0;
     return kIsoClasses[k];
@@ -176,16 +178,16 @@ double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<do
         double information = 0.0, score = 0.0;
         for (std::size_t i = 0; i < m; ++i) {
             const double expected = std::exp(theta) * shape[i] + floor[i];
-            const double w = std::exp(theta) * shape[i] / expected;
+            const double w = expected > 0.0 ? std::exp(theta) * shape[i] / expected : 0.0;  // flat and noiseless: 0
             information += w * w;
-            score += w * (sp.psd[used[i]] / expected - 1.0);
+            if (w > 0.0) score += w * (sp.psd[used[i]] / expected - 1.0);
         }
         if (information < 1e-12) break;  // the signal has vanished below the noise
         theta += std::clamp(score / information, -kMaxWhittleStep, kMaxWhittleStep);
     }
     for (std::size_t i = 0; i < m; ++i) {
         const double signal = std::exp(theta) * shape[i];
-        share[i] = signal / (signal + floor[i]);
+        share[i] = signal + floor[i] > 0.0 ? signal / (signal + floor[i]) : 0.0;
     }
     return std::exp(theta);
 }
@@ -221,7 +223,7 @@ Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const StretchSuppor
     }
     fit.noise_bound = true;
     fit.gd_n0 = whittle_fit(sp, used, support.resolved, nullptr, share);
-    if (iso_class(fit.gd_n0) != 'A') {
+    if (!std::isfinite(fit.gd_n0) || iso_class(fit.gd_n0) != 'A') {
         fit.reason = kNoiseDominates;
         return fit;
     }
@@ -234,8 +236,8 @@ Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const StretchSuppor
 }  // namespace
 
 double class_confidence(double gd_n0_m3, double log_variance) {
-    const int k = static_cast<int>(std::string(kIsoClasses).find(iso_class(gd_n0_m3)));
     if (gd_n0_m3 <= 0.0) return 1.0;
+    const int k = static_cast<int>(std::string(kIsoClasses).find(iso_class(gd_n0_m3)));
     const double sigma = std::sqrt(log_variance);
     const auto below = [&](double limit) {  // P(true value < limit)
         return 0.5 * std::erfc((std::log(gd_n0_m3) - std::log(limit)) / (sigma * std::sqrt(2.0)));
@@ -283,8 +285,8 @@ Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const
     }
     const Fit fit = noise_aware ? noise_aware_fit(sp, used, *support, cfg) : log_fit(sp, used);
     if (fit.noise_bound) r.band_limit = "noise";
-    if (!fit.reason.empty()) {
-        r.reason = fit.reason;
+    if (!fit.reason.empty() || !std::isfinite(fit.gd_n0)) {
+        r.reason = fit.reason.empty() ? "fit failed (G_d(n0) not finite)" : fit.reason;
         return r;
     }
     r.band_lo = lo, r.band_hi = hi;
@@ -294,6 +296,24 @@ Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const
     r.iso_class = iso_class(r.gd_n0);
     r.confidence = class_confidence(r.gd_n0, fit.log_variance);
     return r;
+}
+
+void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughness& right) {
+    if (!left.iso_class && !right.iso_class) {
+        vehicle.iso_class.reset();
+        vehicle.band_lo = vehicle.band_hi = 0.0;
+        vehicle.reason = "both wheels declined";
+        return;
+    }
+    if (vehicle.iso_class || !left.iso_class || !right.iso_class) return;  // one wheel alone: the fit decides
+    vehicle.gd_n0 = 0.5 * (left.gd_n0 + right.gd_n0);
+    vehicle.gd_n0_free = vehicle.waviness = kNaN;
+    vehicle.iso_class = iso_class(vehicle.gd_n0);
+    vehicle.confidence = std::min(left.confidence, right.confidence);
+    vehicle.band_lo = std::min(left.band_lo, right.band_lo);
+    vehicle.band_hi = std::max(left.band_hi, right.band_hi);
+    vehicle.band_limit = "wheels";
+    vehicle.reason.clear();
 }
 
 std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z) {

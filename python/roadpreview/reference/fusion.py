@@ -16,10 +16,10 @@ import numpy as np
 from ..config import Config
 from .frames import check_points, to_base_frame
 from .ground import fit_ground
-from .iri import profile_iri, vehicle_iri
+from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
-from .roughness import analyze_roughness, vehicle_roughness
+from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
 from .support import backed_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
@@ -210,7 +210,7 @@ class FusedMap:
             spread[k] = spread_for_variance(sum(c.variance for c in found) / len(found) ** 2, count[k])
         z = fill_gaps(z, ds, cfg.profile.max_gap_m, flags)
         roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
-        roughness.iri = profile_iri(z, ds, cfg)
+        roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg)
         return Profile(s=s, z=z, count=count, spread=spread, roughness=roughness, blocked=flags), ahead, ahead_now
 
     def _cell_at(self, path, wheel, s, offset, speed, yaw_rate) -> Optional[Cell]:
@@ -255,5 +255,6 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status["frame_coverage"] = (n_l + n_r) / (2 * bin_count(cfg))
     vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
                                 spread_left=left.spread, count_right=right.count, spread_right=right.spread)
+    vehicle = vehicle_from_wheels(vehicle, left.roughness, right.roughness)
     vehicle.iri = vehicle_iri(left.roughness.iri, right.roughness.iri)
     return FusedResult(left, right, status, None, vehicle)

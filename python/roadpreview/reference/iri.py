@@ -17,6 +17,8 @@ SPEED_MPS = 80.0 / 3.6
 BASE_LENGTH_M = 0.25  # the moving average that stands in for the tyre's envelope
 INIT_LENGTH_M = 11.0  # the initial state takes the profile's mean slope over this length
 TOO_SHORT = "valid stretch too short for IRI"
+TOO_SPARSE = "too few bins with points for IRI"
+CLASS_DECLINED = "roughness class declined"
 
 
 @dataclass
@@ -24,6 +26,7 @@ class Iri:
     value: Optional[float] = None  #: m/km; None with a reason
     length: float = 0.0  #: m, the stretch it covers (0 without one)
     reason: Optional[str] = None
+    backed_fraction: Optional[float] = None  #: share of the stretch's bins that hold points (None: unknown)
 
 
 def golden_car() -> tuple[np.ndarray, np.ndarray]:
@@ -87,8 +90,28 @@ def profile_iri(z, ds: float, cfg: Config | None = None) -> Iri:
     return Iri(value=iri(np.asarray(z, dtype=np.float64)[start:stop], ds), length=length)
 
 
+def wheel_iri(z, count, ds: float, wheel_class: Optional[str], cfg: Config | None = None) -> Iri:
+    """A wheel's IRI as the pipeline reports it: profile_iri, plus the share of the stretch's bins with points
+    (count > 0); no value when that share is below iri.min_backed_fraction, or when the wheel has no class."""
+    cfg = cfg or Config()
+    result = profile_iri(z, ds, cfg)
+    start, stop = longest_valid_stretch(z)
+    if stop > start:
+        result.backed_fraction = float(np.mean(np.asarray(count)[start:stop] > 0))
+    if result.value is None:
+        return result
+    if result.backed_fraction < cfg.iri.min_backed_fraction - 1e-12:
+        result.value, result.reason = None, TOO_SPARSE
+    elif wheel_class is None:
+        result.value, result.reason = None, CLASS_DECLINED
+    return result
+
+
 def vehicle_iri(left: Iri, right: Iri) -> Iri:
-    """The mean of both wheels' IRI (the mean roughness index), when both have one."""
+    """The mean of both wheels' IRI (the mean roughness index), when both have one; backed fraction: the mean."""
+    backed = None
+    if left.backed_fraction is not None and right.backed_fraction is not None:
+        backed = (left.backed_fraction + right.backed_fraction) / 2
     if left.value is None or right.value is None:
-        return Iri(reason=left.reason or right.reason)
-    return Iri(value=(left.value + right.value) / 2, length=min(left.length, right.length))
+        return Iri(reason=left.reason or right.reason, backed_fraction=backed)
+    return Iri(value=(left.value + right.value) / 2, length=min(left.length, right.length), backed_fraction=backed)

@@ -14,7 +14,7 @@ from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, w
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
 from .iri import Iri, vehicle_iri
-from .roughness import Roughness, vehicle_roughness
+from .roughness import Roughness, vehicle_from_wheels, vehicle_roughness
 
 
 @dataclass
@@ -76,6 +76,7 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
                    for wheel in ("left", "right"))
     vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
                                 spread_left=left.spread, count_right=right.count, spread_right=right.spread)
+    vehicle = vehicle_from_wheels(vehicle, left.roughness, right.roughness)
     vehicle.iri = vehicle_iri(left.roughness.iri, right.roughness.iri)
     return Result(ground_mask, plane, counts, path, left, right, vehicle, None, obstacles, labels)
 

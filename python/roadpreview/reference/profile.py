@@ -11,7 +11,7 @@ import numpy as np
 
 from ..config import Config
 from .path import wheel_y
-from .iri import Iri, profile_iri
+from .iri import Iri, wheel_iri
 from .roughness import Roughness, analyze_roughness
 from .runs import true_runs
 
@@ -129,5 +129,5 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
     z = fill_gaps(median, ds, cfg.profile.max_gap_m, blocked)
     centres = (np.arange(len(z)) + 0.5) * ds
     roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
-    roughness.iri = profile_iri(z, ds, cfg)
+    roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg)
     return Profile(s=centres, z=z, count=count, spread=spread, roughness=roughness, blocked=blocked)

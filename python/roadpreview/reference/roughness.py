@@ -61,8 +61,8 @@ class Roughness:
 
 def iso_class(gd_n0: float) -> str:
     """ISO 8608 class of G_d(n0) in m³; a value exactly on a limit belongs to the rougher class."""
-    if np.isnan(gd_n0):
-        raise ValueError("gd_n0 is NaN")
+    if not np.isfinite(gd_n0) or gd_n0 < 0:
+        raise ValueError(f"gd_n0 must be finite and >= 0 m³, got {gd_n0}")
     return ISO_CLASSES[int(np.count_nonzero(gd_n0 >= ISO_CLASS_LIMITS))]
 
 
@@ -169,14 +169,19 @@ def _whittle_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, resolved: np.
     theta = math.log(max(_fit_w2(n[used], _log_psd(g)), np.finfo(float).tiny))
     for _ in range(WHITTLE_ITERATIONS):
         expected = math.exp(theta) * shape + floor
-        share = math.exp(theta) * shape / expected
+        share = _ratio(math.exp(theta) * shape, expected)
         information = float(np.sum(share**2))
         if information < 1e-12:  # the signal has vanished below the noise
             break
-        step = float(np.sum(share * (g / expected - 1))) / information
+        step = float(np.sum(share * (_ratio(g, expected) - 1))) / information
         theta += min(max(step, -MAX_WHITTLE_STEP), MAX_WHITTLE_STEP)
     signal = math.exp(theta) * shape
-    return math.exp(theta), signal / (signal + floor)
+    return math.exp(theta), _ratio(signal, signal + floor)
+
+
+def _ratio(part: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """part / whole, 0 where whole is 0 (a flat, noiseless stretch: its ordinates carry no information)."""
+    return np.divide(part, whole, out=np.zeros_like(part), where=whole > 0)
 
 
 def _noise_aware_fit(n: np.ndarray, psd: np.ndarray, used: np.ndarray, support: Support, cfg: Config) -> _Fit:
@@ -293,3 +298,23 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, 
     right = Support.of(count_right, spread_right, start, stop, ds, n)
     support = Support.mean(left, right) if left is not None and right is not None else None
     return classify_psd(n, (psd_left + psd_right) / 2, (stop - start) * ds, ds, cfg, support)
+
+
+def vehicle_from_wheels(vehicle: Roughness, left: Roughness, right: Roughness) -> Roughness:
+    """The vehicle's class never contradicts both wheels (method.md §4, "Vehicle"): two declined wheels decline
+    it; two classified wheels with a declined common stretch give it the mean of their G_d(n0); with one wheel
+    classified its own fit stands."""
+    if left.iso_class is None and right.iso_class is None:
+        vehicle.iso_class, vehicle.gd_n0, vehicle.gd_n0_free, vehicle.waviness = None, None, None, None
+        vehicle.band, vehicle.confidence = None, None
+        vehicle.reason = "both wheels declined"
+        return vehicle
+    if vehicle.iso_class is not None or left.iso_class is None or right.iso_class is None:
+        return vehicle
+    vehicle.gd_n0 = (left.gd_n0 + right.gd_n0) / 2
+    vehicle.iso_class = iso_class(vehicle.gd_n0)
+    vehicle.gd_n0_free = vehicle.waviness = None
+    vehicle.confidence = min(left.confidence, right.confidence)
+    vehicle.band = (min(left.band[0], right.band[0]), max(left.band[1], right.band[1]))
+    vehicle.band_limit, vehicle.reason = "wheels", None
+    return vehicle

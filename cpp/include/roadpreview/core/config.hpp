@@ -58,6 +58,7 @@ struct RoughnessConfig {
 
 struct IriConfig {
     double min_length_m = 11.0;  ///< shortest valid stretch whose IRI is computed (ASTM E1926's 11 m lead-in)
+    double min_backed_fraction = 0.25;  ///< fewest bins of the stretch holding points (the rest interpolated)
 };
 
 /// Obstacles (docs/method.md §5): Euclidean clusters of the non-ground ROI points, and where they cross

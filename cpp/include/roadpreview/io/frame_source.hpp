@@ -36,6 +36,7 @@ struct Frame {
     std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
     FrameDiagnostics diagnostics;
+    std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
 };
 
 /// What a reader knows about its input (`roadpreview info`).

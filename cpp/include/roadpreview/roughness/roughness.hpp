@@ -67,6 +67,11 @@ Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector
 /// Both wheels, noise-aware with the mean of the two profiles' support.
 Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg);
 
+/// The vehicle's class never contradicts both wheels (docs/method.md §4, "Vehicle"): with both wheels declined
+/// it is declined ("both wheels declined"); with both classified and the common stretch declined, G_d(n0) is
+/// the mean of the wheels' (band_limit "wheels"); with one wheel classified its own fit stands.
+void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughness& right);
+
 /// Probability that the true G_d(n0) lies in iso_class(gd_n0) for a normal error of ln G_d(n0) of this variance.
 double class_confidence(double gd_n0_m3, double log_variance);
 

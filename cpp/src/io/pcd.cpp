@@ -1,0 +1,186 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PCD files through PCL's reader. PCL sizes its buffers from the header's WIDTH × HEIGHT × point size and
+// turns an unparsable ASCII value into 0, so the header and the data are checked against the file first.
+#include "io/cloud_files.hpp"
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <pcl/common/io.h>
+#include <pcl/console/print.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+namespace roadpreview {
+namespace {
+
+constexpr std::size_t kMaxHeaderBytes = 1 << 20;
+// LZF encodes at most 264 repeated bytes in a 3-byte back reference: no stream inflates by more than ~90×.
+constexpr std::uint64_t kMaxLzfRatio = 100;
+constexpr std::uint64_t kMaxValuesPerField = 1 << 16;  // descriptors (e.g. FPFH's 33) stay far below
+
+struct PcdHeader {
+    std::uint64_t width = 0, height = 1, points = 0;
+    bool has_width = false, has_points = false;
+    std::uint64_t point_bytes = 0;  // Σ SIZE × COUNT
+    std::uint64_t values = 0;       // Σ COUNT: numbers per ASCII line
+    std::string data;               // ascii, binary or binary_compressed
+    std::uint64_t data_start = 0;   // byte offset of the data
+};
+
+std::vector<std::string> words(const std::string& line) {
+    std::istringstream in(line);
+    std::vector<std::string> out;
+    for (std::string w; in >> w;) out.push_back(w);
+    return out;
+}
+
+// A header count: decimal digits only, below 2^32 as PCL stores it (no sign, exponent or fraction).
+std::uint64_t header_count(const std::string& path, const std::string& key, const std::string& text) {
+    const bool digits = !text.empty() && text.size() <= 10 &&
+                        text.find_first_not_of("0123456789") == std::string::npos;
+    const std::uint64_t v = digits ? std::stoull(text) : std::numeric_limits<std::uint64_t>::max();
+    if (v > std::numeric_limits<std::uint32_t>::max())
+        fail_file(path, "PCD header " + key + " must be a whole number from 0 to 4294967295, got '" + text + "'");
+    return v;
+}
+
+void read_sizes(const std::string& path, const std::vector<std::string>& w, std::vector<std::uint64_t>& out) {
+    out.clear();
+    for (std::size_t i = 1; i < w.size(); ++i) out.push_back(header_count(path, w[0], w[i]));
+}
+
+PcdHeader scan_header(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail_file(path, "cannot open file");
+    PcdHeader h;
+    std::vector<std::uint64_t> sizes, counts;
+    std::size_t fields = 0;
+    for (std::string line; std::getline(in, line);) {
+        if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
+        const auto w = words(line);
+        if (w.empty() || w[0][0] == '#') continue;
+        if (w[0] == "FIELDS") fields = w.size() - 1;
+        if (w[0] == "SIZE") read_sizes(path, w, sizes);
+        if (w[0] == "COUNT") read_sizes(path, w, counts);
+        if (w[0] == "WIDTH" && w.size() > 1) h.width = header_count(path, "WIDTH", w[1]), h.has_width = true;
+        if (w[0] == "HEIGHT" && w.size() > 1) h.height = header_count(path, "HEIGHT", w[1]);
+        if (w[0] == "POINTS" && w.size() > 1) h.points = header_count(path, "POINTS", w[1]), h.has_points = true;
+        if (w[0] != "DATA") continue;
+        h.data = w.size() > 1 ? w[1] : "";
+        h.data_start = static_cast<std::uint64_t>(in.tellg());
+        break;
+    }
+    if (h.data.empty() || fields == 0) fail_file(path, "not a PCD file (no valid header with FIELDS and DATA)");
+    if (sizes.size() != fields || (!counts.empty() && counts.size() != fields))
+        fail_file(path, "PCD header: SIZE and COUNT must give one number per field (" + std::to_string(fields) +
+                            " FIELDS)");
+    for (std::size_t i = 0; i < fields; ++i) {
+        const std::uint64_t count = counts.empty() ? 1 : counts[i];
+        if (sizes[i] > 8 || count > kMaxValuesPerField)
+            fail_file(path, "PCD header: field " + std::to_string(i + 1) + " has SIZE " + std::to_string(sizes[i]) +
+                                " and COUNT " + std::to_string(count) + " (at most 8 bytes and " +
+                                std::to_string(kMaxValuesPerField) + " values)");
+        h.point_bytes += sizes[i] * count;
+        h.values += count;
+    }
+    if (!h.has_points) h.points = h.width * h.height;
+    if (!h.has_width) h.width = h.points, h.height = 1;
+    if (h.width * h.height != h.points)
+        fail_file(path, "PCD header: WIDTH × HEIGHT = " + std::to_string(h.width * h.height) + " but POINTS = " +
+                            std::to_string(h.points));
+    return h;
+}
+
+std::string declared(const PcdHeader& h) {
+    return "its header declares " + std::to_string(h.points) + " points of " + std::to_string(h.point_bytes) +
+           " bytes";
+}
+
+bool is_number(const std::string& token) {
+    if (token == "nan" || token == "NaN") return true;
+    char* end = nullptr;
+    errno = 0;
+    std::strtod(token.c_str(), &end);
+    return end == token.c_str() + token.size() && !token.empty();
+}
+
+// Every data line holds exactly `values` numbers, and there is one line per declared point.
+void check_ascii(const std::string& path, const PcdHeader& h) {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(h.data_start));
+    std::uint64_t lines = 0, line_number = 0;
+    for (std::string line; std::getline(in, line);) {
+        ++line_number;
+        const auto w = words(line);
+        if (w.empty()) continue;
+        bool ok = w.size() == h.values;
+        for (std::size_t i = 0; ok && i < w.size(); ++i) ok = is_number(w[i]);
+        if (!ok)
+            fail_file(path, "PCD data line " + std::to_string(line_number) + " after the header is not " +
+                                std::to_string(h.values) + " numbers: '" + line.substr(0, 80) + "'");
+        if (++lines > h.points) break;
+    }
+    if (lines != h.points)
+        fail_file(path, declared(h) + " but its ASCII data holds " +
+                            (lines > h.points ? "more" : std::to_string(lines)) + " lines");
+}
+
+void check_against_file(const std::string& path, const PcdHeader& h) {
+    const std::uint64_t size = file_size(path);
+    const std::uint64_t available = size > h.data_start ? size - h.data_start : 0;
+    if (h.data == "ascii") return check_ascii(path, h);
+    if (h.point_bytes == 0) fail_file(path, "PCD header: the fields' SIZE × COUNT add up to 0 bytes per point");
+    const std::uint64_t max_points = available / h.point_bytes;
+    if (h.data == "binary") {
+        if (h.points > max_points)
+            fail_file(path, declared(h) + " (" + std::to_string(h.points * h.point_bytes) +
+                                " bytes) but the file holds " + std::to_string(available) + " bytes of data");
+        return;
+    }
+    if (h.data != "binary_compressed") fail_file(path, "PCD header: unknown DATA type '" + h.data + "'");
+    std::uint32_t sizes[2] = {0, 0};  // compressed, uncompressed (little endian, as PCL writes them)
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(h.data_start));
+    if (available < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
+        fail_file(path, "PCD binary_compressed data is missing its sizes");
+    if (sizes[0] > available - 8)
+        fail_file(path, "PCD compressed data of " + std::to_string(sizes[0]) + " bytes runs past the end of the file");
+    if (sizes[1] != h.points * h.point_bytes || sizes[1] > kMaxLzfRatio * sizes[0] + 64)
+        fail_file(path, declared(h) + " but its compressed data unpacks to " + std::to_string(sizes[1]) + " bytes");
+}
+
+}  // namespace
+
+Frame read_pcd(const std::string& path) {
+    check_against_file(path, scan_header(path));
+    return read_cloud(path, "PCD", [&](pcl::PCLPointCloud2& blob) { return pcl::PCDReader().read(path, blob); });
+}
+
+Frame read_cloud(const std::string& path, const char* kind, const std::function<int(pcl::PCLPointCloud2&)>& read) {
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are reported by our exception
+    pcl::PCLPointCloud2 blob;
+    if (read(blob) < 0) fail_file(path, std::string("not a readable ") + kind + " file (corrupt header or data)");
+    for (const char* axis : {"x", "y", "z"})
+        if (pcl::getFieldIndex(blob, axis) < 0) fail_file(path, std::string("the cloud has no '") + axis + "' field");
+    const std::size_t expected = static_cast<std::size_t>(blob.width) * blob.height * blob.point_step;
+    if (blob.data.size() < expected) fail_file(path, "the cloud's data is shorter than its header declares");
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    pcl::fromPCLPointCloud2(blob, cloud);
+    const bool has_intensity = pcl::getFieldIndex(blob, "intensity") >= 0;
+    Frame f;
+    f.source = path;
+    f.points.resize(static_cast<Eigen::Index>(cloud.size()), 4);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud[i];
+        f.points.row(static_cast<Eigen::Index>(i)) << p.x, p.y, p.z, has_intensity ? p.intensity : 0.0f;
+    }
+    return f;
+}
+
+}  // namespace roadpreview
