@@ -2,6 +2,7 @@
 #include "roadpreview/io/readers.hpp"
 
 #include "io/pcap_source.hpp"
+#include "roadpreview/calibration/calibration.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -120,14 +121,26 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
 namespace {
 
 // .bin and .pcd files, one frame each; frame_id is the position in the list.
+// With a beams file, each point's beam is found by its elevation angle and its offsets applied.
 class FileListSource : public FrameSource {
 public:
-    explicit FileListSource(std::vector<std::string> files) : files_(std::move(files)) {}
+    FileListSource(std::vector<std::string> files, const SourceOptions& o) : files_(std::move(files)) {
+        if (o.beam_calibration.empty()) return;
+        beams_file_ = read_beam_calibration(o.beam_calibration);
+        if (beams_file_->index != BeamIndexMethod::Elevation)
+            fail(o.beam_calibration, "indexes beams by the decoder's beam number; .bin/.pcd points need a beams file "
+                                     "that indexes them by elevation (made by `roadpreview calibrate` from such files)");
+        check_beam_calibration(*beams_file_, beams_file_->beam_count, o.sensor_model, "");
+    }
 
     std::optional<Frame> next() override {
         if (next_ == files_.size()) return std::nullopt;
         Frame f = read_frame(files_[next_]);
         f.frame_id = static_cast<std::int64_t>(next_++);
+        if (beams_file_) {
+            f.beams = beams_by_elevation(points_view(f.points.data(), f.points.rows(), 4), *beams_file_);
+            apply_beam_calibration(f.points.data(), f.points.rows(), 4, f.beams, *beams_file_);
+        }
         return f;
     }
 
@@ -140,6 +153,7 @@ public:
 private:
     std::vector<std::string> files_;
     std::size_t next_ = 0;
+    std::optional<BeamCalibration> beams_file_;
 };
 
 std::unique_ptr<FrameSource> open_pcap(const std::string& path, const SourceOptions& o) {
@@ -181,7 +195,7 @@ std::string find_ouster_metadata(const std::string& pcap_path) {
 
 std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
-    if (pcaps == 0) return std::make_unique<FileListSource>(expand_inputs(inputs));
+    if (pcaps == 0) return std::make_unique<FileListSource>(expand_inputs(inputs), options);
     if (inputs.size() > 1) fail(inputs[0], "give one .pcap/.pcapng recording at a time, without other inputs");
     return open_pcap(inputs[0], options);
 }

@@ -34,6 +34,7 @@ struct Frame {
     std::optional<double> timestamp;  ///< s; pcaps: capture time (UNIX epoch) of the frame's first packet
     std::int64_t frame_id = -1;       ///< Ouster: the packets' frame id; Velodyne: sweep count; files: index
     std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
+    std::vector<std::int32_t> beams;  ///< beam (Ouster row from the top, Velodyne laser id) per point; empty: unknown
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
     FrameDiagnostics diagnostics;
 };

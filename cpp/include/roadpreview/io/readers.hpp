@@ -26,6 +26,9 @@ struct SourceOptions {
     double cut_angle_deg = 0.0; ///< Velodyne: a sweep ends where the azimuth crosses this angle (0 = straight ahead)
     int lidar_port = 0;         ///< UDP port of the lidar packets; 0: the metadata's, else detected by packet size
     bool skip_bad_packets = false;  ///< skip and count lidar packets that do not decode, instead of an error
+    /// Beams file (beams.yaml, `roadpreview calibrate`) applied while decoding: Ouster and Velodyne by beam,
+    /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
+    std::string beam_calibration;
 };
 
 /// A reader for the inputs: one .pcap/.pcapng file (Ouster when metadata is given or found, Velodyne when
