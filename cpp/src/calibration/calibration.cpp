@@ -14,6 +14,7 @@
 #include <Eigen/Dense>
 
 #include "roadpreview/core/frames.hpp"
+#include "roadpreview/ground/ground.hpp"
 
 namespace roadpreview {
 namespace {
@@ -323,6 +324,19 @@ void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t
         o.z /= o.weight, o.x /= o.weight, o.y /= o.weight, o.j_elevation /= o.weight, o.j_range /= o.weight;
     }
     poses_.push_back(pose);
+}
+
+void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t>& beams, const Pose2& pose) {
+    const RigidTransform T = to_rigid_transform(effective_extrinsics(cfg_));
+    Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> base(points.rows(), 3);
+    for (Eigen::Index k = 0; k < points.rows(); ++k) {
+        const double p[3] = {points(k, 0), points(k, 1), points(k, 2)};
+        double b[3];
+        transform_point(T, p, b);
+        for (int c = 0; c < 3; ++c) base(k, c) = static_cast<float>(b[c]);
+    }
+    const GroundFit ground = fit_ground(points_view(base.data(), base.rows(), 3), cfg_.ground);
+    add_frame(points, beams, ground.mask, pose);
 }
 
 BeamCalibration BeamCalibrator::solve() const {

@@ -20,6 +20,8 @@ public:
         info_.profile = to_string(m.profile);
         info_.metadata = m.source;
         info_.frame_rate_hz = m.frame_rate_hz;
+        info_.beams = m.pixels_per_column;
+        info_.serial = m.prod_sn;
     }
 
 private:

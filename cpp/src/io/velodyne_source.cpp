@@ -77,6 +77,7 @@ private:
         info_.metadata = calibration.source;
         if (!options_.beam_calibration.empty()) apply_beams_file(calibration, model);
         info_.frame_rate_hz = 0.0;
+        info_.beams = static_cast<int>(calibration.lasers.size());
         decoder_.emplace(model, std::move(calibration), options_.cut_angle_deg);
     }
 

@@ -92,6 +92,8 @@ public:
     /// base frame's pose in the odometry frame.
     void add_frame(PointsView points, const std::vector<std::int32_t>& beams,
                    const std::vector<std::uint8_t>& ground_mask, const Pose2& pose);
+    /// The same, with the ground found by the configured ground stage.
+    void add_frame(PointsView points, const std::vector<std::int32_t>& beams, const Pose2& pose);
     /// Throws CalibrationError when the drive cannot determine the offsets.
     BeamCalibration solve() const;
 

@@ -48,6 +48,8 @@ struct SourceInfo {
     int lidar_port = 0;        ///< UDP destination port of the lidar packets (0: not a pcap or none seen)
     std::string lidar_port_origin;  ///< "metadata", "option", "detected" or "default"
     double frame_rate_hz = 0.0;     ///< nominal sweep rate; 0 when unknown
+    int beams = 0;                  ///< beams (Ouster rows, Velodyne lasers); 0 when unknown
+    std::string serial;             ///< sensor serial number; empty when unknown
     std::vector<std::string> notes; ///< anything worth a user's attention (model choice, ID mismatches)
 };
 
