@@ -64,6 +64,7 @@ std::vector<std::pair<double, double>> centre_samples(const std::vector<PointsVi
 }
 
 constexpr double kHistogramStepDeg = 0.02;
+constexpr double kMinBeamGapDeg = 0.2;  // beams closer than this in elevation are taken for one (HDL-64E: ≥ 0.33°)
 
 std::vector<double> histogram(const std::vector<std::pair<double, double>>& samples, const double tilt[2],
                               double lo, std::size_t bins) {
@@ -202,6 +203,13 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     for (std::size_t k = 1; k + 1 < h.size(); ++k)
         if (h[k] > 0 && h[k] >= h[k - 1] && h[k] > h[k + 1]) peaks.push_back(k);
     std::sort(peaks.begin(), peaks.end(), [&](std::size_t a, std::size_t b) { return h[a] > h[b]; });
+    std::vector<std::size_t> kept;  // a ring's histogram can show two maxima: the taller one stands for it
+    for (std::size_t k : peaks)
+        if (std::none_of(kept.begin(), kept.end(), [&](std::size_t q) {
+                return std::abs(static_cast<double>(k) - static_cast<double>(q)) * kHistogramStepDeg < kMinBeamGapDeg;
+            }))
+            kept.push_back(k);
+    peaks = kept;
     if (static_cast<int>(peaks.size()) < beam_count)
         throw CalibrationError("found " + std::to_string(peaks.size()) + " beam elevations in the points, expected " +
                                std::to_string(beam_count));
@@ -212,12 +220,13 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     c.tilt_deg[1] = best[1];
     c.beam_count = beam_count;
     c.beams.assign(static_cast<std::size_t>(beam_count), BeamOffsets{});
-    double gap = INFINITY;
+    std::vector<double> gaps;
     for (std::size_t b = 0; b < peaks.size(); ++b) {
         c.beams[b].elevation_deg = lo + (static_cast<double>(peaks[b]) + 0.5) * kHistogramStepDeg;
-        if (b) gap = std::min(gap, c.beams[b - 1].elevation_deg - c.beams[b].elevation_deg);
+        if (b) gaps.push_back(c.beams[b - 1].elevation_deg - c.beams[b].elevation_deg);
     }
-    c.index_tolerance_deg = 0.5 * gap;
+    std::sort(gaps.begin(), gaps.end());
+    c.index_tolerance_deg = gaps.empty() ? kMinBeamGapDeg : 0.5 * gaps[gaps.size() / 2];
 }
 
 std::vector<std::int32_t> beams_by_elevation(PointsView points, const BeamCalibration& c) {

@@ -75,18 +75,29 @@ std::vector<double> beam_reach(const std::vector<Obs>& obs, int beams) {
     return reach;
 }
 
-// The offsets the ground cannot tell from the mounting: a common one (tilts every ring like a pitch) and one
-// ∝ 1/reach (lifts every ring by one height, like the sensor's height). Zero for beams never seen.
-Eigen::MatrixXd gauge_basis(const std::vector<double>& reach) {
-    const auto beams = static_cast<Eigen::Index>(reach.size());
+// Rows 1, mean/reach, reach/mean for the beams in `members` (whose reach is finite).
+Eigen::MatrixXd gauge_columns(const std::vector<double>& reach, const std::vector<int>& members) {
     double mean = 0.0;
-    int seen = 0;
-    for (double r : reach)
-        if (std::isfinite(r)) mean += r, ++seen;
-    mean /= std::max(seen, 1);
-    Eigen::MatrixXd basis = Eigen::MatrixXd::Zero(beams, 2);
-    for (Eigen::Index b = 0; b < beams; ++b)
-        if (std::isfinite(reach[static_cast<std::size_t>(b)])) basis(b, 0) = 1.0, basis(b, 1) = mean / reach[b];
+    for (int b : members) mean += reach[static_cast<std::size_t>(b)];
+    mean /= std::max<std::size_t>(members.size(), 1);
+    Eigen::MatrixXd basis(static_cast<Eigen::Index>(members.size()), 3);
+    for (Eigen::Index k = 0; k < basis.rows(); ++k) {
+        const double r = reach[static_cast<std::size_t>(members[static_cast<std::size_t>(k)])];
+        basis.row(k) << 1.0, mean / r, r / mean;
+    }
+    return basis;
+}
+
+// The offsets the ground cannot tell from the mounting or the road's shape (method.md §8): a common one (tilts
+// every ring like a pitch), one ∝ 1/reach (lifts every ring by one height, like the sensor's height) and one
+// ∝ reach (bends the rings' heights by reach², like a sag or crest driven straight over). Zero for beams never seen.
+Eigen::MatrixXd gauge_basis(const std::vector<double>& reach) {
+    std::vector<int> seen;
+    for (std::size_t b = 0; b < reach.size(); ++b)
+        if (std::isfinite(reach[b])) seen.push_back(static_cast<int>(b));
+    const Eigen::MatrixXd columns = gauge_columns(reach, seen);
+    Eigen::MatrixXd basis = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(reach.size()), 3);
+    for (std::size_t k = 0; k < seen.size(); ++k) basis.row(seen[k]) = columns.row(static_cast<Eigen::Index>(k));
     return basis;
 }
 
@@ -198,16 +209,14 @@ Fit robust_fit(const Problem& p, const CalibrationOptions& o, const Eigen::Matri
     return f;
 }
 
-// Offsets of `members` less their best fit by a + b/reach, and their σ (rad).
+// Offsets of `members` less their best fit by the gauge columns, and their σ (rad).
 void relative_offsets(const Fit& f, const std::vector<int>& members, const std::vector<double>& reach,
                       Eigen::VectorXd& delta, Eigen::VectorXd& sigma) {
     const auto m = static_cast<Eigen::Index>(members.size());
-    Eigen::MatrixXd basis(m, 2);
+    const Eigen::MatrixXd basis = gauge_columns(reach, members);
     Eigen::VectorXd theta(m);
     Eigen::MatrixXd cov(m, m);
     for (Eigen::Index a = 0; a < m; ++a) {
-        basis(a, 0) = 1.0;
-        basis(a, 1) = 1.0 / reach[static_cast<std::size_t>(members[static_cast<std::size_t>(a)])];
         theta[a] = f.theta[members[static_cast<std::size_t>(a)]];
         for (Eigen::Index b = 0; b < m; ++b)
             cov(a, b) = f.covariance(members[static_cast<std::size_t>(a)], members[static_cast<std::size_t>(b)]);
@@ -223,20 +232,21 @@ void relative_offsets(const Fit& f, const std::vector<int>& members, const std::
                            ", calibration needs at least " + std::to_string(needed));
 }
 
-// Beams with an observation in a cell another beam also saw: only these can be compared.
-std::vector<int> shared_beams(const Problem& p) {
-    std::vector<char> shared(static_cast<std::size_t>(p.beams), 0);
+// Beams with at least min_observations observations in cells another beam also saw: only these can be compared,
+// and a beam seen in a handful of cells has a σ the pooled noise understates.
+std::vector<int> shared_beams(const Problem& p, int min_observations) {
+    std::vector<int> shared(static_cast<std::size_t>(p.beams), 0);
     for (std::size_t c = 0; c + 1 < p.cell_start.size(); ++c) {
         const std::size_t a = p.cell_start[c], b = p.cell_start[c + 1];
         const bool several = std::any_of(p.obs.begin() + static_cast<std::ptrdiff_t>(a),
                                          p.obs.begin() + static_cast<std::ptrdiff_t>(b),
                                          [&](const Obs& o) { return o.beam != p.obs[a].beam; });
         if (several)
-            for (std::size_t k = a; k < b; ++k) shared[static_cast<std::size_t>(p.obs[k].beam)] = 1;
+            for (std::size_t k = a; k < b; ++k) ++shared[static_cast<std::size_t>(p.obs[k].beam)];
     }
     std::vector<int> out;
     for (int b = 0; b < p.beams; ++b)
-        if (shared[static_cast<std::size_t>(b)]) out.push_back(b);
+        if (shared[static_cast<std::size_t>(b)] >= min_observations) out.push_back(b);
     return out;
 }
 
@@ -349,9 +359,10 @@ BeamCalibration BeamCalibrator::solve() const {
         throw CalibrationError("no motion: the vehicle moved " + fixed(moved, 3) + " m over " + std::to_string(frames) +
                                " frames, calibration needs at least " + fixed(options_.min_travel_m, 2) + " m");
     Problem p = make_problem(observations_, beam_count_, frames);
-    std::vector<int> determined = shared_beams(p);
+    std::vector<int> determined = shared_beams(p, options_.min_observations);
     if (static_cast<int>(determined.size()) < options_.min_beams)
-        too_few_beams(determined.size(), "share road cells with another", options_.min_beams);
+        too_few_beams(determined.size(), "share " + std::to_string(options_.min_observations) +
+                      " road cells with others", options_.min_beams);
     const std::vector<double> reach = beam_reach(p.obs, beam_count_);
     const Eigen::MatrixXd gauge = gauge_basis(reach);
     double noise = 0.0;

@@ -34,6 +34,7 @@ class CalibrationOptions:
     max_sigma_deg: float = 0.01  #: a beam whose offset is less certain than this is not determined
     max_range_sigma_m: float = 0.01  #: range offsets less certain than this are not estimated
     min_beams: int = 3  #: fewer determined beams is an error
+    min_observations: int = 100  #: a beam seen in fewer shared cells is not determined (the noise is pooled)
     outlier_sigmas: float = 4.0  #: observations further off than this many robust σ are dropped
     rounds: int = 3  #: fits, each after dropping the previous fit's outliers
 
@@ -171,28 +172,34 @@ def check_drive(frame_count: int, poses, options: CalibrationOptions) -> float:
     return travel
 
 
-def shared_beams(obs: dict, beam_count: int) -> np.ndarray:
-    """Beams with an observation in a cell that another beam also saw: only these can be compared."""
+def shared_beams(obs: dict, beam_count: int, min_observations: int) -> np.ndarray:
+    """Beams with at least min_observations observations in cells that another beam also saw: only these can be
+    compared, and a beam seen in a handful of cells has a σ the pooled noise understates."""
     beams_per_cell = np.zeros(obs["cell"].max() + 1, np.int64)
     pairs = np.unique(np.stack([obs["cell"], obs["beam"]], 1), axis=0)
     np.add.at(beams_per_cell, pairs[:, 0], 1)
-    shared = np.zeros(beam_count, bool)
-    shared[pairs[beams_per_cell[pairs[:, 0]] >= 2, 1]] = True
-    return shared
+    shared_cell = beams_per_cell[obs["cell"]] >= 2
+    return np.bincount(obs["beam"][shared_cell], minlength=beam_count) >= min_observations
 
 
 GAUGE_PRECISION = 1e12  #: 1/rad², holds the gauge directions at zero
 
 
+def gauge_columns(reach: np.ndarray) -> np.ndarray:
+    """(len(reach), 3): 1, 1/reach and reach, scaled to about one."""
+    mean = reach.mean()
+    return np.stack([np.ones(len(reach)), mean / reach, reach / mean], 1)
+
+
 def gauge_basis(obs: dict, beam_count: int) -> np.ndarray:
-    """(beams, 2): the offsets the ground cannot tell from the mounting, a common one (it tilts every ring like a
-    pitch) and one ∝ 1/reach (it lifts every ring by the same height, like the sensor's height); 0 for beams
-    without observations."""
+    """(beams, 3): the offsets the ground cannot tell from the mounting or the road's shape: a common one (it
+    tilts every ring like a pitch), one ∝ 1/reach (it lifts every ring by one height, like the sensor's height)
+    and one ∝ reach (it bends the rings' heights by reach², like a sag or crest of the road driven straight over);
+    0 for beams without observations."""
     reach = beam_reach(obs, beam_count)
     seen = np.isfinite(reach)
-    basis = np.zeros((beam_count, 2))
-    basis[seen, 0] = 1.0
-    basis[seen, 1] = reach[seen].mean() / reach[seen]
+    basis = np.zeros((beam_count, 3))
+    basis[seen] = gauge_columns(reach[seen])
     return basis
 
 
@@ -216,11 +223,10 @@ def robust_fit(obs: dict, beam_count: int, frame_count: int, range_beams, option
 
 
 def relative_offsets(theta, covariance, members: np.ndarray, reach: np.ndarray):
-    """Elevation offsets of `members` less their best fit by a + b/reach (reach: each beam's mean horizontal
-    range, −J_δ), and their σ. The ground cannot tell those two from the mounting: a common offset tilts every
-    ring like a pitch, and one ∝ 1/reach lifts every ring by the same height, like the sensor's height."""
+    """Elevation offsets of `members` less their best fit by a + b/reach + c·reach (reach: each beam's mean
+    horizontal range, −J_δ; see gauge_basis), and their σ."""
     idx = np.flatnonzero(members)
-    basis = np.stack([np.ones(len(idx)), 1.0 / reach[idx]], 1)
+    basis = gauge_columns(reach[idx])
     P = np.eye(len(idx)) - basis @ np.linalg.pinv(basis)
     delta = P @ theta[idx]
     sigma = np.sqrt(np.diag(P @ covariance[np.ix_(idx, idx)] @ P.T))
@@ -242,10 +248,11 @@ def calibrate_beams(frames, poses, beam_count: int, cfg: Config | None = None, o
         mask = ground_mask_of(points, cfg) if ground_masks is None else ground_masks[f]
         per_frame.append(point_observations(points, beams, mask, poses[f], cfg))
     obs = cell_observations(per_frame, options.cell_m)
-    candidates = shared_beams(obs, beam_count)
+    candidates = shared_beams(obs, beam_count, options.min_observations)
     if candidates.sum() < options.min_beams:
-        raise CalibrationError(f"too few beams on the ground: {int(candidates.sum())} beam(s) share road cells with "
-                               f"another, calibration needs at least {options.min_beams}")
+        raise CalibrationError(f"too few beams on the ground: {int(candidates.sum())} beam(s) share "
+                               f"{options.min_observations} road cells with others, calibration needs at least "
+                               f"{options.min_beams}")
     none = np.array([], np.int64)
     theta, covariance, noise = robust_fit(obs, beam_count, len(frames), none, options)
     reach = beam_reach(obs, beam_count)

@@ -29,6 +29,7 @@ struct CalibrationOptions {
     double max_sigma_deg = 0.01;       ///< a beam whose offset is less certain than this is not determined
     double max_range_sigma_m = 0.01;   ///< range offsets less certain than this are not estimated (set to 0)
     int min_beams = 3;                 ///< fewer determined beams is an error
+    int min_observations = 100;        ///< a beam seen in fewer shared cells is not determined (pooled noise)
     double outlier_sigmas = 4.0;       ///< observations further off than this many robust σ are dropped
     int rounds = 3;                    ///< fits, each after dropping the previous fit's outliers
 };

@@ -1,0 +1,120 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Beam self-calibration (docs/method.md §8): the numpy reference on small simulated drives, the CLI's
+`calibrate` and `--beam-calibration` on real recordings and on bad input."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from roadpreview import sim
+from roadpreview.reference import calibration as cal
+
+from paths import OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, cli
+
+SPEED_MPS = 10.0
+
+
+def small_drive(errors_deg, frames=6):
+    """A short class B drive of a coarse 64-beam sensor (fast: 512 columns) whose beams are off by errors_deg."""
+    lidar = sim.hdl_64e(height_m=1.8, columns=512, beam_errors_deg=tuple(errors_deg))
+    scene = sim.Scene(sim.Road.iso8608("B", seed=3), ())
+    drive = sim.drive(scene, lidar, SPEED_MPS, 0.0, frames, seed=3)
+    return lidar, drive
+
+
+def gauge_free(values, reach, members):
+    """values less their fit by a + b/reach + c·reach over members, as the calibration reports offsets."""
+    basis = cal.gauge_columns(reach[members])
+    v = values[members]
+    return v - basis @ np.linalg.lstsq(basis, v, rcond=None)[0]
+
+
+@pytest.fixture(scope="module")
+def uniform_offsets():
+    errors = np.random.default_rng(7).uniform(-0.1, 0.1, 64)
+    lidar, frames = small_drive(errors)
+    res = cal.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                              [(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames], lidar.beams,
+                              rp.Config(extrinsics=lidar.extrinsics()))
+    return errors, res
+
+
+def test_reference_recovers_uniform_offsets(uniform_offsets):
+    errors, res = uniform_offsets
+    d = res.determined
+    assert d.sum() >= 20
+    truth = gauge_free(errors, res.extra["reach"], d)
+    error = res.elevation_offset_deg[d] - truth
+    assert np.sqrt(np.mean(error**2)) < 0.01  # offsets of up to 0.1° recovered to about a tenth
+    assert np.corrcoef(res.elevation_offset_deg[d], truth)[0, 1] > 0.95
+    assert np.all(np.isnan(res.elevation_sigma_deg[~d]))
+
+
+def test_reference_range_offsets_stay_unestimated_on_a_flat_road(uniform_offsets):
+    # every beam meets a flat road at one range: its range offset cannot be told from its elevation offset
+    _, res = uniform_offsets
+    assert np.all(res.range_offset_m == 0.0)
+
+
+def test_reference_rejects_a_static_or_short_drive():
+    lidar, frames = small_drive(np.zeros(64), frames=2)
+    beams = lidar.beam_index()
+    with pytest.raises(cal.CalibrationError, match="too short"):
+        cal.calibrate_beams([(frames[0].points, beams)], [(0.0, 0.0, 0.0)], 64)
+    with pytest.raises(cal.CalibrationError, match="no motion"):
+        cal.calibrate_beams([(f.points, beams) for f in frames], [(0.0, 0.0, 0.0)] * 2, 64)
+
+
+def run_cli(*args):
+    return subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def os1_beams(tmp_path_factory):
+    out = tmp_path_factory.mktemp("beams") / "beams.yaml"
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--poses",
+                OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt", "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_cli_calibrate_writes_a_beams_file(os1_beams):
+    import yaml
+    doc = yaml.safe_load(os1_beams.read_text())
+    assert doc["format"] == "roadpreview beam calibration 1"
+    assert doc["sensor_model"] == "OS-1-128" and doc["serial"] == "122201000998" and doc["beam_count"] == 128
+    assert len(doc["beams"]) == 128 and any(b["determined"] for b in doc["beams"])
+
+
+def test_cli_applies_the_beams_file(os1_beams, tmp_path):
+    import json
+    outs = []
+    for extra in ((), ("--beam-calibration", os1_beams)):
+        out = tmp_path / f"run{len(outs)}.jsonl"
+        r = run_cli("run", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
+                    "-o", out, "-q", *extra)
+        assert r.returncode == 0, r.stderr
+        outs.append(json.loads(out.read_text().splitlines()[0]))
+    assert outs[0]["points"]["input"] == outs[1]["points"]["input"]
+    assert outs[0]["plane"] != outs[1]["plane"]  # the corrected points fit another ground plane
+
+
+def test_cli_rejects_a_beams_file_for_another_sensor(os1_beams, tmp_path):
+    other = tmp_path / "other.yaml"
+    other.write_text(os1_beams.read_text().replace('serial: "122201000998"', 'serial: "999"'))
+    r = run_cli("run", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--beam-calibration", other)
+    assert r.returncode != 0 and "other.yaml" in r.stderr and "serial 999" in r.stderr
+    pcap_64 = OUSTER / "OS-1-64_1024x10_fw20.pcap"
+    r = run_cli("run", pcap_64, "--meta", OUSTER / "OS-1-64_sensor_config_reduced.json", "--speed", 2.5,
+                "--beam-calibration", os1_beams)
+    assert r.returncode != 0 and "beams.yaml" in r.stderr and "128-beam" in r.stderr
+
+
+def test_cli_calibrate_rejects_a_static_drive(tmp_path):
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 0, "-o", tmp_path / "b.yaml")
+    assert r.returncode != 0 and "no motion" in r.stderr and OS1_128_PCAP.name in r.stderr
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
+                "-o", tmp_path / "b.yaml")
+    assert r.returncode != 0 and "too short" in r.stderr
