@@ -98,6 +98,18 @@ void bind_calibration(py::module_& m) {
         .def_property_readonly("elevation_deg", [](const rp::BeamCalibration& c) {
             return per_beam(c, [](const rp::BeamOffsets& b) { return b.elevation_deg; });
         }, "index by elevation: each beam's centre (NaN for decoder-numbered beams)")
+        .def("apply", [](const rp::BeamCalibration& c, const Points& points, const Beams& beams) {
+            if (points.ndim() != 2 || points.shape(1) < 3 || beams.ndim() != 1 || beams.shape(0) != points.shape(0))
+                throw std::invalid_argument("apply: need N×C points (C >= 3) and N beam indices");
+            std::vector<std::int32_t> index(beams.data(), beams.data() + beams.size());
+            for (std::int32_t b : index)
+                if (b >= c.beam_count) throw std::invalid_argument("apply: beam " + std::to_string(b) + " of a " +
+                                                                   std::to_string(c.beam_count) + "-beam calibration");
+            Points out(std::vector<py::ssize_t>{points.shape(0), points.shape(1)});
+            std::copy(points.data(), points.data() + points.size(), out.mutable_data());
+            rp::apply_beam_calibration(out.mutable_data(), points.shape(0), points.shape(1), index, c);
+            return out;
+        }, py::arg("points"), py::arg("beams"), "a corrected copy of sensor-frame points (beam −1: left as is)")
         .def("to_yaml", &rp::beam_calibration_to_yaml)
         .def("save", &rp::write_beam_calibration, py::arg("path"), "write the beams file (YAML)");
     m.def("read_beam_calibration", &rp::read_beam_calibration, py::arg("path"));

@@ -32,9 +32,14 @@ def gauge_free(values, reach, members):
 
 
 @pytest.fixture(scope="module")
-def uniform_offsets():
+def drive():
     errors = np.random.default_rng(7).uniform(-0.1, 0.1, 64)
-    lidar, frames = small_drive(errors)
+    return (errors, *small_drive(errors))
+
+
+@pytest.fixture(scope="module")
+def uniform_offsets(drive):
+    errors, lidar, frames = drive
     res = cal.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
                               [(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames], lidar.beams,
                               rp.Config(extrinsics=lidar.extrinsics()))
@@ -44,11 +49,11 @@ def uniform_offsets():
 def test_reference_recovers_uniform_offsets(uniform_offsets):
     errors, res = uniform_offsets
     d = res.determined
-    assert d.sum() >= 20
+    assert d.sum() >= 30
     truth = gauge_free(errors, res.extra["reach"], d)
     error = res.elevation_offset_deg[d] - truth
-    assert np.sqrt(np.mean(error**2)) < 0.01  # offsets of up to 0.1° recovered to about a tenth
-    assert np.corrcoef(res.elevation_offset_deg[d], truth)[0, 1] > 0.95
+    assert np.sqrt(np.mean(error**2)) < 0.005  # offsets of up to 0.1°, on a short coarse drive
+    assert np.corrcoef(res.elevation_offset_deg[d], truth)[0, 1] > 0.99
     assert np.all(np.isnan(res.elevation_sigma_deg[~d]))
 
 
@@ -58,8 +63,9 @@ def test_reference_range_offsets_stay_unestimated_on_a_flat_road(uniform_offsets
     assert np.all(res.range_offset_m == 0.0)
 
 
-def test_reference_rejects_a_static_or_short_drive():
-    lidar, frames = small_drive(np.zeros(64), frames=2)
+def test_reference_rejects_a_static_or_short_drive(drive):
+    _, lidar, frames = drive
+    frames = frames[:2]
     beams = lidar.beam_index()
     with pytest.raises(cal.CalibrationError, match="too short"):
         cal.calibrate_beams([(frames[0].points, beams)], [(0.0, 0.0, 0.0)], 64)
