@@ -67,7 +67,7 @@ py::array per_beam(const rp::BeamCalibration& c, Get get) {
 }  // namespace
 
 void bind_calibration(py::module_& m) {
-    static py::exception<rp::CalibrationError> calibration_error(m, "CalibrationError", PyExc_ValueError);
+    py::register_exception<rp::CalibrationError>(m, "CalibrationError", PyExc_ValueError);
     py::class_<rp::BeamCalibration>(m, "BeamCalibration", "Per-beam offsets estimated from a drive (a beams file)")
         .def_readwrite("sensor_model", &rp::BeamCalibration::sensor_model)
         .def_readwrite("serial", &rp::BeamCalibration::serial)

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <random>
 
+#include <Eigen/Dense>
+
 #include "roadpreview/calibration/calibration.hpp"
 
 namespace rp = roadpreview;

@@ -104,7 +104,7 @@ def test_cli_applies_the_beams_file(os1_beams, tmp_path):
         assert r.returncode == 0, r.stderr
         outs.append(json.loads(out.read_text().splitlines()[0]))
     assert outs[0]["points"]["input"] == outs[1]["points"]["input"]
-    assert outs[0]["plane"] != outs[1]["plane"]  # the corrected points fit another ground plane
+    assert outs[0]["ground"]["plane"] != outs[1]["ground"]["plane"]  # the corrected points fit another plane
 
 
 def test_cli_rejects_a_beams_file_for_another_sensor(os1_beams, tmp_path):
@@ -124,3 +124,38 @@ def test_cli_calibrate_rejects_a_static_drive(tmp_path):
     r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
                 "-o", tmp_path / "b.yaml")
     assert r.returncode != 0 and "too short" in r.stderr
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_cpp_agrees_with_the_reference(drive, uniform_offsets):
+    errors, lidar, frames = drive
+    reference = uniform_offsets[1]
+    cpp = rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                             poses=[(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames],
+                             config=rp.Config(extrinsics=lidar.extrinsics()), beam_count=lidar.beams)
+    both = np.asarray(cpp.determined) & reference.determined
+    assert both.sum() >= 0.9 * max(reference.determined.sum(), np.sum(cpp.determined))
+    np.testing.assert_allclose(np.asarray(cpp.elevation_offset_deg)[both], reference.elevation_offset_deg[both],
+                               atol=1e-3)
+    np.testing.assert_allclose(cpp.residual_m, reference.residual_m, rtol=0.05)
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_python_api_saves_a_beams_file_that_applies(drive, tmp_path):
+    errors, lidar, frames = drive
+    c = rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                           poses=[(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames],
+                           config=rp.Config(extrinsics=lidar.extrinsics()), beam_count=lidar.beams)
+    path = tmp_path / "beams.yaml"
+    c.save(str(path))
+    back = rp._core.read_beam_calibration(str(path))
+    np.testing.assert_allclose(back.elevation_offset_deg, c.elevation_offset_deg, atol=1e-7)
+    corrected = c.apply(frames[0].points, lidar.beam_index().astype(np.int32))
+    finite = np.isfinite(frames[0].points[:, 0])
+    elevation = np.degrees(np.arcsin(corrected[finite, 2] / np.linalg.norm(corrected[finite, :3], axis=1)))
+    before = np.degrees(np.arcsin(frames[0].points[finite, 2] / np.linalg.norm(frames[0].points[finite, :3], axis=1)))
+    shift = np.asarray(c.elevation_offset_deg)[lidar.beam_index()[finite]]
+    np.testing.assert_allclose(elevation - before, shift, atol=2e-4)
+    with pytest.raises(rp.CalibrationError, match="no motion"):
+        rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames[:3]], poses=[(0.0, 0.0, 0.0)] * 3,
+                           beam_count=lidar.beams)

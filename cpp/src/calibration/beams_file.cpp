@@ -64,7 +64,7 @@ std::vector<std::pair<double, double>> centre_samples(const std::vector<PointsVi
 }
 
 constexpr double kHistogramStepDeg = 0.02;
-constexpr double kMinBeamGapDeg = 0.2;  // beams closer than this in elevation are taken for one (HDL-64E: ≥ 0.33°)
+constexpr double kMinBeamGapDeg = 0.25;  // beams closer than this in elevation are taken for one (HDL-64E: ≥ 0.33°)
 
 std::vector<double> histogram(const std::vector<std::pair<double, double>>& samples, const double tilt[2],
                               double lo, std::size_t bins) {
@@ -191,13 +191,21 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     for (const auto& s : samples) lo = std::min(lo, s.first), hi = std::max(hi, s.first);
     lo -= 1.0;
     const auto bins = static_cast<std::size_t>((hi + 1.0 - lo) / kHistogramStepDeg) + 1;
-    double best[2] = {0.0, 0.0}, best_sharpness = -1.0;
-    for (double a = -0.5; a <= 0.5 + 1e-9; a += 0.02)  // the common tilt that makes the rings sharpest
-        for (double b = -0.6; b <= 0.6 + 1e-9; b += 0.02) {
-            const double tilt[2] = {a, b};
-            const double s = sharpness(histogram(samples, tilt, lo, bins));
-            if (s > best_sharpness) best_sharpness = s, best[0] = a, best[1] = b;
-        }
+    // the common tilt that makes the rings sharpest: a 0.1° grid over t_c ∈ [−0.5, 0.5], t_s ∈ [−0.6, 0.6], then
+    // 0.02° steps within ±0.1° of its best
+    double best[2] = {0.0, 0.0};
+    const auto search = [&](double a0, double a1, double b0, double b1, double step) {
+        double best_sharpness = -1.0, found[2] = {best[0], best[1]};
+        for (double a = a0; a <= a1 + 1e-9; a += step)
+            for (double b = b0; b <= b1 + 1e-9; b += step) {
+                const double tilt[2] = {a, b};
+                const double s = sharpness(histogram(samples, tilt, lo, bins));
+                if (s > best_sharpness) best_sharpness = s, found[0] = a, found[1] = b;
+            }
+        best[0] = found[0], best[1] = found[1];
+    };
+    search(-0.5, 0.5, -0.6, 0.6, 0.1);
+    search(best[0] - 0.1, best[0] + 0.1, best[1] - 0.1, best[1] + 0.1, 0.02);
     const std::vector<double> h = histogram(samples, best, lo, bins);
     std::vector<std::size_t> peaks;  // local maxima, the beam_count tallest
     for (std::size_t k = 1; k + 1 < h.size(); ++k)
