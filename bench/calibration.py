@@ -51,13 +51,13 @@ def md_table(headers, rows) -> str:
     return "\n".join(lines + ["| " + " | ".join(str(c) for c in r) + " |" for r in rows])
 
 
-def vehicle_classes(frames, cfg: rp.Config, poses=None) -> list:
+def vehicle_classes(frames, cfg: rp.Config, poses=None, speed_mps: float = SPEED_MPS) -> list:
     """The vehicle class of every frame through one estimator ('-' when declined)."""
     est = rp.Estimator(cfg)
     out = []
     for k, points in enumerate(frames):
         kwargs = {"pose": poses[k]} if poses is not None else {"timestamp": k / 10.0}
-        res = est.process(points, SPEED_MPS if poses is None else 8.0, 0.0, **kwargs)
+        res = est.process(points, speed_mps, 0.0, **kwargs)
         out.append(res.vehicle.iso_class)
     return [c or "-" for c in out]
 
@@ -121,7 +121,7 @@ def os1_frames():
     return frames, [(m[0, 3], m[1, 3], float(np.arctan2(m[1, 0], m[0, 0]))) for m in rows]
 
 
-def real(name: str, frames, poses, height: float, tmp: Path, **open_kwargs) -> tuple[list, list]:
+def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, **open_kwargs) -> tuple[list, list]:
     cfg = rp.Config(sensor_height=height)
     source = rp.io.open(open_kwargs.pop("path")) if "path" in open_kwargs else None
     if source is not None:
@@ -144,8 +144,8 @@ def real(name: str, frames, poses, height: float, tmp: Path, **open_kwargs) -> t
     classes = []
     for label, pts in (("before", frames), ("after", corrected)):
         pts = [p if isinstance(p, np.ndarray) else p[0] for p in pts]
-        classes.append([name, label, " ".join(vehicle_classes(pts, cfg, poses)),
-                        " ".join(vehicle_classes(pts, fused, poses))])
+        classes.append([name, label, " ".join(vehicle_classes(pts, cfg, poses, speed_mps)),
+                        " ".join(vehicle_classes(pts, fused, poses, speed_mps))])
     return summary, classes
 
 
@@ -175,11 +175,12 @@ def main(argv=None) -> int:
             if kitti is not None:
                 files = sorted((REPO / "tests" / "data" / "semantickitti").glob("00000[0-2].bin"))
                 files += sorted((SHARED / "kitti" / "patchworkpp_seq00").glob("*.bin"))
-                s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, Path(tmp), files=files)
+                s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, 8.6, Path(tmp),
+                            files=files)
                 summaries.append(s)
                 classes += c
             os1, os1_poses = os1_frames()
-            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, Path(tmp), path=OS1_PCAP)
+            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, 2.5, Path(tmp), path=OS1_PCAP)
             summaries.append(s)
             classes += c
         print("## Real recordings: per-beam offsets\n")
