@@ -31,7 +31,7 @@ from roadpreview import sim
 from roadpreview.reference import calibration as ref
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO.parent / "shared" / "data"
+SHARED = REPO.parent / "shared" / "data"  # the project's shared data beside the repository (--shared overrides)
 SPEED_MPS = 10.0
 SENSOR_HEIGHT_M = 1.8
 KITTI_HEIGHT_M = 1.73
@@ -94,17 +94,23 @@ def simulated(name: str, errors: dict, frames: int, quick: bool) -> list:
         rows.append([name, label, "–" if label == "before" else f"{int(np.sum(c.determined))}/{lidar.beams}",
                      "–" if label == "before" else f"{np.abs(error).max():.4f}",
                      "–" if label == "before" else f"{np.sqrt(np.mean(error ** 2)):.4f}",
+                     "–" if label == "before" else f"{int(np.sum(np.abs(error) <= 0.005))}",
                      "–" if label == "before" else f"{np.nanmedian(np.asarray(c.elevation_sigma_deg)):.4f}",
                      " ".join(vehicle_classes(pts, single)), vehicle_classes(pts, fused)[-1],
                      "–" if label == "before" else f"{seconds:.1f}"])
     return rows
 
 
-def kitti_frames():
+def kitti_files(shared: Path) -> list:
     files = sorted((REPO / "tests" / "data" / "semantickitti").glob("00000[0-2].bin"))
-    files += sorted((SHARED / "kitti" / "patchworkpp_seq00").glob("*.bin"))
-    poses_file = SHARED / "kitti" / "seq00_poses" / "00.txt"
+    return files + sorted((shared / "kitti" / "patchworkpp_seq00").glob("*.bin"))
+
+
+def kitti_frames(shared: Path):
+    files = kitti_files(shared)
+    poses_file = shared / "kitti" / "seq00_poses" / "00.txt"
     if len(files) != 6 or not poses_file.exists():
+        log(f"KITTI frames 3-5 or the seq 00 poses not found under {shared}: skipped")
         return None, None
     poses = []
     for line in poses_file.read_text().splitlines()[:6]:
@@ -153,6 +159,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a short, coarse drive (smoke test)")
     parser.add_argument("--frames", type=int, default=10, help="frames of each simulated drive")
+    parser.add_argument("--shared", type=Path, default=SHARED, help="the shared data folder (KITTI frames 3-5, poses)")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     frames = 4 if args.quick else args.frames
@@ -165,16 +172,16 @@ def main(argv=None) -> int:
     print(f"- load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; Python {platform.python_version()}, "
           f"roadpreview {rp.__version__}\n")
     print(f"## Simulated HDL-64E, class B road, {frames} frames at {SPEED_MPS:g} m/s\n")
-    print(md_table(["beams", "calibration", "determined", "max |error| °", "RMS error °", "median σ °",
+    print(md_table(["beams", "calibration", "determined", "max |error| °", "RMS error °", "within 0.005°",
+                    "median σ °",
                     "vehicle class per frame", "fused class (last frame)", "calibration s"], rows) + "\n")
     if not args.quick:
         import tempfile
         summaries, classes = [], []
         with tempfile.TemporaryDirectory() as tmp:
-            kitti, kitti_poses = kitti_frames()
+            kitti, kitti_poses = kitti_frames(args.shared)
             if kitti is not None:
-                files = sorted((REPO / "tests" / "data" / "semantickitti").glob("00000[0-2].bin"))
-                files += sorted((SHARED / "kitti" / "patchworkpp_seq00").glob("*.bin"))
+                files = kitti_files(args.shared)
                 s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, 8.6, Path(tmp),
                             files=files)
                 summaries.append(s)
