@@ -11,7 +11,7 @@ import roadpreview as rp
 from roadpreview import sim
 from roadpreview.reference import calibration as cal
 
-from paths import OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, cli
+from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, cli
 
 SPEED_MPS = 10.0
 
@@ -116,6 +116,8 @@ def test_cli_rejects_a_beams_file_for_another_sensor(os1_beams, tmp_path):
     r = run_cli("run", pcap_64, "--meta", OUSTER / "OS-1-64_sensor_config_reduced.json", "--speed", 2.5,
                 "--beam-calibration", os1_beams)
     assert r.returncode != 0 and "beams.yaml" in r.stderr and "128-beam" in r.stderr
+    r = run_cli("run", KITTI_FRAMES[0], "--speed", 2.5, "--beam-calibration", os1_beams)
+    assert r.returncode != 0 and "beams.yaml" in r.stderr and "elevation" in r.stderr
 
 
 def test_cli_calibrate_rejects_a_static_drive(tmp_path):
