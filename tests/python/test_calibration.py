@@ -161,3 +161,26 @@ def test_python_api_saves_a_beams_file_that_applies(drive, tmp_path):
     with pytest.raises(rp.CalibrationError, match="no motion"):
         rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames[:3]], poses=[(0.0, 0.0, 0.0)] * 3,
                            beam_count=lidar.beams)
+
+
+# KITTI odometry seq 00 ground-truth poses of frames 0-2 (KITTI, CC BY-NC-SA 3.0), turned from the camera's axes
+# into the Velodyne's: x, y (m) and heading (rad)
+KITTI_POSES = [(0.0, 0.0, 0.0), (0.8587, 0.0469, 0.00207), (1.7163, 0.0937, 0.00413)]
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_kitti_beams_found_by_elevation(tmp_path):
+    frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
+    c = rp.calibrate_beams(frames, poses=KITTI_POSES, config=rp.Config(sensor_height=1.73))
+    centres = np.asarray(c.elevation_deg)
+    assert c.beam_count == 64 and np.all(np.diff(centres) <= -0.25)  # numbered from the top, distinct rings
+    assert -25.5 < centres[-1] < -23.0  # the HDL-64E's lowest beam is near −24.8°
+    path = tmp_path / "kitti_beams.yaml"
+    c.save(str(path))
+    frame = next(iter(rp.io.open(KITTI_FRAMES[0], beam_calibration=path)))
+    beams = np.asarray(frame.beams)
+    raw = frames[0]
+    ahead = (raw[:, 0] > 4) & (np.abs(raw[:, 1]) < 10) & (raw[:, 2] < -1.0)  # the road ahead
+    assert np.mean(beams[ahead] >= 0) > 0.9
+    moved = np.linalg.norm(frame.points[:, :3] - raw[:, :3], axis=1)
+    assert np.all(moved[beams < 0] == 0) and np.any(moved[beams >= 0] > 0)

@@ -50,15 +50,20 @@ double untilted_elevation_deg(double el_deg, double az, const double tilt[2]) {
     return el_deg - tilt[0] * (std::cos(az) - 1.0) - tilt[1] * std::sin(az);
 }
 
-// Points that take part in finding the beam centres: the front half, beyond 4 m (near the sensor the lasers'
-// own offsets from its origin shift the elevation), as (elevation deg, azimuth rad).
-std::vector<std::pair<double, double>> centre_samples(const std::vector<PointsView>& frames) {
-    std::vector<std::pair<double, double>> out;
+// A point that takes part in finding the beam centres: its elevation (deg), cos φ − 1 and sin φ.
+struct CentreSample {
+    double elevation_deg, cos_az_minus_1, sin_az;
+};
+
+// The front half, beyond 4 m (near the sensor the lasers' own offsets from its origin shift the elevation).
+std::vector<CentreSample> centre_samples(const std::vector<PointsView>& frames) {
+    std::vector<CentreSample> out;
     for (const PointsView& f : frames)
         for (Eigen::Index k = 0; k < f.rows(); ++k) {
             const double x = f(k, 0), y = f(k, 1), z = f(k, 2), r = std::sqrt(x * x + y * y + z * z);
             if (!std::isfinite(r) || r < 4.0 || x <= 0) continue;
-            out.emplace_back(deg(std::asin(z / r)), std::atan2(y, x));
+            const double az = std::atan2(y, x);
+            out.push_back({deg(std::asin(z / r)), std::cos(az) - 1.0, std::sin(az)});
         }
     return out;
 }
@@ -66,11 +71,12 @@ std::vector<std::pair<double, double>> centre_samples(const std::vector<PointsVi
 constexpr double kHistogramStepDeg = 0.02;
 constexpr double kMinBeamGapDeg = 0.25;  // beams closer than this in elevation are taken for one (HDL-64E: ≥ 0.33°)
 
-std::vector<double> histogram(const std::vector<std::pair<double, double>>& samples, const double tilt[2],
-                              double lo, std::size_t bins) {
+std::vector<double> histogram(const std::vector<CentreSample>& samples, const double tilt[2], double lo,
+                              std::size_t bins) {
     std::vector<double> h(bins, 0.0);
-    for (const auto& [el, az] : samples) {
-        const double k = std::floor((untilted_elevation_deg(el, az, tilt) - lo) / kHistogramStepDeg);
+    for (const CentreSample& s : samples) {
+        const double el = s.elevation_deg - tilt[0] * s.cos_az_minus_1 - tilt[1] * s.sin_az;
+        const double k = std::floor((el - lo) / kHistogramStepDeg);
         if (k >= 0 && k < static_cast<double>(bins)) h[static_cast<std::size_t>(k)] += 1.0;
     }
     return h;
@@ -188,7 +194,7 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     const auto samples = centre_samples(frames);
     if (samples.empty()) throw CalibrationError("no points ahead beyond 4 m to find the beams' elevations from");
     double lo = INFINITY, hi = -INFINITY;
-    for (const auto& s : samples) lo = std::min(lo, s.first), hi = std::max(hi, s.first);
+    for (const CentreSample& s : samples) lo = std::min(lo, s.elevation_deg), hi = std::max(hi, s.elevation_deg);
     lo -= 1.0;
     const auto bins = static_cast<std::size_t>((hi + 1.0 - lo) / kHistogramStepDeg) + 1;
     // the common tilt that makes the rings sharpest: a 0.1° grid over t_c ∈ [−0.5, 0.5], t_s ∈ [−0.6, 0.6], then
