@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // roadpreview — command-line front end: `roadpreview run INPUT... [options]` writes one JSON line per frame;
+// `roadpreview calibrate INPUT... -o beams.yaml` estimates the beams' offsets from a drive;
 // `roadpreview info INPUT...` describes a recording.
 #include <algorithm>
 #include <cmath>
@@ -41,30 +42,39 @@ struct RunOptions {
     std::string fusion;
     double alpha = 0.0;
     std::string poses_file;
+    int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
+    double cell = 0.1;    // calibrate: road cell, m
+    double max_sigma = 0.01;  // calibrate: deg
 };
+
+// True when the subcommand has this option and it was given.
+bool given(const CLI::App& cmd, const std::string& name) {
+    const CLI::Option* option = cmd.get_option_no_throw(name);
+    return option && option->count() > 0;
+}
 
 // Config file first, then the flags that were given on the command line.
 rp::Config build_config(const RunOptions& o, const CLI::App& run) {
     rp::Config cfg = o.config_file.empty() ? rp::Config{} : rp::config_from_file(o.config_file);
-    if (run.count("--sensor-height")) {
+    if (given(run, "--sensor-height")) {
         cfg.sensor_height = o.sensor_height;
         cfg.extrinsics.reset();
     }
-    if (run.count("--extrinsics")) {
+    if (given(run, "--extrinsics")) {
         const auto& e = o.extrinsics;
         cfg.extrinsics = rp::Extrinsics{e[0], e[1], e[2], e[3], e[4], e[5]};
         cfg.sensor_height.reset();
     }
-    if (run.count("--track-width")) cfg.track_width = o.track_width;
-    if (run.count("--tire-width")) cfg.tire_width = o.tire_width;
-    if (run.count("--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
-    if (run.count("--clusters")) cfg.obstacles.enabled = o.clusters == "on";
-    if (run.count("--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
-    if (run.count("--fusion"))
+    if (given(run, "--track-width")) cfg.track_width = o.track_width;
+    if (given(run, "--tire-width")) cfg.tire_width = o.tire_width;
+    if (given(run, "--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
+    if (given(run, "--clusters")) cfg.obstacles.enabled = o.clusters == "on";
+    if (given(run, "--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
+    if (given(run, "--fusion"))
         cfg.fusion.method = o.fusion == "ema" ? rp::FusionMethod::Ema
                             : o.fusion == "kalman" ? rp::FusionMethod::Kalman : rp::FusionMethod::None;
-    if (run.count("--alpha")) cfg.fusion.alpha = o.alpha;
-    if (run.count("--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
+    if (given(run, "--alpha")) cfg.fusion.alpha = o.alpha;
+    if (given(run, "--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
     rp::validate(cfg);
     return cfg;
 }
@@ -261,6 +271,99 @@ int run(const RunOptions& o, const CLI::App& app) {
     return 0;
 }
 
+// The base frame's pose for frame `index`: from the poses file, else integrated from the motion over the time
+// since the previous frame (timestamps, else 1/frame rate).
+rp::Pose2 pose_for(const RunOptions& o, const std::vector<rp::Pose2>& poses, std::int64_t index, const rp::Motion& m,
+                   const std::optional<rp::Pose2>& previous, double dt_s) {
+    if (!o.poses_file.empty()) {
+        if (index >= static_cast<std::int64_t>(poses.size()))
+            throw std::runtime_error(o.poses_file + ": no pose for frame " + std::to_string(index) + " (it has " +
+                                     std::to_string(poses.size()) + ")");
+        return poses[static_cast<std::size_t>(index)];
+    }
+    return previous ? rp::integrate_motion(*previous, m.speed_mps, m.yaw_rate_rps, dt_s) : rp::Pose2{};
+}
+
+// Frames of the drive into the calibrator: numbered points at once, files (no beam numbers) at the end, by the
+// beam centres their elevations show.
+int calibrate(const RunOptions& o, const CLI::App& app) {
+    if (!app.count("--speed") && o.motion_file.empty() && o.poses_file.empty())
+        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE");
+    if (o.output.empty()) throw std::invalid_argument("give the beams file to write: -o beams.yaml");
+    const rp::Config cfg = build_config(o, app);
+    const auto [first, last] = parse_frame_range(o.frames);
+    std::optional<rp::MotionTable> table;
+    if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
+    std::vector<rp::Pose2> poses;
+    if (!o.poses_file.empty()) poses = rp::read_kitti_poses(o.poses_file);
+    const auto source = rp::open_frames(o.inputs, o.source);
+    rp::CalibrationOptions options;
+    options.cell_m = o.cell;
+    options.max_sigma_deg = o.max_sigma;
+    std::optional<rp::BeamCalibrator> calibrator;
+    std::vector<rp::Frame> unnumbered;
+    std::vector<rp::Pose2> unnumbered_poses;
+    std::optional<rp::Pose2> pose;
+    std::optional<double> last_time;
+    std::int64_t index = 0;
+    for (; index < last; ++index) {
+        std::optional<rp::Frame> frame = source->next();
+        if (!frame) break;
+        if (index == 0 && !o.quiet) report_source(source->info());
+        if (index < first) continue;
+        const std::optional<double> t = frame_time(*frame, index, o.frame_rate);
+        const double dt = t && last_time ? *t - *last_time : 1.0 / cfg.fusion.frame_rate_hz;
+        last_time = t;
+        pose = pose_for(o, poses, index, motion_for(o, app, table, *frame, t, cfg).motion, pose, dt);
+        const auto view = rp::points_view(frame->points.data(), frame->points.rows(), 4);
+        if (frame->beams.empty()) {
+            unnumbered.push_back(std::move(*frame));
+            unnumbered_poses.push_back(*pose);
+        } else {
+            if (!calibrator) calibrator.emplace(cfg, source->info().beams, options);
+            calibrator->add_frame(view, frame->beams, *pose);
+        }
+        if (!o.quiet) std::fprintf(stderr, "[%lld] %s: pose x %.2f m, y %.2f m, yaw %.4f rad\n",
+                                   static_cast<long long>(index + 1), frame_label(unnumbered.empty() ? *frame
+                                   : unnumbered.back()).c_str(), pose->x_m, pose->y_m, pose->yaw_rad);
+    }
+    rp::BeamCalibration indexing;
+    if (!unnumbered.empty()) {
+        std::vector<rp::PointsView> views;
+        for (const rp::Frame& f : unnumbered) views.push_back(rp::points_view(f.points.data(), f.points.rows(), 4));
+        rp::find_beam_centres(views, o.beams, indexing);
+        calibrator.emplace(cfg, o.beams, options);
+        for (std::size_t k = 0; k < views.size(); ++k)
+            calibrator->add_frame(views[k], rp::beams_by_elevation(views[k], indexing), unnumbered_poses[k]);
+    }
+    if (!calibrator) throw rp::CalibrationError(o.inputs[0] + ": no frames to calibrate from");
+    rp::BeamCalibration c;
+    try {
+        c = calibrator->solve();
+    } catch (const rp::CalibrationError& e) {
+        throw rp::CalibrationError(o.inputs[0] + ": " + e.what());
+    }
+    const rp::SourceInfo info = source->info();
+    c.sensor_model = info.format == "files" ? o.source.sensor_model : info.sensor_model;
+    c.serial = info.serial;
+    if (!unnumbered.empty()) {
+        c.index = rp::BeamIndexMethod::Elevation;
+        c.tilt_deg[0] = indexing.tilt_deg[0];
+        c.tilt_deg[1] = indexing.tilt_deg[1];
+        c.index_tolerance_deg = indexing.index_tolerance_deg;
+        for (std::size_t b = 0; b < c.beams.size(); ++b) c.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
+    }
+    rp::write_beam_calibration(c, o.output);
+    int determined = 0;
+    double largest = 0.0;
+    for (const rp::BeamOffsets& b : c.beams)
+        if (b.determined) ++determined, largest = std::max(largest, std::abs(b.elevation_offset_deg));
+    std::fprintf(stderr, "roadpreview: %d of %d beams determined from %lld frames over %.2f m (point noise %.1f mm); "
+                 "largest offset %.4f deg; wrote %s\n", determined, c.beam_count, static_cast<long long>(c.frames),
+                 c.travel_m, 1e3 * c.residual_m, largest, o.output.c_str());
+    return 0;
+}
+
 // Decodes every frame and prints what the recording holds.
 int info(const std::vector<std::string>& inputs, const rp::SourceOptions& options) {
     const auto source = rp::open_frames(inputs, options);
@@ -338,6 +441,8 @@ void add_source_options(CLI::App* cmd, rp::SourceOptions& s) {
     cmd->add_option("--lidar-port", s.lidar_port, "UDP port of the lidar packets (default: metadata, else detected)")
         ->check(CLI::Range(1, 65535));
     cmd->add_flag("--skip-bad-packets", s.skip_bad_packets, "Skip and count lidar packets that do not decode instead of stopping");
+    cmd->add_option("--beam-calibration", s.beam_calibration,
+                    "Beams file (roadpreview calibrate) applied while decoding; .bin/.pcd points find their beam by elevation");
 }
 
 }  // namespace
@@ -394,9 +499,33 @@ int main(int argc, char** argv) {
     info_cmd->add_option("INPUT", info_inputs, "One pcap, or frame files / directories")->required();
     add_source_options(info_cmd, info_options);
 
+    RunOptions c;
+    CLI::App* cal_cmd = app.add_subcommand("calibrate", "Estimate each beam's elevation (and range) offset from a drive");
+    cal_cmd->add_option("INPUT", c.inputs, "Frame files, or directories of them (sorted by name), or one .pcap")->required();
+    cal_cmd->add_option("--speed", c.speed, "Vehicle speed V in m/s");
+    cal_cmd->add_option("--yaw-rate", c.yaw_rate, "Yaw rate in rad/s, positive turning left (default: IMU, else 0)");
+    cal_cmd->add_option("--motion", c.motion_file, "CSV with columns t,speed,yaw_rate, interpolated at each frame's timestamp");
+    cal_cmd->add_option("--poses", c.poses_file, "KITTI poses file, one 3x4 row-major pose per frame of the input");
+    cal_cmd->add_option("--frames", c.frames, "Frames A:B of the input (0-based, B excluded; A: or :B)");
+    cal_cmd->add_option("--frame-rate", c.frame_rate, "File inputs: frames per second (default 10)");
+    auto* cal_height = cal_cmd->add_option("--sensor-height", c.sensor_height, "Sensor height above the ground, m");
+    cal_cmd->add_option("--extrinsics", c.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
+        ->expected(6)->delimiter(',')->excludes(cal_height);
+    cal_cmd->add_option("--ground", c.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
+    cal_cmd->add_option("--config", c.config_file, "JSON or YAML config file with the fields of rp.Config");
+    cal_cmd->add_option("--beams", c.beams, "Beams of a sensor whose files do not number them (default 64, HDL-64E)")
+        ->check(CLI::PositiveNumber);
+    cal_cmd->add_option("--cell", c.cell, "Road cell in which beams are compared, m (default 0.1)")->check(CLI::PositiveNumber);
+    cal_cmd->add_option("--max-sigma", c.max_sigma, "A beam less certain than this (deg) is not determined (default 0.01)")
+        ->check(CLI::PositiveNumber);
+    cal_cmd->add_option("-o,--output", c.output, "Beams file to write (YAML)")->required();
+    cal_cmd->add_flag("-q,--quiet", c.quiet, "No per-frame progress on stderr");
+    add_source_options(cal_cmd, c.source);
+
     if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
+        if (cal_cmd->parsed()) return calibrate(c, *cal_cmd);
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

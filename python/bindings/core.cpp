@@ -16,6 +16,7 @@ namespace py = pybind11;
 namespace rp = roadpreview;
 
 void bind_io(py::module_& m);  // io.cpp
+void bind_calibration(py::module_& m);  // calibration.cpp
 
 namespace {
 
@@ -507,6 +508,7 @@ PYBIND11_MODULE(_core, m) {
     bind_estimator(m);
     bind_stages(m);
     bind_io(m);
+    bind_calibration(m);
     m.def("read_frame", [](const std::string& path, int columns) {
         rp::Frame f = rp::read_frame(path, columns);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));

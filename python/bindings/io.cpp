@@ -27,6 +27,8 @@ py::dict info_dict(const rp::SourceInfo& s) {
     d["lidar_port_origin"] = s.lidar_port_origin;
     d["frame_rate_hz"] = s.frame_rate_hz;
     d["notes"] = s.notes;
+    d["beams"] = s.beams;
+    d["serial"] = s.serial;
     return d;
 }
 
@@ -58,6 +60,11 @@ void bind_io(py::module_& m) {
             return read_only(py::array(py::dtype::of<float>(), {static_cast<py::ssize_t>(t.size())},
                                        {py::ssize_t(sizeof(float))}, t.data(), self));
         }, "float32 s after .timestamp per point; empty when unknown")
+        .def_property_readonly("beams", [](py::object self) {
+            const auto& b = self.cast<const rp::Frame&>().beams;
+            return read_only(py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(b.size())},
+                                       {py::ssize_t(sizeof(std::int32_t))}, b.data(), self));
+        }, "int32 beam of each point (Ouster row from the top, Velodyne laser id, -1: none); empty when unknown")
         .def_property_readonly("imu_timestamps", [](const rp::Frame& f) {
             std::vector<double> t;
             for (const auto& s : f.imu) t.push_back(s.timestamp);
@@ -97,8 +104,9 @@ void bind_io(py::module_& m) {
 
     m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
                             const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets,
-                            int columns) {
-        rp::SourceOptions o{meta, sensor_model, calibration, cut_angle_deg, lidar_port, skip_bad_packets, columns};
+                            int columns, const std::string& beam_calibration) {
+        rp::SourceOptions o{meta,        sensor_model,     calibration, cut_angle_deg,
+                            lidar_port,  skip_bad_packets, columns,     beam_calibration};
         return rp::open_frames(inputs, o);
     });
     m.def("imu_yaw_rate", [](const rp::Frame& f, const std::string& config_json) {

@@ -19,6 +19,8 @@ from .estimator import Estimator
 
 if native_available():
     from . import io
+    from ._core import BeamCalibration, CalibrationError
+    from .calibration import calibrate_beams
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
@@ -32,5 +34,5 @@ def cmake_dir() -> str:
 __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
-    "reference", "sim", "cmake_dir", "__version__",
+    "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
 ]

@@ -34,7 +34,8 @@ def expand(inputs: list[str]) -> list[str]:
 
 def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = None, *,  # noqa: A001
          sensor_model: Optional[str] = None, calibration: Optional[PathLike] = None, cut_angle_deg: float = 0.0,
-         lidar_port: int = 0, skip_bad_packets: bool = False, columns: int = 0):
+         lidar_port: int = 0, skip_bad_packets: bool = False, columns: int = 0,
+         beam_calibration: Optional[PathLike] = None):
     """An iterable of frames, decoded one at a time with constant memory (as ``roadpreview run`` reads them).
 
     path: ``.pcap``/``.pcapng`` recordings (several: split recordings of one drive, read in order), or
@@ -51,12 +52,15 @@ def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = N
     ``.imu_angular_velocity`` and ``.diagnostics`` (missing columns, skipped packets, complete).
     The iterator's ``.info`` describes the recording. Bad input raises RuntimeError naming the file and the
     problem; frames yielded before it stay valid. ``skip_bad_packets=True`` skips and counts lidar packets
-    that do not decode instead.
+    that do not decode instead. ``beam_calibration`` is a beams file (``rp.calibrate_beams``, ``roadpreview
+    calibrate``) applied while decoding; a file for another sensor raises RuntimeError naming it. Frames also have
+    ``.beams`` (int32 beam of each point; empty when the input does not number them).
     """
     paths = [path] if isinstance(path, (str, os.PathLike)) else list(path)
     return core().open_frames([os.fspath(p) for p in paths], os.fspath(meta) if meta else "", sensor_model or "",
                               os.fspath(calibration) if calibration else "", float(cut_angle_deg), int(lidar_port),
-                              bool(skip_bad_packets), int(columns))
+                              bool(skip_bad_packets), int(columns),
+                              os.fspath(beam_calibration) if beam_calibration else "")
 
 
 def imu_yaw_rate(frame, cfg=None) -> Optional[float]:

@@ -2,6 +2,7 @@
 // Umbrella header: #include <roadpreview/roadpreview.hpp>
 #pragma once
 
+#include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/core/config.hpp"
 #include "roadpreview/core/frames.hpp"
 #include "roadpreview/fusion/fusion.hpp"

@@ -240,10 +240,14 @@ OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
             const double o[3] = {std::cos(encoder) * beam_x - d[0] * beam_dist,
                                  std::sin(encoder) * beam_x - d[1] * beam_dist, -d[2] * beam_dist + beam_z};
             const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
+            const double range_offset_mm = meta_.beam_range_offset_m.empty()
+                                               ? 0.0 : 1e3 * meta_.beam_range_offset_m[static_cast<std::size_t>(u)];
             for (int r = 0; r < 3; ++r) {
                 const double* R = &T[static_cast<std::size_t>(4 * r)];
-                lut_.direction[i + r] = static_cast<float>(1e-3 * (R[0] * d[0] + R[1] * d[1] + R[2] * d[2]));
-                lut_.offset[i + r] = static_cast<float>(1e-3 * (R[0] * o[0] + R[1] * o[1] + R[2] * o[2] + R[3]));
+                const double direction = R[0] * d[0] + R[1] * d[1] + R[2] * d[2];
+                lut_.direction[i + r] = static_cast<float>(1e-3 * direction);
+                lut_.offset[i + r] = static_cast<float>(
+                    1e-3 * (R[0] * o[0] + R[1] * o[1] + R[2] * o[2] + R[3] - direction * range_offset_mm));
             }
         }
     }
@@ -372,6 +376,7 @@ Frame OusterDecoder::build_frame() {
         for (int v = 0; v < W; ++v) n += returned(u, v);  // the order does not matter for the count
     f.points.resize(n, 4);
     f.point_times.resize(static_cast<std::size_t>(n));
+    f.beams.resize(static_cast<std::size_t>(n));
     Eigen::Index k = 0;
     for (int u = 0; u < H; ++u) {
         for (int vd = 0, v = first_column(u); vd < W; ++vd, v = v + 1 == W ? 0 : v + 1) {
@@ -380,6 +385,7 @@ Frame OusterDecoder::build_frame() {
             const float r = static_cast<float>(range_mm_[i]);
             for (int c = 0; c < 3; ++c) f.points(k, c) = lut_.direction[3 * i + c] * r + lut_.offset[3 * i + c];
             f.points(k, 3) = static_cast<float>(reflectivity_[i]);
+            f.beams[static_cast<std::size_t>(k)] = u;
             f.point_times[static_cast<std::size_t>(k)] = static_cast<float>(
                 1e-9 * static_cast<double>(static_cast<std::int64_t>(column_ns_[static_cast<std::size_t>(v)] - first_column_ns_)));
             ++k;

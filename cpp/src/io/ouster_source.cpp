@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // An Ouster pcap: lidar packets to OusterDecoder, IMU packets attached to the frame being assembled.
+#include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/io/ouster.hpp"
 #include "pcap_source.hpp"
 
@@ -19,6 +20,8 @@ public:
         info_.profile = to_string(m.profile);
         info_.metadata = m.source;
         info_.frame_rate_hz = m.frame_rate_hz;
+        info_.beams = m.pixels_per_column;
+        info_.serial = m.prod_sn;
     }
 
 private:
@@ -41,11 +44,27 @@ private:
     OusterDecoder decoder_;
 };
 
+// The beams file's offsets folded into the beam intrinsics the decoder's XYZ table is built from.
+OusterMetadata calibrated(OusterMetadata meta, const std::string& beams_file) {
+    if (beams_file.empty()) return meta;
+    const BeamCalibration c = read_beam_calibration(beams_file);
+    check_beam_calibration(c, meta.pixels_per_column, meta.prod_line, meta.prod_sn);
+    if (c.index != BeamIndexMethod::Decoder)
+        throw std::runtime_error(beams_file + ": indexes beams by elevation; an Ouster needs one by beam number");
+    meta.beam_range_offset_m.assign(c.beams.size(), 0.0);
+    for (std::size_t b = 0; b < c.beams.size(); ++b) {
+        meta.beam_altitude_deg[b] += c.beams[b].elevation_offset_deg;
+        meta.beam_range_offset_m[b] = c.beams[b].range_offset_m;
+    }
+    return meta;
+}
+
 }  // namespace
 
 std::unique_ptr<FrameSource> open_ouster_pcap(const std::string& path, const std::string& meta_path,
                                               const SourceOptions& options) {
-    return std::make_unique<OusterPcapSource>(path, read_ouster_metadata(meta_path), options);
+    return std::make_unique<OusterPcapSource>(path, calibrated(read_ouster_metadata(meta_path), options.beam_calibration),
+                                              options);
 }
 
 }  // namespace roadpreview

@@ -3,6 +3,7 @@
 
 #include "io/cloud_files.hpp"
 #include "io/pcap_source.hpp"
+#include "roadpreview/calibration/calibration.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -171,9 +172,18 @@ std::string sequence_break(const std::string& previous, const std::string& next,
 namespace {
 
 // .bin, .pcd and .ply files, one frame each; frame_id is the position in the list.
+// With a beams file, each point's beam is found by its elevation angle and its offsets applied.
 class FileListSource : public FrameSource {
 public:
-    FileListSource(InputFiles inputs, int columns) : inputs_(std::move(inputs)), columns_(columns) {}
+    FileListSource(InputFiles inputs, const SourceOptions& o) : inputs_(std::move(inputs)), columns_(o.columns) {
+        if (o.beam_calibration.empty()) return;
+        beams_file_ = read_beam_calibration(o.beam_calibration);
+        if (beams_file_->index != BeamIndexMethod::Elevation)
+            fail_file(o.beam_calibration, "indexes beams by the decoder's beam number; .bin/.pcd points need a "
+                                          "beams file that indexes them by elevation (made by `roadpreview "
+                                          "calibrate` from such files)");
+        check_beam_calibration(*beams_file_, beams_file_->beam_count, o.sensor_model, "");
+    }
 
     std::optional<Frame> next() override {
         const auto& files = inputs_.files;
@@ -181,6 +191,10 @@ public:
         Frame f = read_frame(files[next_], columns_);
         if (next_ > 0) f.sequence_break = sequence_break(files[next_ - 1], files[next_], step_);
         f.frame_id = static_cast<std::int64_t>(next_++);
+        if (beams_file_) {
+            f.beams = beams_by_elevation(points_view(f.points.data(), f.points.rows(), 4), *beams_file_);
+            apply_beam_calibration(f.points.data(), f.points.rows(), 4, f.beams, *beams_file_);
+        }
         return f;
     }
 
@@ -205,6 +219,7 @@ private:
     int columns_;
     std::size_t next_ = 0;
     std::int64_t step_ = 0;  // of the name numbers in the current sequence
+    std::optional<BeamCalibration> beams_file_;
 };
 
 std::unique_ptr<FrameSource> open_pcap(const std::string& path, const SourceOptions& o) {
@@ -293,7 +308,7 @@ private:
 
 std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
-    if (pcaps == 0) return std::make_unique<FileListSource>(list_inputs(inputs), options.columns);
+    if (pcaps == 0) return std::make_unique<FileListSource>(list_inputs(inputs), options);
     if (pcaps != static_cast<std::ptrdiff_t>(inputs.size()))
         fail_file(inputs[0], "give .pcap/.pcapng recordings or frame files, not both in one run");
     if (options.columns > 0) fail_file(inputs[0], "--columns applies to raw float32 .bin files only");

@@ -252,6 +252,7 @@ void VelodyneDecoder::add_firing(const Firing& f, std::vector<Frame>& done) {
         xyzi_.insert(xyzi_.end(), {static_cast<float>(y_forward), static_cast<float>(-x_right), static_cast<float>(z),
                                    static_cast<float>(ch[2])});
         times_.push_back(static_cast<float>(1e-6 * (f.time_us + fire_us - sweep_first_us_)));
+        beams_.push_back(f.first_laser + k);
     }
 }
 
@@ -262,11 +263,13 @@ void VelodyneDecoder::close_sweep(bool at_cut, std::vector<Frame>& done) {
         f.timestamp = sweep_time_;
         f.points = Eigen::Map<const PointMatrix>(xyzi_.data(), static_cast<Eigen::Index>(xyzi_.size() / 4), 4);
         f.point_times = std::move(times_);
+        f.beams = std::move(beams_);
         f.diagnostics.complete = started_at_cut_ && at_cut;
         done.push_back(std::move(f));
     }
     xyzi_.clear();
     times_.clear();
+    beams_.clear();
     started_at_cut_ = at_cut;
 }
 

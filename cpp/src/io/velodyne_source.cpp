@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/io/velodyne.hpp"
 #include "pcap_source.hpp"
 
@@ -74,8 +75,22 @@ private:
         VelodyneCalibration calibration = options_.calibration.empty() ? default_velodyne_calibration(model)
                                                                        : read_velodyne_calibration(options_.calibration);
         info_.metadata = calibration.source;
+        if (!options_.beam_calibration.empty()) apply_beams_file(calibration, model);
         info_.frame_rate_hz = 0.0;
+        info_.beams = static_cast<int>(calibration.lasers.size());
         decoder_.emplace(model, std::move(calibration), options_.cut_angle_deg);
+    }
+
+    // The beams file's offsets folded into the lasers' corrections (the decoder adds dist_correction).
+    void apply_beams_file(VelodyneCalibration& calibration, VelodyneModel model) const {
+        const BeamCalibration c = read_beam_calibration(options_.beam_calibration);
+        check_beam_calibration(c, static_cast<int>(calibration.lasers.size()), to_string(model), "");
+        if (c.index != BeamIndexMethod::Decoder)
+            fail(options_.beam_calibration + " indexes beams by elevation; a Velodyne recording needs laser ids");
+        for (std::size_t b = 0; b < c.beams.size(); ++b) {
+            calibration.lasers[b].vert_correction += c.beams[b].elevation_offset_deg * 3.14159265358979323846 / 180.0;
+            calibration.lasers[b].dist_correction -= c.beams[b].range_offset_m;
+        }
     }
 
     VelodyneModel choose_model(const VelodyneFactory& factory, const UdpDatagram* second) {

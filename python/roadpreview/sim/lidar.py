@@ -33,6 +33,7 @@ class Lidar:
     roll_deg: float = 0.0
     elevation_error_deg: float = 0.0  #: 1σ of each beam's fixed calibration error: rays fly this far off the table
     calibration_seed: int = 0  #: draws the beams' errors (the same unit in every frame)
+    beam_errors_deg: tuple = ()  #: per beam, added to the drawn errors: e.g. uniform offsets of a given bound
 
     def __post_init__(self):
         if len(self.elevations_deg) != len(self.azimuth_offsets_deg) or not len(self.elevations_deg):
@@ -41,6 +42,8 @@ class Lidar:
             raise ValueError(f"{self.name}: need columns >= 1, 0 <= dropout < 1, range_noise_m >= 0")
         if not 0 <= self.min_range_m < self.max_range_m:
             raise ValueError(f"{self.name}: need 0 <= min_range_m < max_range_m")
+        if self.beam_errors_deg and len(self.beam_errors_deg) != len(self.elevations_deg):
+            raise ValueError(f"{self.name}: beam_errors_deg needs one entry per beam ({len(self.elevations_deg)})")
 
     @property
     def beams(self) -> int:
@@ -55,15 +58,27 @@ class Lidar:
         beam table says (where the sensor places its points), or as the rays actually fly (with the beams'
         calibration errors)."""
         elevations = np.asarray(self.elevations_deg, float)
-        if actual and self.elevation_error_deg:
-            elevations = elevations + np.random.default_rng(self.calibration_seed).normal(
-                0.0, self.elevation_error_deg, self.beams)
+        if actual:
+            elevations = elevations + self.elevation_errors_deg()
         elevation = np.radians(elevations)[:, None]
         azimuth = (2 * np.pi * np.arange(self.columns)[None, :] / self.columns
                    - np.radians(np.asarray(self.azimuth_offsets_deg, float))[:, None])
         cos_el = np.cos(elevation)
         d = np.stack(np.broadcast_arrays(cos_el * np.cos(azimuth), cos_el * np.sin(azimuth), np.sin(elevation)), -1)
         return d.reshape(-1, 3)
+
+    def elevation_errors_deg(self) -> np.ndarray:
+        """How far each beam's ray flies above its table angle (the truth a beam calibration should recover)."""
+        errors = np.zeros(self.beams)
+        if self.elevation_error_deg:
+            errors += np.random.default_rng(self.calibration_seed).normal(0.0, self.elevation_error_deg, self.beams)
+        if self.beam_errors_deg:
+            errors += np.asarray(self.beam_errors_deg, float)
+        return errors
+
+    def beam_index(self) -> np.ndarray:
+        """Beam of each row of a frame (beam-major rows, as directions() and drive() give them)."""
+        return np.repeat(np.arange(self.beams), self.columns)
 
     def mount_rotation(self) -> np.ndarray:
         """Sensor-to-base rotation Ry(pitch)·Rx(roll) (no yaw), as roadpreview's extrinsics define it."""

@@ -34,6 +34,7 @@ struct Frame {
     std::optional<double> timestamp;  ///< s; pcaps: capture time (UNIX epoch) of the frame's first packet
     std::int64_t frame_id = -1;       ///< Ouster: the packets' frame id; Velodyne: sweep count; files: index
     std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
+    std::vector<std::int32_t> beams;  ///< beam (Ouster row from the top, Velodyne laser id) per point; empty: unknown
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
     FrameDiagnostics diagnostics;
     std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
@@ -48,6 +49,8 @@ struct SourceInfo {
     int lidar_port = 0;        ///< UDP destination port of the lidar packets (0: not a pcap or none seen)
     std::string lidar_port_origin;  ///< "metadata", "option", "detected" or "default"
     double frame_rate_hz = 0.0;     ///< nominal sweep rate; 0 when unknown
+    int beams = 0;                  ///< beams (Ouster rows, Velodyne lasers); 0 when unknown
+    std::string serial;             ///< sensor serial number; empty when unknown
     std::vector<std::string> notes; ///< anything worth a user's attention (model choice, ID mismatches)
 };
 

@@ -35,6 +35,7 @@ struct OusterMetadata {
     std::vector<int> pixel_shift_by_row;     ///< destagger shift per beam (zeros when unknown)
     std::vector<double> beam_altitude_deg;   ///< per beam, from the top beam down
     std::vector<double> beam_azimuth_deg;
+    std::vector<double> beam_range_offset_m; ///< per beam, subtracted from its ranges (beam calibration); empty: none
     Mat4 beam_to_lidar{};    ///< beam origin in the lidar frame (mm)
     Mat4 lidar_to_sensor{};  ///< lidar frame → sensor frame (mm)
     Mat4 imu_to_sensor{};    ///< IMU frame → sensor frame (mm)

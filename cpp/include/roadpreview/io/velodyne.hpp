@@ -88,6 +88,7 @@ private:
     // The sweep being assembled.
     std::vector<float> xyzi_;
     std::vector<float> times_;
+    std::vector<std::int32_t> beams_;
     double sweep_time_ = 0.0;       // capture time of its first packet
     double sweep_first_us_ = 0.0;   // sensor time of its first firing
     double packet_capture_time_ = 0.0;

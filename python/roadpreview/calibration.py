@@ -1,0 +1,82 @@
+"""Beam self-calibration (docs/method.md §8): each beam's elevation-angle (and range) offset from a drive.
+
+    frames = rp.io.open("drive.pcap")
+    beams = rp.calibrate_beams(frames, speed=2.5, config=rp.Config(sensor_height=1.97))   # or poses=[...]
+    beams.elevation_offset_deg, beams.elevation_sigma_deg, beams.determined
+    beams.save("beams.yaml")            # then rp.io.open(..., beam_calibration="beams.yaml")
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
+
+from ._native import core
+from .config import Config
+
+DEFAULT_UNNUMBERED_BEAMS = 64  #: a sensor whose frames do not number their points: the KITTI HDL-64E
+
+
+def _frame_arrays(frame):
+    """(points, beams or None, timestamp or None) of an rp.io frame, an (N, C) array or a (points, beams) pair."""
+    if isinstance(frame, tuple):
+        points, beams = frame
+        return np.asarray(points), (None if beams is None else np.asarray(beams, np.int32)), None
+    if hasattr(frame, "points"):
+        beams = np.asarray(frame.beams) if len(frame.beams) else None
+        return frame.points, beams, frame.timestamp
+    return np.asarray(frame), None, None
+
+
+def _integrated_poses(times: list, speed: float, yaw_rate: float, frame_rate_hz: float) -> list:
+    """Poses of constant speed and yaw rate at each frame's time (1/frame_rate_hz apart where unknown)."""
+    poses, x, y, yaw = [], 0.0, 0.0, 0.0
+    for k, t in enumerate(times):
+        if k:
+            known = t is not None and times[k - 1] is not None
+            dt = t - times[k - 1] if known else 1.0 / frame_rate_hz
+            if yaw_rate * dt == 0:
+                x, y = x + speed * dt * math.cos(yaw), y + speed * dt * math.sin(yaw)
+            else:
+                r, yaw_next = speed / yaw_rate, yaw + yaw_rate * dt
+                x, y = x + r * (math.sin(yaw_next) - math.sin(yaw)), y - r * (math.cos(yaw_next) - math.cos(yaw))
+                yaw = yaw_next
+        poses.append((x, y, yaw))
+    return poses
+
+
+def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate: float = 0.0,
+                    poses: Optional[Sequence] = None, config: Optional[Config] = None,
+                    beam_count: Optional[int] = None, frame_rate_hz: float = 10.0, cell_m: float = 0.1,
+                    max_sigma_deg: float = 0.01, min_observations: int = 100):
+    """Per-beam offsets from a drive, estimated in C++ (as ``roadpreview calibrate``).
+
+    frames: rp.io frames (their ``.beams`` number the points), (points, beams) pairs, or bare (N, C) arrays whose
+    beams are then found by elevation. poses: (x, y, yaw) of the base frame per frame (m, rad; e.g. from a KITTI
+    poses file); else speed (m/s) and yaw_rate (rad/s) are integrated between the frames' timestamps (or
+    1/frame_rate_hz). config: extrinsics and ground settings (rp.Config). beam_count: default the recording's
+    (rp.io ``.info["beams"]``), else 64 for frames found by elevation, else the largest beam + 1.
+    Returns a BeamCalibration (``.save(path)`` writes beams.yaml); raises CalibrationError (a ValueError) when
+    the drive cannot determine the offsets (too short, no motion, too few beams on the ground).
+    """
+    info = getattr(frames, "info", None)
+    arrays = [_frame_arrays(f) for f in frames]
+    if poses is None:
+        if speed is None:
+            raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses")
+        poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
+    if len(poses) < len(arrays):
+        raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
+    if beam_count is None:
+        numbered = [a[1] for a in arrays if a[1] is not None and len(a[1])]
+        beam_count = (info or {}).get("beams") or (
+            int(max(b.max() for b in numbered)) + 1 if numbered else DEFAULT_UNNUMBERED_BEAMS)
+    out = core().calibrate_beams([a[0] for a in arrays], [a[1] for a in arrays],
+                                 [tuple(map(float, p[:3])) for p in poses[:len(arrays)]], int(beam_count),
+                                 (config or Config()).to_json(), float(cell_m), float(max_sigma_deg),
+                                 int(min_observations))
+    if info:
+        out.sensor_model, out.serial = info.get("sensor_model", ""), info.get("serial", "")
+    return out

@@ -1,0 +1,186 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Beam self-calibration (docs/method.md §8): the numpy reference on small simulated drives, the CLI's
+`calibrate` and `--beam-calibration` on real recordings and on bad input."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from roadpreview import sim
+from roadpreview.reference import calibration as cal
+
+from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, cli
+
+SPEED_MPS = 10.0
+
+
+def small_drive(errors_deg, frames=6):
+    """A short class B drive of a coarse 64-beam sensor (fast: 512 columns) whose beams are off by errors_deg."""
+    lidar = sim.hdl_64e(height_m=1.8, columns=512, beam_errors_deg=tuple(errors_deg))
+    scene = sim.Scene(sim.Road.iso8608("B", seed=3), ())
+    drive = sim.drive(scene, lidar, SPEED_MPS, 0.0, frames, seed=3)
+    return lidar, drive
+
+
+def gauge_free(values, reach, members):
+    """values less their fit by a + b/reach + c·reach over members, as the calibration reports offsets."""
+    basis = cal.gauge_columns(reach[members])
+    v = values[members]
+    return v - basis @ np.linalg.lstsq(basis, v, rcond=None)[0]
+
+
+@pytest.fixture(scope="module")
+def drive():
+    errors = np.random.default_rng(7).uniform(-0.1, 0.1, 64)
+    return (errors, *small_drive(errors))
+
+
+@pytest.fixture(scope="module")
+def uniform_offsets(drive):
+    errors, lidar, frames = drive
+    res = cal.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                              [(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames], lidar.beams,
+                              rp.Config(extrinsics=lidar.extrinsics()))
+    return errors, res
+
+
+def test_reference_recovers_uniform_offsets(uniform_offsets):
+    errors, res = uniform_offsets
+    d = res.determined
+    assert d.sum() >= 30
+    truth = gauge_free(errors, res.extra["reach"], d)
+    error = res.elevation_offset_deg[d] - truth
+    assert np.sqrt(np.mean(error**2)) < 0.005  # offsets of up to 0.1°, on a short coarse drive
+    assert np.corrcoef(res.elevation_offset_deg[d], truth)[0, 1] > 0.99
+    assert np.all(np.isnan(res.elevation_sigma_deg[~d]))
+
+
+def test_reference_range_offsets_stay_unestimated_on_a_flat_road(uniform_offsets):
+    # every beam meets a flat road at one range: its range offset cannot be told from its elevation offset
+    _, res = uniform_offsets
+    assert np.all(res.range_offset_m == 0.0)
+
+
+def test_reference_rejects_a_static_or_short_drive(drive):
+    _, lidar, frames = drive
+    frames = frames[:2]
+    beams = lidar.beam_index()
+    with pytest.raises(cal.CalibrationError, match="too short"):
+        cal.calibrate_beams([(frames[0].points, beams)], [(0.0, 0.0, 0.0)], 64)
+    with pytest.raises(cal.CalibrationError, match="no motion"):
+        cal.calibrate_beams([(f.points, beams) for f in frames], [(0.0, 0.0, 0.0)] * 2, 64)
+
+
+def run_cli(*args):
+    return subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def os1_beams(tmp_path_factory):
+    out = tmp_path_factory.mktemp("beams") / "beams.yaml"
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--poses",
+                OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt", "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_cli_calibrate_writes_a_beams_file(os1_beams):
+    import yaml
+    doc = yaml.safe_load(os1_beams.read_text())
+    assert doc["format"] == "roadpreview beam calibration 1"
+    assert doc["sensor_model"] == "OS-1-128" and doc["serial"] == "122201000998" and doc["beam_count"] == 128
+    assert len(doc["beams"]) == 128 and any(b["determined"] for b in doc["beams"])
+
+
+def test_cli_applies_the_beams_file(os1_beams, tmp_path):
+    import json
+    outs = []
+    for extra in ((), ("--beam-calibration", os1_beams)):
+        out = tmp_path / f"run{len(outs)}.jsonl"
+        r = run_cli("run", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
+                    "-o", out, "-q", *extra)
+        assert r.returncode == 0, r.stderr
+        outs.append(json.loads(out.read_text().splitlines()[0]))
+    assert outs[0]["points"]["input"] == outs[1]["points"]["input"]
+    assert outs[0]["ground"]["plane"] != outs[1]["ground"]["plane"]  # the corrected points fit another plane
+
+
+def test_cli_rejects_a_beams_file_for_another_sensor(os1_beams, tmp_path):
+    other = tmp_path / "other.yaml"
+    other.write_text(os1_beams.read_text().replace('serial: "122201000998"', 'serial: "999"'))
+    r = run_cli("run", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--beam-calibration", other)
+    assert r.returncode != 0 and "other.yaml" in r.stderr and "serial 999" in r.stderr
+    pcap_64 = OUSTER / "OS-1-64_1024x10_fw20.pcap"
+    r = run_cli("run", pcap_64, "--meta", OUSTER / "OS-1-64_sensor_config_reduced.json", "--speed", 2.5,
+                "--beam-calibration", os1_beams)
+    assert r.returncode != 0 and "beams.yaml" in r.stderr and "128-beam" in r.stderr
+    r = run_cli("run", KITTI_FRAMES[0], "--speed", 2.5, "--beam-calibration", os1_beams)
+    assert r.returncode != 0 and "beams.yaml" in r.stderr and "elevation" in r.stderr
+
+
+def test_cli_calibrate_rejects_a_static_drive(tmp_path):
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 0, "-o", tmp_path / "b.yaml")
+    assert r.returncode != 0 and "no motion" in r.stderr and OS1_128_PCAP.name in r.stderr
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
+                "-o", tmp_path / "b.yaml")
+    assert r.returncode != 0 and "too short" in r.stderr
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_cpp_agrees_with_the_reference(drive, uniform_offsets):
+    errors, lidar, frames = drive
+    reference = uniform_offsets[1]
+    cpp = rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                             poses=[(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames],
+                             config=rp.Config(extrinsics=lidar.extrinsics()), beam_count=lidar.beams)
+    both = np.asarray(cpp.determined) & reference.determined
+    assert both.sum() >= 0.9 * max(reference.determined.sum(), np.sum(cpp.determined))
+    np.testing.assert_allclose(np.asarray(cpp.elevation_offset_deg)[both], reference.elevation_offset_deg[both],
+                               atol=1e-3)
+    np.testing.assert_allclose(cpp.residual_m, reference.residual_m, rtol=0.05)
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_python_api_saves_a_beams_file_that_applies(drive, tmp_path):
+    errors, lidar, frames = drive
+    c = rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                           poses=[(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames],
+                           config=rp.Config(extrinsics=lidar.extrinsics()), beam_count=lidar.beams)
+    path = tmp_path / "beams.yaml"
+    c.save(str(path))
+    back = rp._core.read_beam_calibration(str(path))
+    np.testing.assert_allclose(back.elevation_offset_deg, c.elevation_offset_deg, atol=1e-7)
+    corrected = c.apply(frames[0].points, lidar.beam_index().astype(np.int32))
+    finite = np.isfinite(frames[0].points[:, 0])
+    elevation = np.degrees(np.arcsin(corrected[finite, 2] / np.linalg.norm(corrected[finite, :3], axis=1)))
+    before = np.degrees(np.arcsin(frames[0].points[finite, 2] / np.linalg.norm(frames[0].points[finite, :3], axis=1)))
+    shift = np.asarray(c.elevation_offset_deg)[lidar.beam_index()[finite]]
+    np.testing.assert_allclose(elevation - before, shift, atol=2e-4)
+    with pytest.raises(rp.CalibrationError, match="no motion"):
+        rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames[:3]], poses=[(0.0, 0.0, 0.0)] * 3,
+                           beam_count=lidar.beams)
+
+
+# KITTI odometry seq 00 ground-truth poses of frames 0-2 (KITTI, CC BY-NC-SA 3.0), turned from the camera's axes
+# into the Velodyne's: x, y (m) and heading (rad)
+KITTI_POSES = [(0.0, 0.0, 0.0), (0.8587, 0.0469, 0.00207), (1.7163, 0.0937, 0.00413)]
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_kitti_beams_found_by_elevation(tmp_path):
+    frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
+    c = rp.calibrate_beams(frames, poses=KITTI_POSES, config=rp.Config(sensor_height=1.73))
+    centres = np.asarray(c.elevation_deg)
+    assert c.beam_count == 64 and np.all(np.diff(centres) <= -0.25)  # numbered from the top, distinct rings
+    assert -25.5 < centres[-1] < -23.0  # the HDL-64E's lowest beam is near −24.8°
+    path = tmp_path / "kitti_beams.yaml"
+    c.save(str(path))
+    frame = next(iter(rp.io.open(KITTI_FRAMES[0], beam_calibration=path)))
+    beams = np.asarray(frame.beams)
+    raw = frames[0]
+    ahead = (raw[:, 0] > 4) & (np.abs(raw[:, 1]) < 10) & (raw[:, 2] < -1.0)  # the road ahead
+    assert np.mean(beams[ahead] >= 0) > 0.9
+    moved = np.linalg.norm(frame.points[:, :3] - raw[:, :3], axis=1)
+    assert np.all(moved[beams < 0] == 0) and np.any(moved[beams >= 0] > 0)
