@@ -21,10 +21,14 @@ RigidTransform to_rigid_transform(const Extrinsics& e) {
 
 namespace {
 
-// ROI cells: about the clustering's reach and the obstacles' ground columns, so that neighbours in space are
-// neighbours in memory; a huge ROI gets wider cells rather than millions of empty ones.
+// ROI cells: columns about the clustering's reach and the obstacles' ground columns wide, so that neighbours in
+// space are neighbours in memory (a huge ROI gets wider columns rather than millions of empty ones), cut into
+// slabs of base-frame height, so that within a column the road comes before what stands on it and a test for
+// ground or not ground sees long runs of equal answers, whatever the order of the input rows.
 constexpr double kCellEdgeM = 1.0;
 constexpr double kMaxCellsPerSide = 1024.0;
+constexpr double kSlabLowM = -1.0, kSlabM = 0.1;  // below kSlabLowM: the first slab
+constexpr std::uint32_t kSlabs = 32;                // from kSlabLowM + (kSlabs - 1)·kSlabM up: the last one
 
 // The finite rows of `input` in the base frame, the ROI points among them kept in `scratch` in input order.
 // Written without a branch on the ROI test (a point is always stored, then kept or overwritten): in an
@@ -53,20 +57,25 @@ std::size_t roi_points(PointsView input, const RigidTransform& T, const GroundCo
 
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out) {
     const std::size_t kept = roi_points(input, T, g, out);
-    // A stable counting sort of the kept points by cell.
+    // A stable counting sort of the kept points by cell: column, then slab.
     const double x_lo = g.roi_x_min_m, y_lo = -g.roi_y_abs_max_m;
     const double edge = std::max({kCellEdgeM, (g.roi_x_max_m - x_lo) / (kMaxCellsPerSide - 1.0),
                                   -2.0 * y_lo / (kMaxCellsPerSide - 1.0)});
     const auto cell = [edge](double v, double lo) { return static_cast<std::uint32_t>((v - lo) / edge); };
     const std::uint32_t x_last = cell(g.roi_x_max_m, x_lo), y_last = cell(-y_lo, y_lo);
-    const std::uint32_t cells = (x_last + 1) * (y_last + 1);
+    const std::uint32_t cells = (x_last + 1) * (y_last + 1) * kSlabs;
+    const auto slab = [](float z) {
+        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) / kSlabM);
+        return std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
+    };
     auto& scratch = out.scratch;
     auto& start = out.cell_start;
     start.assign(cells + 1, 0);
     for (std::size_t k = 0; k < kept; ++k) {
         RoiCloud::Candidate& c = scratch[k];
         // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0)
-        c.cell = std::min(cell(c.x, x_lo), x_last) * (y_last + 1) + std::min(cell(c.y, y_lo), y_last);
+        const std::uint32_t column = std::min(cell(c.x, x_lo), x_last) * (y_last + 1) + std::min(cell(c.y, y_lo), y_last);
+        c.cell = column * kSlabs + slab(c.z);
         ++start[c.cell + 1];
     }
     for (std::uint32_t c = 0; c < cells; ++c) start[c + 1] += start[c];
