@@ -74,7 +74,8 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
     for (std::size_t k = 0; k < kept; ++k) {
         RoiCloud::Candidate& c = scratch[k];
         // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0)
-        const std::uint32_t column = std::min(cell(c.x, x_lo), x_last) * (y_last + 1) + std::min(cell(c.y, y_lo), y_last);
+        const std::uint32_t column =
+            std::min(cell(c.x, x_lo), x_last) * (y_last + 1) + std::min(cell(c.y, y_lo), y_last);
         c.cell = column * kSlabs + slab(c.z);
         ++start[c.cell + 1];
     }
