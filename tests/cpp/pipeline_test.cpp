@@ -166,3 +166,18 @@ TEST(Pipeline, ClusterTiesGoToTheLowestInputRow) {
     EXPECT_EQ(boxes[left_id].aabb_min[0], boxes[right_id].aabb_min[0]);
     EXPECT_LT(left_id, right_id);
 }
+
+// A huge ROI is ordered by wider cells (a bounded count array): the same points give the same answer as in a
+// ROI that just holds them.
+TEST(Pipeline, HugeRoiGivesTheAnswerOfATightOne) {
+    const scenes::Cloud pts = scenes::concat(road_scene(), scenes::box(12.0, -3.0, 1.0, 1.0, 1.0, -1.8));
+    rp::Config tight = kitti_like(), huge = kitti_like();
+    tight.ground.roi_x_max_m = 46.0, tight.ground.roi_y_abs_max_m = 12.0;
+    huge.ground.roi_x_max_m = 5000.0, huge.ground.roi_y_abs_max_m = 3000.0;
+    const rp::Result a = rp::Estimator(tight).process(pts, 5.0, 0.1), b = rp::Estimator(huge).process(pts, 5.0, 0.1);
+    EXPECT_EQ(a.points.roi, b.points.roi);
+    EXPECT_EQ(a.ground_mask, b.ground_mask);
+    EXPECT_EQ(a.cluster_labels, b.cluster_labels);
+    ASSERT_TRUE(a.plane && b.plane);
+    for (int k = 0; k < 4; ++k) EXPECT_NEAR((*a.plane)[k], (*b.plane)[k], 1e-12);
+}

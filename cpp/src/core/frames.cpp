@@ -26,7 +26,7 @@ namespace {
 // slabs of base-frame height, so that within a column the road comes before what stands on it and a test for
 // ground or not ground sees long runs of equal answers, whatever the order of the input rows.
 constexpr double kCellEdgeM = 1.0;
-constexpr double kMaxCellsPerSide = 1024.0;
+constexpr double kMaxCellsPerSide = 128.0;  // at most 128 × 128 columns × kSlabs cells: 2 MB of counts
 constexpr double kSlabLowM = -1.0, kSlabM = 0.1;  // below kSlabLowM: the first slab
 constexpr std::uint32_t kSlabs = 32;                // from kSlabLowM + (kSlabs - 1)·kSlabM up: the last one
 
