@@ -61,11 +61,12 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
     const double x_lo = g.roi_x_min_m, y_lo = -g.roi_y_abs_max_m;
     const double edge = std::max({kCellEdgeM, (g.roi_x_max_m - x_lo) / (kMaxCellsPerSide - 1.0),
                                   -2.0 * y_lo / (kMaxCellsPerSide - 1.0)});
-    const auto cell = [edge](double v, double lo) { return static_cast<std::uint32_t>((v - lo) / edge); };
+    const double per_m = 1.0 / edge;  // multiplications, not divisions, per point: a cell is only an order
+    const auto cell = [per_m](double v, double lo) { return static_cast<std::uint32_t>((v - lo) * per_m); };
     const std::uint32_t x_last = cell(g.roi_x_max_m, x_lo), y_last = cell(-y_lo, y_lo);
     const std::uint32_t cells = (x_last + 1) * (y_last + 1) * kSlabs;
     const auto slab = [](float z) {
-        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) / kSlabM);
+        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) * (1.0 / kSlabM));
         return std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
     };
     auto& scratch = out.scratch;
