@@ -19,8 +19,13 @@ What it measures, printed as Markdown tables on stdout (progress goes to stderr)
    ``.bin``): precision, recall and F1 inside the ROI x ∈ [1, 40] m, |y| ≤ 10 m, unlabelled points excluded.
    The synthetic frame, whose ground truth is known from the ray casting, is shown too (not in the mean).
 3. Point counts per frame: input, finite, ROI, and ground for each method and implementation.
+4. The default pipeline (``rp.Config`` defaults but the sensor height: ground, obstacles, paths, profiles,
+   roughness), C++ stage times as in 1., on each KITTI frame and the first frame of the bundled OS1-128
+   recording (``OS1_128_PCAP``, 1.97 m high), in sensor order and shuffled (one random permutation of the
+   rows, seed 0): median (min–max) per stage, shuffled/ordered ratio of the total median, and whether the
+   shuffled run gave the same ground, clusters and profiles (its masks and labels mapped back to the rows).
 
-Usage: ``python bench/bench.py [--repeat N] [--ref-repeat N] [--quick]``
+Usage: ``python bench/bench.py [--repeat N] [--ref-repeat N] [--quick] [--default-only]``
 """
 
 from __future__ import annotations
@@ -51,11 +56,13 @@ from roadpreview.reference import profile as ref_profile  # noqa: E402
 REPO = Path(__file__).resolve().parents[1]
 KITTI_DIR = REPO / "tests" / "data" / "semantickitti"
 OUSTER_META = REPO / "tests" / "data" / "ouster" / "OS-1-128_v2.3.0_1024x10.json"  # beam angles
+OS1_128_PCAP = REPO / "tests" / "data" / "ouster" / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"  # a real frame
 
 SPEED_MPS = 5.0
 YAW_RATE_RPS = 0.1
 KITTI_SENSOR_HEIGHT_M = 1.73
 OUSTER_SENSOR_HEIGHT_M = 1.8
+OS1_128_SENSOR_HEIGHT_M = 1.97  # the recording's ground level (README, "Two commands")
 METHODS = ("pca", "ransac")
 STAGES = ("ground", "path", "profile", "roughness", "total")
 CPP_WARMUP = 3
@@ -67,6 +74,9 @@ ROI_X_M = (1.0, 40.0)
 ROI_Y_ABS_M = 10.0
 
 TARGET_TOTAL_MS = 1.5
+DEFAULT_STAGES = ("ground", "obstacles", "path", "profile", "roughness", "total")
+TARGET_SHUFFLED_RATIO = 1.2  # shuffled total / sensor-ordered total
+SHUFFLE_SEED = 0
 BUSY_LOAD = 0.5  # 1-min load average above which the timings are flagged
 PAPER_MS = {"ground": 9.88, "profile": 0.74, "roughness": 0.37, "total": 10.96}  # Seok et al. 2024, Table 2
 FIELD_NOTES_F1 = {"plain PCA ×3 (0.2 m)": 0.953, "Patchwork++ 1.4.1": 0.957}
@@ -175,6 +185,12 @@ def ouster_frame(meta_path: Path, seed: int = 0, max_range: float = 100.0) -> tu
     return Frame("synthetic OS1-128", points, h, truth, hit, synthetic=True), source
 
 
+def os1_128_frame() -> Frame:
+    """The first frame of the bundled OS1-128 recording (sensor frame, ordered by beam and column)."""
+    points = next(iter(rp.io.open(OS1_128_PCAP))).points
+    return Frame("OS1-128 recording, frame 0", points, OS1_128_SENSOR_HEIGHT_M)
+
+
 # ------------------------------------------------------------------------------------------------ timing
 def config(frame: Frame, method: str) -> rp.Config:
     """The paper's pipeline: the obstacle stage (not in the paper, timed by bench/obstacles.py) is off."""
@@ -264,6 +280,45 @@ def time_reference(frame: Frame, method: str, repeat: int):
         check_profiles_match(profiles, cfg)
     runs = [reference_once(frame.points, cfg) for _ in range(repeat)]
     return [ms for ms, _, _ in runs], runs[-1][1]
+
+
+def time_default(points: np.ndarray, sensor_height: float, repeat: int):
+    """Per-run stage times (ms) of the default pipeline (obstacles on) and the last result."""
+    est = rp.Estimator(rp.Config(sensor_height=sensor_height))
+    for _ in range(CPP_WARMUP):
+        est.process(points, SPEED_MPS, YAW_RATE_RPS)
+    runs = []
+    for _ in range(repeat):
+        res = est.process(points, SPEED_MPS, YAW_RATE_RPS)
+        runs.append({s: res.timing_ms[s] for s in DEFAULT_STAGES})
+    return runs, res
+
+
+def same_answer(ordered, shuffled, permutation: np.ndarray) -> bool:
+    """Whether a shuffled frame's result is the ordered frame's: masks and labels per row, planes, profiles."""
+    def rows(values) -> np.ndarray:
+        back = np.empty_like(np.asarray(values))
+        back[permutation] = np.asarray(values)  # shuffled row i is original row permutation[i]
+        return back
+
+    same = (np.array_equal(rows(shuffled.ground_mask), np.asarray(ordered.ground_mask))
+            and np.array_equal(rows(shuffled.cluster_labels), np.asarray(ordered.cluster_labels))
+            and np.allclose(shuffled.plane, ordered.plane, rtol=0, atol=1e-12))
+    for wheel in ("left", "right"):
+        a, b = getattr(ordered, wheel), getattr(shuffled, wheel)
+        same = same and np.array_equal(a.count, b.count) and np.allclose(a.z, b.z, rtol=0, atol=1e-9, equal_nan=True)
+    return bool(same)
+
+
+def run_default(frame: Frame, args) -> dict:
+    print(f"{frame.name}: default pipeline ordered and shuffled, ×{args.repeat} each", file=sys.stderr)
+    permutation = np.random.default_rng(SHUFFLE_SEED).permutation(len(frame.points))
+    ordered, res_ordered = time_default(frame.points, frame.sensor_height, args.repeat)
+    shuffled, res_shuffled = time_default(np.ascontiguousarray(frame.points[permutation]), frame.sensor_height,
+                                          args.repeat)
+    return {"frame": frame.name, "n": len(frame.points), "ordered": ordered, "shuffled": shuffled,
+            "roi": res_ordered.points["roi"], "clusters": len(res_ordered.obstacles.count),
+            "same": same_answer(res_ordered, res_shuffled, permutation)}
 
 
 # ------------------------------------------------------------------------------------------------ quality
@@ -406,6 +461,31 @@ def print_counts(results: list[dict]) -> None:
           "differs between the C++ and reference masks (RANSAC samples differ: PCL's generator vs numpy's).")
 
 
+def print_default(results: list[dict], args) -> None:
+    print(f"## Timing: default pipeline (ground {rp.Config().ground.method} + obstacles + roughness), sensor "
+          "order vs shuffled (Result.timing_ms, ms)\n")
+    print(f"Median (min–max) of {args.repeat} runs after {CPP_WARMUP} warm-up, single-threaded; motion "
+          f"{SPEED_MPS} m/s, {YAW_RATE_RPS} rad/s; shuffled = one random permutation of the rows (seed "
+          f"{SHUFFLE_SEED}); \"same\" = the shuffled frame gave the ordered frame's ground mask, cluster labels, "
+          "plane and profiles.\n")
+    rows = []
+    for r in results:
+        for order in ("ordered", "shuffled"):
+            tail = [f"{median(r['shuffled'], 'total') / median(r['ordered'], 'total'):.2f}",
+                    "yes" if r["same"] else "NO"] if order == "shuffled" else ["", ""]
+            rows.append([r["frame"], r["n"], r["roi"], r["clusters"], order,
+                         *(spread(r[order], s) for s in DEFAULT_STAGES), *tail])
+    print(md_table(["frame", "points", "ROI points", "clusters", "order", *DEFAULT_STAGES, "shuffled / ordered",
+                    "same"], rows) + "\n")
+    kitti = [r for r in results if not r["frame"].startswith("OS1-128")]
+    worst_total = max(median(r[o], "total") for r in kitti for o in ("ordered", "shuffled"))
+    worst_ratio = max(median(r["shuffled"], "total") / median(r["ordered"], "total") for r in results)
+    print(f"Targets: total ≤ {TARGET_TOTAL_MS} ms per KITTI frame — worst median {worst_total:.2f} ms → "
+          f"{'met' if worst_total <= TARGET_TOTAL_MS else 'NOT met'}; shuffled ≤ {TARGET_SHUFFLED_RATIO}× "
+          f"sensor order — worst ratio {worst_ratio:.2f} → "
+          f"{'met' if worst_ratio <= TARGET_SHUFFLED_RATIO else 'NOT met'}.\n")
+
+
 # ------------------------------------------------------------------------------------------------ main
 def run_frame(frame: Frame, method: str, args) -> dict:
     print(f"{frame.name}: {method} C++ ×{args.repeat}, reference ×{args.ref_repeat}", file=sys.stderr)
@@ -426,6 +506,8 @@ def parse_args(argv=None):
     parser.add_argument("--quick", action="store_true", help="3 C++ runs and 1 reference run (smoke test)")
     parser.add_argument("--ouster-meta", type=Path, default=OUSTER_META,
                         help="Ouster metadata JSON with beam_altitude_angles")
+    parser.add_argument("--default-only", action="store_true",
+                        help="only the default pipeline's table, ordered vs shuffled")
     args = parser.parse_args(argv)
     if args.quick:
         args.repeat, args.ref_repeat = 3, 1
@@ -438,13 +520,16 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     load_at_start = os.getloadavg()[0]
     frames = kitti_frames()
+    default_results = [run_default(frame, args) for frame in [*frames, os1_128_frame()]]
     synthetic, ouster_source = ouster_frame(args.ouster_meta)
-    frames.append(synthetic)
-    results = [run_frame(frame, method, args) for frame in frames for method in METHODS]
+    results = [] if args.default_only else [run_frame(frame, method, args) for frame in [*frames, synthetic]
+                                            for method in METHODS]
     print_header(args, ouster_source, load_at_start)
-    print_timing(results, args)
-    print_quality(results)
-    print_counts(results)
+    if results:
+        print_timing(results, args)
+        print_quality(results)
+        print_counts(results)
+    print_default(default_results, args)
     return 0
 
 

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Internal: the one per-frame copy of the cloud — base-frame points of the front ROI, stored as a PCL
 // cloud so that RANSAC (and later clustering) use it in place, and viewed as N×3 floats by everything else.
+// The points are ordered by square cells of the ROI (a counting sort, stable: input order within a cell), so
+// that every later stage reads memory in spatial order whatever the order of the input rows.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +20,7 @@ namespace roadpreview {
 struct RoiCloud {
     pcl::PointCloud<pcl::PointXYZ>::Ptr cloud{new pcl::PointCloud<pcl::PointXYZ>};
     std::vector<std::int32_t> input_index;  ///< input row of each ROI point
+    std::vector<std::int32_t> input_order;  ///< the ROI points' positions in the order of their input rows
     std::int64_t finite = 0;                ///< input rows with finite x, y, z
 
     Eigen::Index size() const { return static_cast<Eigen::Index>(input_index.size()); }
@@ -25,9 +28,19 @@ struct RoiCloud {
         static_assert(sizeof(pcl::PointXYZ) == 4 * sizeof(float));
         return points_view(cloud->points.empty() ? nullptr : cloud->points[0].data, size(), 4);
     }
+
+    // Scratch of crop_roi, kept so that a stream of frames allocates nothing once the buffers have grown.
+    struct Candidate {
+        float x, y, z;
+        std::uint32_t cell;
+        std::int32_t row;
+    };
+    std::vector<Candidate> scratch;
+    std::vector<std::uint32_t> cell_start;
 };
 
-/// Transform, drop non-finite rows (counted), crop to the ROI; reuses `out`'s buffers.
+/// Transform, drop non-finite rows (counted), crop to the ROI and order the points by cell; reuses `out`'s
+/// buffers.
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out);
 
 }  // namespace roadpreview

@@ -74,19 +74,24 @@ GroundFit pca_ground(PointsView pts, const GroundConfig& cfg) {
 // PCL's up-axis-constrained plane model; subclassed only to set the seed of its sampler.
 class SeededPlaneModel : public pcl::SampleConsensusModelPerpendicularPlane<pcl::PointXYZ> {
 public:
-    SeededPlaneModel(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, std::uint32_t seed)
-        : pcl::SampleConsensusModelPerpendicularPlane<pcl::PointXYZ>(cloud) {
+    SeededPlaneModel(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const pcl::Indices& indices,
+                     std::uint32_t seed)
+        : pcl::SampleConsensusModelPerpendicularPlane<pcl::PointXYZ>(cloud, indices) {
         rng_alg_.seed(seed);
     }
 };
 
 // PCL finds the consensus set; the plane is then refined by this file's double-precision PCA on it, and
-// the ground is every point within the distance of the refined plane (method.md §1).
-GroundFit ransac_ground(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, PointsView pts, const GroundConfig& cfg) {
+// the ground is every point within the distance of the refined plane (method.md §1). The sampler draws
+// from the points in the order of their input rows, as if the ROI had not been ordered by cell.
+GroundFit ransac_ground(const RoiCloud& roi, const GroundConfig& cfg) {
+    const auto& cloud = roi.cloud;
+    const PointsView pts = roi.view();
     GroundFit fit;
     fit.mask.assign(cloud->size(), 0);
     if (cloud->size() < 3) return fit;
-    auto model = std::make_shared<SeededPlaneModel>(cloud, cfg.ransac_seed);
+    const pcl::Indices in_input_order(roi.input_order.begin(), roi.input_order.end());
+    auto model = std::make_shared<SeededPlaneModel>(cloud, in_input_order, cfg.ransac_seed);
     model->setAxis(Eigen::Vector3f::UnitZ());
     model->setEpsAngle(cfg.ransac_max_tilt_deg * M_PI / 180.0);
     pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, cfg.ransac_distance_m);
@@ -122,7 +127,7 @@ std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t
 
 GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     if (cfg.method == GroundMethod::Pca) return pca_ground(roi.view(), cfg);
-    return ransac_ground(roi.cloud, roi.view(), cfg);
+    return ransac_ground(roi, cfg);
 }
 
 GroundFit fit_ground(PointsView points, const GroundConfig& cfg) {

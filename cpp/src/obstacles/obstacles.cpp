@@ -123,8 +123,9 @@ Representatives representatives(PointsView pts, const pcl::Indices& candidates, 
 
 // Cluster id per candidate (−1: none): PCL's Euclidean clusters of the representatives, each candidate joining
 // its representative's; clusters outside the size limits (in points) dropped, the rest ranked nearest first
-// (smallest x of their points), ties by their lowest point index.
-std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+// (smallest x of their points), ties by their lowest input row (`row_of` each point, the point itself if null).
+std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
+                                           const std::vector<std::int32_t>* row_of) {
     const Representatives reps = representatives(pts, candidates, cfg.voxel_m);
     const std::vector<pcl::PointIndices> components = euclidean_clusters(reps.cloud, cfg.cluster_tolerance_m);
     std::vector<std::int32_t> component_of(reps.cloud->size());
@@ -143,7 +144,7 @@ std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& c
         Extent& e = extent[static_cast<std::size_t>(label[k])];
         ++e.count;
         e.x_min = std::min(e.x_min, pts(candidates[k], 0));
-        e.first = std::min(e.first, candidates[k]);
+        e.first = std::min(e.first, row_of ? (*row_of)[static_cast<std::size_t>(candidates[k])] : candidates[k]);
     }
     std::vector<std::int32_t> kept;
     for (std::size_t c = 0; c < extent.size(); ++c)
@@ -157,9 +158,10 @@ std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& c
 }
 
 // Cluster id per point (−1: none) of the `candidates` among `points` points.
-std::vector<std::int32_t> point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg) {
+std::vector<std::int32_t> point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
+                                       const std::vector<std::int32_t>* row_of = nullptr) {
     std::vector<std::int32_t> label(static_cast<std::size_t>(pts.rows()), -1);
-    const std::vector<std::int32_t> of_candidate = candidate_labels(pts, candidates, cfg);
+    const std::vector<std::int32_t> of_candidate = candidate_labels(pts, candidates, cfg, row_of);
     for (std::size_t k = 0; k < candidates.size(); ++k) label[static_cast<std::size_t>(candidates[k])] = of_candidate[k];
     return label;
 }
@@ -263,7 +265,8 @@ Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& 
     pcl::Indices candidates;
     for (std::size_t i = 0; i < ground_mask.size(); ++i)
         if (!ground_mask[i]) candidates.push_back(static_cast<pcl::index_t>(i));
-    return describe_all(roi.view(), point_labels(roi.view(), candidates, cfg), ground_mask, plane, cfg);
+    std::vector<std::int32_t> label = point_labels(roi.view(), candidates, cfg, &roi.input_index);
+    return describe_all(roi.view(), std::move(label), ground_mask, plane, cfg);
 }
 
 Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,

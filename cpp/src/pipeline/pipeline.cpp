@@ -39,12 +39,24 @@ void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
     if (cfg.obstacles.enabled) p.obstacles.emplace();
 }
 
+// Per-ROI-point values written to their input rows (`rows`, one per input row, already holding the value for
+// the rows outside the ROI). The ROI is visited in input order, so the rows are written in ascending order.
+template <class T>
+void to_input_rows(const RoiCloud& roi, const std::vector<T>& of_roi_point, std::vector<T>& rows) {
+    if (of_roi_point.size() != roi.input_order.size())
+        throw std::logic_error("a stage gave " + std::to_string(of_roi_point.size()) + " values for " +
+                               std::to_string(roi.input_order.size()) + " ROI points");
+    for (const std::int32_t k : roi.input_order) {
+        const auto at = static_cast<std::size_t>(k);
+        rows[static_cast<std::size_t>(roi.input_index[at])] = of_roi_point[at];
+    }
+}
+
 // Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
 Clustering cluster_frame(const RoiCloud& roi, const GroundFit& ground, const ObstaclesConfig& cfg, Result& r) {
     Clustering clustering;
     if (r.plane) clustering = find_obstacles(roi, ground.mask, *r.plane, cfg);
-    for (std::size_t i = 0; i < clustering.label.size(); ++i)
-        if (clustering.label[i] >= 0) r.cluster_labels[static_cast<std::size_t>(roi.input_index[i])] = clustering.label[i];
+    if (!clustering.label.empty()) to_input_rows(roi, clustering.label, r.cluster_labels);
     r.obstacles = clustering.clusters;
     return clustering;
 }
@@ -125,8 +137,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
     r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
-    for (std::size_t i = 0; i < ground.mask.size(); ++i)
-        if (ground.mask[i]) r.ground_mask[static_cast<std::size_t>(roi.input_index[i])] = 1;
+    to_input_rows(roi, ground.mask, r.ground_mask);
     r.timing_ms.ground = ms_since(mark);
 
     r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
