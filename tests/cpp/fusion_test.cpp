@@ -336,7 +336,8 @@ TEST(Fusion, AFewSharedCellsAlongOneRingFixTheOffsetButDoNotTiltTheFrame) {
 scenes::Cloud checkerboard_patch(double x0, double x1, double y_abs, unsigned seed) {
     scenes::Cloud frame = flat_patch(x0, x1, y_abs, 0.0, 0.0, seed);
     for (Eigen::Index i = 0; i < frame.rows(); ++i) {
-        const auto ix = static_cast<long>(std::floor(frame(i, 0) / 0.1)), iy = static_cast<long>(std::floor(frame(i, 1) / 0.1));
+        const auto ix = static_cast<long>(std::floor(frame(i, 0) / 0.1));
+        const auto iy = static_cast<long>(std::floor(frame(i, 1) / 0.1));
         frame(i, 2) = (ix + iy) % 2 ? 0.01f : -0.01f;
     }
     return frame;
