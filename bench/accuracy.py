@@ -406,7 +406,7 @@ def main(argv=None) -> int:
     print_classes(results)
     print_ranges(results)
     print_repeatability(results)
-    real_recordings.print_tables()
+    real_recordings.print_tables(args.quick)
     return 0
 
 

@@ -105,8 +105,9 @@ def md_table(headers: list[str], rows: list[list]) -> str:
                      ["| " + " | ".join(map(str, r)) + " |" for r in rows])
 
 
-def print_tables() -> None:
-    recordings = [r for r in (os1_128(), kitti_seq00()) if r is not None]
+def print_tables(quick: bool = False) -> None:
+    """The tables; `quick` (the smoke test): the OS1-128 recording only."""
+    recordings = [r for r in (os1_128(), None if quick else kitti_seq00()) if r is not None]
     rows, reps = [], []
     for rec in recordings:
         single, fused = process(rec, "none"), process(rec, "kalman")
