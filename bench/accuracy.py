@@ -17,7 +17,10 @@ Printed (Markdown, progress on stderr):
   * the bump height error per bump height, single frame and fused;
   * what one frame resolves per range: bins backed by points, spacing of the points, the highest frequency
     that spacing resolves, and the profile error, per sensor; and the bins the fused map backs there.
-Definitions are in bench/README.md. Usage: ``python bench/accuracy.py [--quick] [--jobs N]``.
+  * repeatability (docs/method.md §9), a measure that needs no truth: the same stretch of road seen by the first
+    frame 14–24 m ahead and by the last 5–15 m ahead, frame by frame; and on every real recording with poses
+    (the OS1-128 pcap, KITTI seq 00 frames 0–5 from the shared data), with their fused classes frame by frame.
+Definitions are in bench/README.md. Usage: ``python bench/accuracy.py [--quick] [--jobs N] [--match TEXT]``.
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ import numpy as np
 import roadpreview as rp
 from roadpreview import sim
 
+import real_recordings
+
 SPEED_MPS = 10.0
 CURVE_YAW_RATE_RPS = 0.2  # radius 50 m at 10 m/s
 FRAMES = 10
@@ -50,6 +55,7 @@ BUMP_LENGTH_M = 1.0
 BUMP_RANGE_M = (5.0, 12.0)  # frames whose bump lies this far ahead score its height
 BEAM_ERROR_DEG = 0.03  # per-beam elevation error of the calibration scenarios
 RANGE_BUCKETS_M = ((4, 8), (8, 12), (12, 16), (16, 25), (25, 40))
+NEAR_M = (5.0, 15.0)  # repeatability: the stretch as the last frame sees it; the first saw it further ahead
 ROI_X_M, ROI_Y_ABS_M = (1.0, 40.0), 10.0
 SCENE_BOXES = (
     sim.Box(10.0, 14.5, 2.4, 4.2, 1.5),  # parked car, left
@@ -180,9 +186,29 @@ def run(scenario: Scenario) -> dict:
     out = {"scenario": scenario}
     for method in FUSION:
         est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method}))
-        out[method] = [measure(est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s), f, truth,
-                               scenario) for f, truth in zip(frames, truths)]
+        results = [est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s) for f in frames]
+        out[method] = [measure(res, f, truth, scenario) for res, f, truth in zip(results, frames, truths)]
+        travelled = SPEED_MPS * (frames[-1].time_s - frames[0].time_s)
+        out[method][0]["repeatability"] = [
+            frame_repeatability(getattr(results[0], w), getattr(results[-1], w),
+                                wheel_travel(travelled, scenario.yaw_rate, w, est.config)) for w in ("left", "right")]
     return out
+
+
+def wheel_travel(travelled_m: float, yaw_rate: float, wheel: str, cfg) -> float:
+    """Arc length a wheel rolls while the vehicle's origin travels travelled_m at this yaw rate."""
+    if yaw_rate == 0.0:
+        return travelled_m
+    radius = SPEED_MPS / yaw_rate
+    y_wheel = cfg.track_width / 2 * (1 if wheel == "left" else -1)
+    return travelled_m * abs(radius - y_wheel) / abs(radius)
+
+
+def frame_repeatability(first, last, travelled_m: float) -> rp.Repeatability:
+    """The stretch the last frame's profile holds NEAR_M ahead, against the first frame's view of it."""
+    grid = np.arange(*NEAR_M, 0.1) + 0.05 + travelled_m
+    return rp.repeatability(rp.world_profile(first.s, first.z, 0.0, grid),
+                            rp.world_profile(last.s, last.z, travelled_m, grid), 0.1)
 
 
 # ------------------------------------------------------------------------------------------------ summary
@@ -325,6 +351,26 @@ def print_ranges(results: list[dict]) -> None:
                     f"bins backed, {FUSION[-1]} map after the sequence"], rows) + "\n")
 
 
+def print_repeatability(results: list[dict]) -> None:
+    rows = []
+    for sensor in SENSORS:
+        for group, classes in (("classes C–D", "CD"), ("classes A–F", CLASSES)):
+            picked = [r for r in results if r["scenario"].sensor == sensor and r["scenario"].group == "classes"
+                      and r["scenario"].iso_class in classes]
+            for method in FUSION:
+                reps = [x for r in picked for x in r[method][0]["repeatability"]]
+                values = [x.correlation for x in reps if x.correlation is not None]
+                rms = [x.rms_m for x in reps if x.rms_m is not None]
+                if reps:
+                    rows.append([sensor, group, method, f"{len(values)}/{len(reps)}",
+                                 f"{np.median(values):.3f}" if values else "–",
+                                 f"{np.min(values):.3f}" if values else "–",
+                                 f"{np.median(rms) * 100:.2f}" if rms else "–"])
+    print(f"## Repeatability: {NEAR_M[0]:g}–{NEAR_M[1]:g} m ahead in the last frame vs the first frame's view\n")
+    print(md_table(["sensor", "roads", "fusion", "wheels compared", "correlation median", "correlation min",
+                    "RMS difference cm (median)"], rows) + "\n")
+
+
 def run_in_pool(work, items: list, jobs: int, describe) -> list:
     """work(item) for every item on `jobs` spawned processes, in order; progress (describe(result)) on stderr."""
     results = []
@@ -339,10 +385,15 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="three short sequences (smoke test)")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="worker processes")
+    parser.add_argument("--match", action="append", default=[],
+                        help="run only the scenarios whose 'sensor name' contains TEXT (repeatable)")
     args = parser.parse_args(argv)
     if args.jobs < 1:
         parser.error("--jobs must be at least 1")
-    scenarios = suite(args.quick)
+    scenarios = [sc for sc in suite(args.quick)
+                 if not args.match or any(m.lower() in f"{sc.sensor} {sc.name}".lower() for m in args.match)]
+    if not scenarios:
+        parser.error(f"no scenario matches {args.match}")
     start = time.perf_counter()
     results = run_in_pool(run, scenarios, args.jobs, lambda r: f"{r['scenario'].sensor} {r['scenario'].name}")
     print("# roadpreview accuracy benchmark\n")
@@ -354,6 +405,8 @@ def main(argv=None) -> int:
     print_bumps(results)
     print_classes(results)
     print_ranges(results)
+    print_repeatability(results)
+    real_recordings.print_tables(args.quick)
     return 0
 
 

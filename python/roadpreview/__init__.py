@@ -16,6 +16,7 @@ from ._native import native_available
 from .config import (Config, Extrinsics, FusionConfig, GroundConfig, IriConfig, ObstaclesConfig, PathConfig,
                      ProfileConfig, RoughnessConfig)
 from .estimator import Estimator
+from .metrics import Repeatability, repeatability, world_profile
 
 if native_available():
     from . import io
@@ -35,4 +36,5 @@ __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
+    "Repeatability", "repeatability", "world_profile",
 ]

@@ -331,29 +331,47 @@ TEST(Fusion, AFewSharedCellsAlongOneRingFixTheOffsetButDoNotTiltTheFrame) {
     }
 }
 
-TEST(Fusion, DisagreementBeyondTheVariancesIsAddedToTheFramesVariancesGrowingWithRange) {
-    // The map holds a flat road. The next frame's cells are exact (no spread) but alternate ±1 cm against the
-    // map in a checkerboard — relief within cells, or seams between frames, that no plane removes. The frame's
-    // cells must carry that disagreement, modelled as a·d² (d the distance from the vehicle) with a fitted so
-    // that the shared cells' mean matches their 1e-4 m²: the new cells beyond the map get a·d², not ~0.
-    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
-    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 1), {}, 0.0);
-    scenes::Cloud frame = flat_patch(1.0, 15.0, 2.0, 0.0, 0.0, 2);
+// A frame whose exact cells alternate ±1 cm in a checkerboard: disagreement with the map that no plane removes and
+// no cell's spread shows (per-beam offsets, seams between frames).
+scenes::Cloud checkerboard_patch(double x0, double x1, double y_abs, unsigned seed) {
+    scenes::Cloud frame = flat_patch(x0, x1, y_abs, 0.0, 0.0, seed);
     for (Eigen::Index i = 0; i < frame.rows(); ++i) {
-        const auto ix = static_cast<long>(std::floor(frame(i, 0) / 0.1)), iy = static_cast<long>(std::floor(frame(i, 1) / 0.1));
+        const auto ix = static_cast<long>(std::floor(frame(i, 0) / 0.1));
+        const auto iy = static_cast<long>(std::floor(frame(i, 1) / 0.1));
         frame(i, 2) = (ix + iy) % 2 ? 0.01f : -0.01f;
     }
-    fuse_at(fusion, frame, {}, 0.1);
-    double squares = 0.0;  // mean d² of the shared cells' centres
-    int shared = 0;
-    for (double x = 1.05; x < 10.0; x += 0.1)
-        for (double y = -1.95; y < 2.0; y += 0.1) squares += x * x + y * y, ++shared;
-    const double per_square_metre = 1e-4 / (squares / shared);
-    const rp::MapCell* fresh = fusion.map().at(12.05, 0.05);
-    ASSERT_NE(fresh, nullptr);
-    EXPECT_EQ(fresh->observations, 1);
-    EXPECT_NEAR(fresh->variance, per_square_metre * (12.05 * 12.05 + 0.05 * 0.05), 0.02 * fresh->variance);
-    EXPECT_LT(fusion.map().at(5.05, 0.05)->variance, 1e-9);  // a shared cell keeps the map's confidence
+    return frame;
+}
+
+TEST(Fusion, DisagreementBeyondTheVariancesIsTheSameAtEveryRangeAndHalfOfItIsTheFirstFramesToo) {
+    // The map holds an exact flat road (one frame, never compared). The next frame disagrees with it by ±1 cm in
+    // every cell at every range: 1e-4 m² beyond the variances, which the two frames share. Each frame's cells
+    // get half of it, at every range: the frame's new cells 12 and 14 m ahead alike (growing with range, as
+    // a·d², they got 4-6 times that before), and the map's cells the next frame did not see again.
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 1), {}, 0.0);
+    fuse_at(fusion, checkerboard_patch(1.0, 15.0, 1.0, 2), {}, 0.1);
+    const double half = 0.5e-4;
+    for (const double x : {12.05, 14.05}) {
+        const rp::MapCell* fresh = fusion.map().at(x, 0.05);
+        ASSERT_NE(fresh, nullptr);
+        EXPECT_EQ(fresh->observations, 1);
+        EXPECT_NEAR(fresh->variance, half, 0.02 * half) << x;
+    }
+    EXPECT_NEAR(fusion.map().at(5.05, 1.55)->variance, half, 0.02 * half);        // the first frame's alone
+    EXPECT_NEAR(fusion.map().at(5.05, 0.05)->variance, half / 2, 0.02 * half);    // both frames, fused
+}
+
+TEST(Fusion, OnceTheMapCarriesItsShareTheWholeExcessIsTheNewFrames) {
+    // A second exact frame agrees with the first (no excess, but the map has now been compared); the third
+    // disagrees by ±1 cm: all of its 1e-4 m² is the third frame's.
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 1), {}, 0.0);
+    fuse_at(fusion, flat_patch(1.0, 10.0, 2.0, 0.0, 0.0, 2), {}, 0.1);
+    EXPECT_LT(fusion.map().at(5.05, 0.05)->variance, 1e-9);
+    fuse_at(fusion, checkerboard_patch(1.0, 15.0, 1.0, 3), {}, 0.2);
+    EXPECT_NEAR(fusion.map().at(12.05, 0.05)->variance, 1e-4, 2e-6);
+    EXPECT_LT(fusion.map().at(5.05, 1.55)->variance, 1e-9);  // the map's own cells keep their variance
 }
 
 TEST(Fusion, CellsFarOffTheAlignmentPlaneLeaveItAndKeepTheirDisagreement) {

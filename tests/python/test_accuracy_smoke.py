@@ -29,3 +29,9 @@ def test_accuracy_quick_prints_the_accuracy_and_range_tables():
     assert len(coverage) == 2 and coverage[1] > coverage[0]  # the map backs more bins than one frame
     # too sparse: no class, frame by frame or fused
     assert re.search(r"\| class C, straight \| VLP-16 \| declined \| – \| ··· \| declined \| – \| ··· \|", out)
+    # repeatability of the simulated class C road (a correlation in [-1, 1]) and the real OS1-128 recording
+    rep = re.search(r"\| OS1-128 \| classes C–D \| none \| 2/2 \| (-?\d\.\d{3}) \| (-?\d\.\d{3}) \| \d+\.\d\d \|",
+                    out)
+    assert rep and -1.0 <= float(rep.group(2)) <= float(rep.group(1)) <= 1.0, out
+    assert re.search(r"\| OS1-128 pcap \(3 frames\) \| 2 \| [A-H] / ", out), out  # classes frame by frame
+    assert re.search(r"\| OS1-128 pcap \(3 frames\) \| left \| 0\.50 \| -?\d\.\d{3} \|", out), out

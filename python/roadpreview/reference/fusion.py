@@ -93,9 +93,11 @@ class FusedMap:
     frame: int = 0
     fused: int = 0
     started: bool = False
+    map_has_excess: bool = False  #: the map's variances carry an excess disagreement (an alignment has run)
 
     def reset(self):
         self.cells, self.pose, self.last_time, self.fused, self.started = {}, (0.0, 0.0, 0.0), None, 0, False
+        self.map_has_excess = False
 
     def advance(self, speed, yaw_rate, timestamp=None, pose=None) -> Optional[str]:
         """Moves to this frame's pose; returns why the map was reset, if it was."""
@@ -166,19 +168,27 @@ class FusedMap:
             return np.linalg.solve(v[use].T @ (v[use] / total[use, None]) + prior,
                                    v[use].T @ (difference[use] / total[use]))
 
-        plane = fit(np.ones(len(shared), dtype=bool))
-        residual = difference - v @ plane
-        scale = _MAD_TO_SIGMA * np.median(np.abs(residual))
-        inlier = np.abs(residual) <= _OUTLIER_SIGMAS * np.maximum(scale, np.sqrt(total))
+        # Outliers (a wall's foot, a moving object) are judged against the median difference, not a plane they tilt.
+        deviation = np.abs(difference - np.median(difference))
+        scale = _MAD_TO_SIGMA * np.median(deviation)
+        inlier = deviation <= _OUTLIER_SIGMAS * np.maximum(scale, np.sqrt(total))
+        if inlier.sum() < _MIN_ALIGN_CELLS:
+            inlier[:] = True
+        plane = fit(inlier)
         variances = variances.copy()
-        variances[shared[~inlier]] += residual[~inlier] ** 2
-        if _MIN_ALIGN_CELLS <= inlier.sum() < len(shared):
-            plane = fit(inlier)
-        residual = difference - v @ plane
-        squares = np.sum(offsets[shared[inlier]] ** 2)
-        excess = max(0.0, float(np.sum(residual[inlier] ** 2 - total[inlier])))
-        per_square_metre = excess / squares if squares > 0 else 0.0
-        return medians - regressors @ plane, variances + per_square_metre * np.sum(offsets ** 2, axis=1)
+        variances[shared[~inlier]] += (difference[~inlier] - v[~inlier] @ plane) ** 2
+        # The disagreement left beyond the variances is error common to every frame that no cell's spread sees,
+        # the same at every range on real recordings: its weighted mean joins every cell of the frame; the first
+        # time, the map's cells (from frames never compared) take half of it.
+        residual = difference[inlier] - v[inlier] @ plane
+        weights = 1 / total[inlier] ** 2
+        excess = max(0.0, float(np.sum(weights * (residual ** 2 - total[inlier])) / np.sum(weights)))
+        if not self.map_has_excess:
+            excess /= 2
+            for cell in self.cells.values():
+                cell.variance += excess
+            self.map_has_excess = True
+        return medians - regressors @ plane, variances + excess
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
         """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""

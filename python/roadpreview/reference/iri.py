@@ -54,10 +54,11 @@ def moving_average_samples(ds: float) -> int:
     return max(1, int(np.floor(BASE_LENGTH_M / ds + 0.5 + 1e-9)))
 
 
-def rectified_slope(z, ds: float) -> np.ndarray:
-    """|sprung − unsprung slope| (m/m) after each step of the smoothed profile. The smoothed profile's slopes
-    are (z[i+k] − z[i])/(k·ds) for the k-sample moving average; the car starts level with the profile's mean
-    slope over its first 11 m, (z[a] − z[0])/(a·ds), a = the sample nearest to 11 m (or the last one)."""
+def suspension_slope(z, ds: float) -> np.ndarray:
+    """Sprung − unsprung slope (m/m) of the golden car after each step of the smoothed profile: the IRI filter's
+    output, whose mean absolute value is the IRI. The smoothed profile's slopes are (z[i+k] − z[i])/(k·ds) for
+    the k-sample moving average; the car starts level with the profile's mean slope over its first 11 m,
+    (z[a] − z[0])/(a·ds), a = the sample nearest to 11 m (or the last one)."""
     z = np.asarray(z, dtype=np.float64)
     k = moving_average_samples(ds)
     if len(z) <= k:
@@ -69,8 +70,13 @@ def rectified_slope(z, ds: float) -> np.ndarray:
     out = np.empty(len(z) - k)
     for i, slope in enumerate((z[k:] - z[:-k]) / (k * ds)):
         state = st @ state + pr * slope
-        out[i] = abs(state[0] - state[2])
+        out[i] = state[0] - state[2]
     return out
+
+
+def rectified_slope(z, ds: float) -> np.ndarray:
+    """|sprung − unsprung slope| (m/m) after each step of the smoothed profile (see suspension_slope)."""
+    return np.abs(suspension_slope(z, ds))
 
 
 def iri(z, ds: float) -> float:

@@ -111,9 +111,9 @@ public:
     const Pose2& pose() const { return pose_; }
 
 private:
-    /// Removes from the frame's cell medians the plane of their differences to the map (method.md §7).
-    void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
-               std::vector<double>& medians) const;
+    /// Removes from the frame's cell medians the plane of their differences to the map and adds the excess
+    /// disagreement to the variances (method.md §7); the first time, half of it to the map's cells.
+    void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances, std::vector<double>& medians);
     Profile sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
                    std::size_t& ahead, std::size_t& ahead_now) const;
 
@@ -124,6 +124,7 @@ private:
     std::int32_t frame_ = 0;  // frames seen (the cells' clock)
     std::int64_t fused_ = 0;
     bool started_ = false;
+    bool map_has_excess_ = false;  // the map's variances carry an excess disagreement (an alignment has run)
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
 };
