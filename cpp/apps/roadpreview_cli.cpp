@@ -54,7 +54,9 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
     }
     if (run.count("--track-width")) cfg.track_width = o.track_width;
     if (run.count("--tire-width")) cfg.tire_width = o.tire_width;
-    if (run.count("--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
+    if (run.count("--ground"))
+        cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac
+                            : o.ground == "pca"  ? rp::GroundMethod::Pca : rp::GroundMethod::Zones;
     if (run.count("--clusters")) cfg.obstacles.enabled = o.clusters == "on";
     if (run.count("--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
     if (run.count("--fusion"))
@@ -280,7 +282,8 @@ int main(int argc, char** argv) {
     height->excludes(extr);
     run_cmd->add_option("--track-width", o.track_width, "Track width, m (default 1.6)");
     run_cmd->add_option("--tire-width", o.tire_width, "Tire width, m (default 0.3)");
-    run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
+    run_cmd->add_option("--ground", o.ground, "Ground method (default zones)")
+        ->check(CLI::IsMember({"zones", "pca", "ransac"}));
     run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
     run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
         ->check(CLI::PositiveNumber);

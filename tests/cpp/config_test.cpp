@@ -9,7 +9,8 @@ namespace rp = roadpreview;
 
 TEST(Config, DefaultsAreThePapers) {
     const rp::Config c;
-    EXPECT_EQ(c.ground.method, rp::GroundMethod::Pca);
+    EXPECT_EQ(c.ground.method, rp::GroundMethod::Zones);  // the paper's fit per patch (method.md §1)
+    EXPECT_DOUBLE_EQ(c.ground.max_tilt_deg, 15.0);
     EXPECT_DOUBLE_EQ(c.ground.pca_threshold_m, 0.20);
     EXPECT_EQ(c.ground.pca_iterations, 3);
     EXPECT_DOUBLE_EQ(c.profile.ds_m, 0.1);
