@@ -82,14 +82,17 @@ PatchLists group_by_patch(const std::vector<std::int32_t>& patch, std::int32_t p
 std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std::vector<std::uint8_t>& kept,
                                     const GroundConfig& cfg) {
     std::optional<PlaneFit> fit;
+    Moments m;  // of the points kept so far, accumulated while they are selected
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        if (kept[i]) m.add(pts[i]);
     for (int k = 0; k < cfg.pca_iterations; ++k) {
-        Moments m;
-        for (std::size_t i = 0; i < pts.size(); ++i)
-            if (kept[i]) m.add(pts[i]);
         fit = plane_fit(m);
         if (!fit) return std::nullopt;
-        for (std::size_t i = 0; i < pts.size(); ++i)
+        m = Moments{};
+        for (std::size_t i = 0; i < pts.size(); ++i) {
             kept[i] = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z()) <= cfg.pca_threshold_m;
+            if (kept[i]) m.add(pts[i]);
+        }
     }
     return fit;
 }
@@ -98,6 +101,7 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
 // stands on), or the level the extrinsics give when that fails or is too steep.
 Plane root_reference(PointsView points, const GroundConfig& cfg) {
     std::vector<Eigen::Vector3d> near;
+    near.reserve(static_cast<std::size_t>(points.rows()));
     const double r_sq = cfg.zone_root_m * cfg.zone_root_m;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const Eigen::Vector3d p = row(points, i);
@@ -167,6 +171,7 @@ GroundFit zone_ground(PointsView points, const GroundConfig& cfg) {
 
     const auto gather = [&](std::int32_t from, std::int32_t to, std::vector<Eigen::Vector3d>& out) {
         out.clear();
+        out.reserve(static_cast<std::size_t>(to - from));
         for (std::int32_t k = from; k < to; ++k) out.push_back(row(points, lists.order[static_cast<std::size_t>(k)]));
     };
     std::vector<Eigen::Vector3d> pts;
