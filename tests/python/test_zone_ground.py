@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
+import roadpreview.native
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
 from roadpreview.config import Config
 
 STEP_M = 0.25  # grid spacing of the synthetic scenes
@@ -137,3 +139,15 @@ def test_the_old_name_of_the_tilt_limit_is_still_read(tmp_path):
 
 def test_zones_is_the_default():
     assert Config().ground.method == "zones"
+
+
+@pytest.mark.parametrize("frame", KITTI_FRAMES, ids=lambda p: p.stem)
+def test_zone_ground_cpp_and_reference_agree_on_real_kitti_frames(frame):
+    base = rp.io.read(frame)[:, :3].astype(np.float64)
+    base[:, 2] += KITTI_SENSOR_HEIGHT
+    cfg = Config()
+    cpp_mask, cpp_plane = rp.native.fit_ground(base, cfg)
+    ref_mask, ref_plane = rp.reference.fit_ground(base, cfg)
+    assert np.count_nonzero(cpp_mask != ref_mask) <= 1e-4 * len(base)  # float32 coordinates in C++
+    assert ref_mask.sum() > 0.2 * len(base)
+    np.testing.assert_allclose(cpp_plane, ref_plane, atol=1e-6)
