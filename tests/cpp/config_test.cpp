@@ -104,3 +104,11 @@ TEST(Config, YamlAndJsonFilesGiveTheSameConfig) {
     expect_rejected_file(yaml, "track_width");
     EXPECT_THROW(rp::config_from_file((dir / "absent.yaml").string()), std::invalid_argument);
 }
+
+TEST(Config, TheTiltLimitsOldNameIsStillRead) {
+    EXPECT_DOUBLE_EQ(rp::config_from_json(R"({"ground": {"ransac_max_tilt_deg": 12}})").ground.max_tilt_deg, 12.0);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"ransac_max_tilt_deg": 12, "max_tilt_deg": 10}})"),
+                 std::invalid_argument);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"max_tilt_deg": 90}})"), std::invalid_argument);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"zone_sectors": [4, 4]}})"), std::invalid_argument);  // 14 rings
+}
