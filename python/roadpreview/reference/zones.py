@@ -83,6 +83,10 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
     `too steep` says, when there is none, that a patch held a plane beyond the tilt limit."""
     g = cfg.ground
     ring, sector = patch_rings_sectors(xyz, cfg)
+    first = np.concatenate([[0], np.cumsum(g.zone_sectors)])  # patch number of each ring's sector 0
+    patch = np.where(ring >= 0, first[np.maximum(ring, 0)] + sector, -1)
+    order = np.argsort(patch, kind="stable")  # the points patch by patch, each patch's in input order
+    bounds = np.searchsorted(patch[order], np.arange(first[-1] + 1))
     ground = np.zeros(len(xyz), dtype=bool)
     root = _root_reference(xyz, cfg)
     handed_inward = None
@@ -92,7 +96,7 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
         for s in range(count):
             # The inner patch holding this patch's central azimuth hands on its plane (or its own reference).
             reference = root if r == 0 else handed_inward[(2 * s + 1) * g.zone_sectors[r - 1] // (2 * count)]
-            rows = np.flatnonzero((ring == r) & (sector == s))
+            rows = order[bounds[first[r] + s]:bounds[first[r] + s + 1]]
             plane, mine, steep = fit_patch(xyz[rows], reference, cfg)
             too_steep |= steep
             handed.append(reference if plane is None else plane)
