@@ -151,3 +151,23 @@ def test_zone_ground_cpp_and_reference_agree_on_real_kitti_frames(frame):
     assert np.count_nonzero(cpp_mask != ref_mask) <= 1e-4 * len(base)  # float32 coordinates in C++
     assert ref_mask.sum() > 0.2 * len(base)
     np.testing.assert_allclose(cpp_plane, ref_plane, atol=1e-6)
+
+
+def canopy_over_the_path(height_m):
+    """Level road (sensor frame, 1.73 m up) under a slab `height_m` up over x 10–20 m, |y| ≤ 3 m."""
+    road = road_grid(lambda x, y: 0.0 * x)
+    x, y = np.meshgrid(np.arange(10.0, 20.0, 0.2), np.arange(-3.0, 3.0, 0.2))
+    slab = np.column_stack([x.ravel(), y.ravel(), np.full(x.size, height_m)])
+    points = np.vstack([road, slab])
+    points[:, 2] -= KITTI_SENSOR_HEIGHT
+    return points.astype(np.float32)
+
+
+@pytest.mark.parametrize("height_m, clearance_m, blocks", [(6.7, 2.5, False), (1.5, 2.5, True), (6.7, 8.0, True)])
+def test_an_overhead_cluster_blocks_no_wheel_path(height_m, clearance_m, blocks):
+    cfg = Config(sensor_height=KITTI_SENSOR_HEIGHT, obstacles={"clearance_m": clearance_m})
+    points = canopy_over_the_path(height_m)
+    for result in (rp.Estimator(cfg).process(points, 5.0, 0.0), rp.reference.process(points, 5.0, 0.0, cfg)):
+        assert len(result.obstacles) == 1
+        assert result.obstacles.bottom[0] == pytest.approx(height_m, abs=0.01)
+        assert (len(result.left.obstacles) == 1) == blocks and (len(result.right.obstacles) == 1) == blocks

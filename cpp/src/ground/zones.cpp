@@ -120,8 +120,8 @@ struct PatchResult {
 
 // One patch: seeds = points at most `threshold` above the mean of the lowest seed points (heights above the
 // reference, and never more than `threshold` above the reference), the paper's fit from them, then the
-// uprightness, elevation and flatness tests. A patch with too few points or seeds for a fit keeps the
-// reference: its points at most `threshold` above it are ground.
+// uprightness, elevation and flatness tests. A patch with too few points or seeds for a fit, or whose fit fails
+// a test, keeps the reference: its points at most `threshold` above it are ground.
 PatchResult fit_patch(const std::vector<Eigen::Vector3d>& pts, const Plane& reference, const GroundConfig& cfg,
                       std::vector<double>& scratch) {
     PatchResult out;
@@ -145,13 +145,17 @@ PatchResult fit_patch(const std::vector<Eigen::Vector3d>& pts, const Plane& refe
     const auto fit = iterate_fit(pts, out.ground, cfg);
     if (!fit) return inherit();
     const bool upright = within_tilt(fit->plane, cfg.max_tilt_deg);
-    out.too_steep = !upright;
+
     const double step = height_above(reference, fit->centre.x(), fit->centre.y(), fit->centre.z());
     const bool near_inner_ground = std::abs(step) <= cfg.zone_max_step_m;
     const bool flat = std::sqrt(fit->flatness_m2) <= cfg.zone_max_flatness_m;
-    if (!(upright && near_inner_ground && flat)) out.ground.clear();
-    else out.plane = fit->plane;
-    return out;
+    if (upright && near_inner_ground && flat) {
+        out.plane = fit->plane;
+        return out;
+    }
+    PatchResult rejected = inherit();  // the inner ground goes on: the foot of a wall or a car is no obstacle
+    rejected.too_steep = !upright;
+    return rejected;
 }
 
 }  // namespace

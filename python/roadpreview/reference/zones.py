@@ -56,8 +56,8 @@ def _root_reference(xyz: np.ndarray, cfg: Config) -> np.ndarray:
 
 
 def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
-    """(plane, ground mask, too steep) of one patch; the mask is None when it has no ground, the plane None when
-    it has no plane of its own (too few points or seeds for a fit: those at most pca_threshold_m above the
+    """(plane, ground mask, too steep) of one patch; the plane is None when it has no plane of its own (too few
+    points or seeds for a fit, or a fit that failed a test: then the points at most pca_threshold_m above the
     reference are ground), and `too steep` says whether its fit failed the uprightness test."""
     g = cfg.ground
     above_reference = height_above(xyz, reference)
@@ -75,7 +75,9 @@ def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
     upright = tilt_deg(plane) <= g.max_tilt_deg
     near_inner = abs(height_above(centre[None, :], reference)[0]) <= g.zone_max_step_m
     flat = flatness <= g.zone_max_flatness_m
-    return (plane, ground, False) if upright and near_inner and flat else (None, None, not upright)
+    if upright and near_inner and flat:
+        return plane, ground, False
+    return None, inherited, not upright  # a rejected fit: the inner ground goes on (its foot is no obstacle)
 
 
 def zone_ground(xyz: np.ndarray, cfg: Config):
