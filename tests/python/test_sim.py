@@ -209,8 +209,9 @@ def test_beam_calibration_errors_tilt_each_ring_by_its_own_angle():
 GRADE_ROADS = {
     "3 % grade": sim.Road.iso8608("B", seed=4, grade=0.03),
     # up 3 % to a crest 15 m ahead, then down 3 %; and a level road that starts climbing 3 % 12 m ahead
-    "crest": sim.Road.iso8608("B", seed=4, grade=0.03, grade_changes=(sim.GradeChange(x_m=15.0, change=-0.06),)),
-    "grade ahead": sim.Road.iso8608("B", seed=4, grade_changes=(sim.GradeChange(x_m=12.0, change=0.03),)),
+    "crest": sim.Road.iso8608("B", seed=4, grade=0.03,
+                              grade_changes=(sim.GradeChange(x_m=15.0, change=-0.06, until_m=45.0),)),
+    "grade ahead": sim.Road.iso8608("B", seed=4, grade_changes=(sim.GradeChange(x_m=12.0, change=0.03, until_m=45.0),)),
 }
 
 
@@ -221,7 +222,7 @@ def test_no_obstacle_in_a_clear_wheel_path_on_a_grade_or_over_a_crest(road):
     cfg = rp.Config(extrinsics=lidar.extrinsics())
     for result in (rp.Estimator(cfg).process(frame.points, 10.0, 0.0), rp.reference.process(frame.points, 10.0, 0.0, cfg)):
         assert len(result.left.obstacles) == 0 and len(result.right.obstacles) == 0
-        assert np.isfinite(result.left.z).sum() > 300  # the road is there, read as road
+        assert np.isfinite(result.left.z).sum() > 100  # the road is there (10+ m of it), read as road
 
 
 def test_grade_changes_are_bounded_relief():
