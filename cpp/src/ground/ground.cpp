@@ -123,7 +123,9 @@ GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     GroundFit fit = cfg.method == GroundMethod::Pca      ? pca_ground(roi.view(), cfg)
                     : cfg.method == GroundMethod::Ransac ? ransac_ground(roi.cloud, roi.view(), cfg)
                                                          : zone_ground(roi.view(), cfg);
-    if (fit.plane && !within_tilt(*fit.plane, cfg.max_tilt_deg)) {  // a wall, a bank of vegetation: not ground
+    // A wall, a bank of vegetation: not ground. The zones hold each patch to the limit (their frame plane only
+    // sums up upright patches, on a hillside it may lie steeper).
+    if (cfg.method != GroundMethod::Zones && fit.plane && !within_tilt(*fit.plane, cfg.max_tilt_deg)) {
         fit = GroundFit{};
         fit.mask.assign(static_cast<std::size_t>(roi.size()), 0);
         fit.reason = kTiltedGround;

@@ -96,7 +96,8 @@ def ground_model(base_xyz, cfg: Config | None = None) -> GroundModel:
             plane = None
     if plane is None:
         return GroundModel(mask, None, NO_GROUND)
-    if tilt_deg(plane) > cfg.ground.max_tilt_deg:  # a wall, a bank of vegetation: not ground
+    # A wall, a bank of vegetation: not ground (zones: each patch was held to the limit, not the frame's plane).
+    if cfg.ground.method != "zones" and tilt_deg(plane) > cfg.ground.max_tilt_deg:
         return GroundModel(mask, None, TILTED_GROUND)
     mask[roi[ground]] = True
     return GroundModel(mask, plane)
