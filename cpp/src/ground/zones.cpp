@@ -185,7 +185,7 @@ GroundFit zone_ground(PointsView points, const GroundConfig& cfg) {
     std::vector<Plane> handed(static_cast<std::size_t>(zones.patches()), root);
     std::vector<double> scratch;
     Moments all;
-    bool any_too_steep = false;
+    bool any_too_steep = false, any_accepted = false;
     for (int ring = 0; ring < zones.rings(); ++ring) {
         for (int sector = 0; sector < zones.sectors(ring); ++sector) {
             const std::int32_t patch = zones.first(ring) + sector;
@@ -199,6 +199,7 @@ GroundFit zone_ground(PointsView points, const GroundConfig& cfg) {
             const PatchResult result = fit_patch(pts, reference, cfg, scratch);
             handed[static_cast<std::size_t>(patch)] = result.plane ? *result.plane : reference;
             any_too_steep = any_too_steep || result.too_steep;
+            any_accepted = any_accepted || result.plane.has_value();
             for (std::size_t k = 0; k < result.ground.size(); ++k) {
                 if (!result.ground[k]) continue;
                 const auto i = static_cast<std::size_t>(lists.order[static_cast<std::size_t>(from) + k]);
@@ -207,7 +208,7 @@ GroundFit zone_ground(PointsView points, const GroundConfig& cfg) {
             }
         }
     }
-    const auto frame_plane = plane_fit(all);
+    const auto frame_plane = any_accepted ? plane_fit(all) : std::nullopt;  // inherited ground needs a real patch
     if (frame_plane) {
         fit.plane = frame_plane->plane;
         fit.count = all.count;

@@ -92,7 +92,7 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
     ground = np.zeros(len(xyz), dtype=bool)
     root = _root_reference(xyz, cfg)
     handed_inward = None
-    too_steep = False  # the planes ring − 1 hands on, one per sector
+    too_steep = accepted = False  # the planes ring − 1 hands on, one per sector
     for r, count in enumerate(g.zone_sectors):
         handed = []
         for s in range(count):
@@ -101,11 +101,14 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
             rows = order[bounds[first[r] + s]:bounds[first[r] + s + 1]]
             plane, mine, steep = fit_patch(xyz[rows], reference, cfg)
             too_steep |= steep
+            accepted |= plane is not None
             handed.append(reference if plane is None else plane)
             if mine is not None:
                 ground[rows[mine]] = True
         handed_inward = handed
     try:
+        if not accepted:  # ground handed on from references alone is no ground: no patch held a plane
+            raise DegenerateFit("no patch accepted")
         plane = fit_plane(xyz[ground])
     except DegenerateFit:
         return np.zeros(len(xyz), dtype=bool), None, too_steep
