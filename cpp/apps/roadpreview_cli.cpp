@@ -67,7 +67,9 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
     }
     if (given(run, "--track-width")) cfg.track_width = o.track_width;
     if (given(run, "--tire-width")) cfg.tire_width = o.tire_width;
-    if (given(run, "--ground")) cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac : rp::GroundMethod::Pca;
+    if (given(run, "--ground"))
+        cfg.ground.method = o.ground == "ransac" ? rp::GroundMethod::Ransac
+                            : o.ground == "pca"  ? rp::GroundMethod::Pca : rp::GroundMethod::Zones;
     if (given(run, "--clusters")) cfg.obstacles.enabled = o.clusters == "on";
     if (given(run, "--cluster-tolerance")) cfg.obstacles.cluster_tolerance_m = o.cluster_tolerance;
     if (given(run, "--fusion"))
@@ -477,7 +479,8 @@ int main(int argc, char** argv) {
     height->excludes(extr);
     run_cmd->add_option("--track-width", o.track_width, "Track width, m (default 1.6)");
     run_cmd->add_option("--tire-width", o.tire_width, "Tire width, m (default 0.3)");
-    run_cmd->add_option("--ground", o.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
+    run_cmd->add_option("--ground", o.ground, "Ground method (default zones)")
+        ->check(CLI::IsMember({"zones", "pca", "ransac"}));
     run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
     run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
         ->check(positive_finite());

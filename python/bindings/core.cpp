@@ -144,6 +144,7 @@ void bind_obstacles(py::module_& m) {
     add_field(clusters, "ground_offset", [](const C& c) -> const auto& { return c.ground_offset; },
               "local ground level above the frame's ground plane, m");
     add_field(clusters, "height", [](const C& c) -> const auto& { return c.height; }, "highest point above the local ground, m");
+    add_field(clusters, "bottom", [](const C& c) -> const auto& { return c.bottom; }, "lowest point above the local ground, m");
 
     auto in_path = bind_records<rp::PathObstacle>(m, "PathObstacles", "The clusters in one wheel's path, ordered by s_start");
     using P = rp::PathObstacle;

@@ -30,16 +30,28 @@ class Extrinsics:
 
 @dataclass
 class GroundConfig:
-    method: str = "pca"  #: "pca" (the paper's iterative plane fit) or "ransac" (PCL)
+    #: "zones" (a plane per patch of rings × sectors), "pca" (the paper's one iterative plane) or "ransac" (PCL)
+    method: str = "zones"
     roi_x_min_m: float = 1.0
     roi_x_max_m: float = 40.0
     roi_y_abs_max_m: float = 10.0
     pca_iterations: int = 3
     pca_threshold_m: float = 0.20  #: points farther than this above the plane are not ground
     ransac_distance_m: float = 0.20
-    ransac_max_tilt_deg: float = 15.0  #: largest angle between the plane normal and the up axis
     ransac_max_iterations: int = 200
     ransac_seed: int = 1
+    #: every method: a plane or patch whose normal is farther than this from the base frame's up axis (the level
+    #: the extrinsics give) is not ground. Old config files may name it ransac_max_tilt_deg.
+    max_tilt_deg: float = 15.0
+    #: zone ground (docs/method.md §1): ring edges (m, horizontal distance from the base origin) and sectors per
+    #: ring over the full circle
+    zone_ring_edges_m: list = field(default_factory=lambda: [1, 3, 5, 7, 9, 11, 13, 15.5, 18, 21, 24, 28, 32, 36, 42])
+    zone_sectors: list = field(default_factory=lambda: [16, 24, 32, 48, 56, 64, 72, 80, 96, 104, 112, 128, 144, 160])
+    zone_root_m: float = 10.0  #: the paper's plane of the points nearer than this is the first ring's reference
+    zone_min_points: int = 10  #: fewer points in a patch: no ground there
+    zone_seed_points: int = 20  #: the mean height of this many lowest points starts a patch's fit
+    zone_max_step_m: float = 0.3  #: elevation test: a patch's ground centroid off the inner ground by at most this
+    zone_max_flatness_m: float = 0.08  #: flatness test: RMS distance of the fitted points from the patch plane
 
 
 @dataclass
@@ -54,6 +66,8 @@ class ProfileConfig:
     ds_m: float = 0.1  #: resampling step along the wheel path
     max_gap_m: float = 1.0  #: interior gaps up to this length are linearly interpolated
     level: bool = True  #: remove the fitted ground plane's tilt before reading heights
+    level_local: bool = True  #: with level: heights above the local ground's plane in bands of level_band_m (§3)
+    level_band_m: float = 10.0  #: radial width of those bands; sets which long waves the levelling removes
 
 
 @dataclass
@@ -85,6 +99,7 @@ class ObstaclesConfig:
     ground_search_m: float = 1.0  #: ground points this far around a cluster give its local ground
     safety_margin_m: float = 0.1  #: widens each wheel corridor sideways and each obstacle along s
     min_height_m: float = 0.1  #: lower clusters do not block a wheel path (ground the fit missed)
+    clearance_m: float = 2.5  #: clusters entirely higher above their local ground (canopy, signs, bridges) do not block
 
 
 @dataclass
@@ -195,6 +210,10 @@ def _require_finite(data: Any, where: str) -> None:
 
 
 def _stage_from_dict(cls: type, data: dict[str, Any], name: str) -> Any:
+    if cls is GroundConfig and "ransac_max_tilt_deg" in data:  # the tilt limit's old name
+        if "max_tilt_deg" in data:
+            raise ValueError(f"Config.{name}: set max_tilt_deg or its old name ransac_max_tilt_deg, not both")
+        data = {("max_tilt_deg" if key == "ransac_max_tilt_deg" else key): value for key, value in data.items()}
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(data) - known)
     if unknown:

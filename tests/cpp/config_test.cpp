@@ -9,7 +9,8 @@ namespace rp = roadpreview;
 
 TEST(Config, DefaultsAreThePapers) {
     const rp::Config c;
-    EXPECT_EQ(c.ground.method, rp::GroundMethod::Pca);
+    EXPECT_EQ(c.ground.method, rp::GroundMethod::Zones);  // the paper's fit per patch (method.md §1)
+    EXPECT_DOUBLE_EQ(c.ground.max_tilt_deg, 15.0);
     EXPECT_DOUBLE_EQ(c.ground.pca_threshold_m, 0.20);
     EXPECT_EQ(c.ground.pca_iterations, 3);
     EXPECT_DOUBLE_EQ(c.profile.ds_m, 0.1);
@@ -104,4 +105,12 @@ TEST(Config, YamlAndJsonFilesGiveTheSameConfig) {
     std::ofstream(yaml) << "sensor_height: 1\xd8\xc8" "3\nground:\n  method: ransac\n";  // found by config_fuzz
     expect_rejected_file(yaml, "not UTF-8");
     EXPECT_THROW(rp::config_from_file((dir / "absent.yaml").string()), std::invalid_argument);
+}
+
+TEST(Config, TheTiltLimitsOldNameIsStillRead) {
+    EXPECT_DOUBLE_EQ(rp::config_from_json(R"({"ground": {"ransac_max_tilt_deg": 12}})").ground.max_tilt_deg, 12.0);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"ransac_max_tilt_deg": 12, "max_tilt_deg": 10}})"),
+                 std::invalid_argument);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"max_tilt_deg": 90}})"), std::invalid_argument);
+    EXPECT_THROW(rp::config_from_json(R"({"ground": {"zone_sectors": [4, 4]}})"), std::invalid_argument);  // 14 rings
 }

@@ -34,7 +34,9 @@ TEST(Ground, PcaIterationsDropWhatStandsAboveTheGround) {
     scenes::Cloud ground = scenes::plane(a, b, c, 20000);
     scenes::Cloud boxes = scenes::plane(a, b, c + 1.0, 4000, 10.0, 14.0, 2.0, 7);  // a 1 m high slab
     const scenes::Cloud pts = scenes::concat(ground, boxes);
-    const rp::GroundFit fit = rp::fit_ground(view(pts), rp::GroundConfig{});
+    rp::GroundConfig cfg;
+    cfg.method = rp::GroundMethod::Pca;
+    const rp::GroundFit fit = rp::fit_ground(view(pts), cfg);
     ASSERT_TRUE(fit.plane);
     const Eigen::Vector3d n = up_normal(a, b);
     EXPECT_NEAR((*fit.plane)[0], n.x(), 1e-5);
@@ -75,7 +77,7 @@ TEST_P(RansacGround, InliersLieWithinTheThresholdOfItsPlane) {
     const scenes::Cloud pts = scenes::concat(ground, scenes::plane(0.0, 0.0, 0.5, 3000, 5, 30, 9, 3));
     const rp::GroundFit fit = rp::fit_ground(view(pts), cfg);
     ASSERT_TRUE(fit.plane);
-    EXPECT_GT((*fit.plane)[2], std::cos(cfg.ransac_max_tilt_deg * M_PI / 180));
+    EXPECT_GT((*fit.plane)[2], std::cos(cfg.max_tilt_deg * M_PI / 180));
     std::int64_t count = 0;
     for (Eigen::Index i = 0; i < pts.rows(); ++i) {
         const double h = rp::height_above(*fit.plane, pts(i, 0), pts(i, 1), pts(i, 2));

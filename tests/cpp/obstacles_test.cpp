@@ -19,7 +19,11 @@ scenes::Cloud flat_ground(unsigned seed = 3) { return scenes::plane(0.0, 0.0, 0.
 
 scenes::Cloud with(scenes::Cloud scene, const scenes::Cloud& more) { return scenes::concat(scene, more); }
 
-rp::Result run(const scenes::Cloud& pts, double v, double w, const rp::Config& cfg = {}) {
+// These scenes put boxes with dense faces (0.05 m apart) on flat ground ten times sparser and were written for
+// the one-plane ground: the zone ground's small patches can take part of such a face as a patch's ground
+// (README "Ground"). The obstacle stage is tested here on the one plane.
+rp::Result run(const scenes::Cloud& pts, double v, double w, rp::Config cfg = {}) {
+    cfg.ground.method = rp::GroundMethod::Pca;
     rp::Estimator est(cfg);
     return est.process(pts, v, w);
 }
@@ -217,7 +221,7 @@ TEST(Obstacles, JsonLineCarriesClustersBlockedBinsAndTiming) {
     const auto j = nlohmann::json::parse(rp::result_to_json(r));
     ASSERT_EQ(j["obstacles"].size(), 1u);
     const auto& c = j["obstacles"][0];
-    for (const char* key : {"id", "count", "centroid", "aabb_min", "aabb_max", "obb", "height"}) EXPECT_TRUE(c.contains(key)) << key;
+    for (const char* key : {"id", "count", "centroid", "aabb_min", "aabb_max", "obb", "height", "bottom"}) EXPECT_TRUE(c.contains(key)) << key;
     EXPECT_NEAR(c["height"].get<double>(), 0.3, 0.0015);
     EXPECT_EQ(c["obb"]["size"].size(), 3u);
     const auto& left = j["profiles"]["left"];

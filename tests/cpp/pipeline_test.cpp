@@ -119,7 +119,7 @@ TEST(Pipeline, JsonLineHasTheDocumentedFields) {
     EXPECT_EQ(j["source"], "f.bin");
     for (const char* key : {"points", "ground", "path", "profiles", "roughness", "timing_ms"}) EXPECT_TRUE(j.contains(key)) << key;
     EXPECT_NEAR(j["path"]["icr_y"].get<double>(), 5.0 / 0.3, 1e-12);
-    EXPECT_EQ(j["ground"]["method"], "pca");
+    EXPECT_EQ(j["ground"]["method"], "zones");
     EXPECT_EQ(j["profiles"]["left"]["z"].size(), 400u);
     for (const char* key : {"class", "gd_n0", "waviness", "band", "n", "psd", "octave_bands", "reason"})
         EXPECT_TRUE(j["roughness"]["vehicle"].contains(key)) << key;

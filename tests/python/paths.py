@@ -1,5 +1,6 @@
 """Locations shared by the Python tests."""
 
+import os
 import shutil
 import subprocess
 import sys
@@ -42,3 +43,7 @@ def run_cli(*args, check=True) -> subprocess.CompletedProcess:
     if check:
         assert proc.returncode == 0, proc.stderr
     return proc
+
+# The project's shared data (real recordings too large or not licensed for tests/data): ../shared/data beside
+# the repository, or ROADPREVIEW_SHARED_DATA. Tests that need it skip when it is absent.
+SHARED_DATA = Path(os.environ.get("ROADPREVIEW_SHARED_DATA", REPO.parent / "shared" / "data"))

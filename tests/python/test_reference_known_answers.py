@@ -164,7 +164,7 @@ def test_ground_drops_obstacles_and_finds_the_exact_plane(impl, method):
 def test_pca_ground_threshold_is_one_sided(impl):
     # 0.1 above: kept; 0.3 above: dropped; 0.5 below: kept (never an obstacle above the road).
     xyz, labels = ground_scene(tilted_plane(), extra_heights=(0.1, 0.3, -0.5))
-    mask, _ = impl.fit_ground(xyz, Config())
+    mask, _ = impl.fit_ground(xyz, Config(ground={"method": "pca"}))
     expected = (labels == "ground") | (labels == "+0.1") | (labels == "-0.5")
     np.testing.assert_array_equal(mask, expected)
 

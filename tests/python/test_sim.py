@@ -204,3 +204,28 @@ def test_beam_calibration_errors_tilt_each_ring_by_its_own_angle():
     expected = frame.ranges_m * (np.sin(nominal) - np.sin(nominal + np.radians(errors[beam])))
     np.testing.assert_allclose(base[hit, 2], expected[hit], atol=2e-5)
     assert np.abs(base[hit, 2]).max() > 0.005
+
+
+GRADE_ROADS = {
+    "3 % grade": sim.Road.iso8608("B", seed=4, grade=0.03),
+    # up 3 % to a crest 15 m ahead, then down 3 %; and a level road that starts climbing 3 % 12 m ahead
+    "crest": sim.Road.iso8608("B", seed=4, grade=0.03,
+                              grade_changes=(sim.GradeChange(x_m=15.0, change=-0.06, until_m=45.0),)),
+    "grade ahead": sim.Road.iso8608("B", seed=4, grade_changes=(sim.GradeChange(x_m=12.0, change=0.03, until_m=45.0),)),
+}
+
+
+@pytest.mark.parametrize("road", GRADE_ROADS)
+def test_no_obstacle_in_a_clear_wheel_path_on_a_grade_or_over_a_crest(road):
+    lidar = sim.os1_128(range_noise_m=0.01)
+    frame = sim.drive(sim.Scene(GRADE_ROADS[road]), lidar, 10.0, frames=1)[0]
+    cfg = rp.Config(extrinsics=lidar.extrinsics())
+    for result in (rp.Estimator(cfg).process(frame.points, 10.0, 0.0), rp.reference.process(frame.points, 10.0, 0.0, cfg)):
+        assert len(result.left.obstacles) == 0 and len(result.right.obstacles) == 0
+        assert np.isfinite(result.left.z).sum() > 100  # the road is there (10+ m of it), read as road
+
+
+def test_grade_changes_are_bounded_relief():
+    change = sim.GradeChange(x_m=10.0, change=-0.05, until_m=30.0)
+    np.testing.assert_allclose(change.height(np.array([5.0, 20.0, 40.0]), np.zeros(3)), [0.0, -0.5, -1.0])
+    assert change.bounds() == (-1.0, 0.0)

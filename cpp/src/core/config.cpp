@@ -17,30 +17,36 @@ using nlohmann::json;
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level, level_local,
+                                                level_band_m)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
                                                 min_cycles, min_band_points, noise_aware, min_resolved_fraction)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
                                                 min_cluster_points, max_cluster_points, ground_search_m,
-                                                safety_margin_m, min_height_m)
+                                                safety_margin_m, min_height_m, clearance_m)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IriConfig, min_length_m, min_backed_fraction)
 
-const char* to_string(GroundMethod method) { return method == GroundMethod::Pca ? "pca" : "ransac"; }
+const char* to_string(GroundMethod method) {
+    switch (method) {
+        case GroundMethod::Pca: return "pca";
+        case GroundMethod::Ransac: return "ransac";
+        case GroundMethod::Zones: return "zones";
+    }
+    return "?";
+}
 
 void to_json(json& j, const GroundMethod& m) { j = to_string(m); }
 void from_json(const json& j, GroundMethod& m) {
     const auto name = j.get<std::string>();
-    if (name == "pca") {
-        m = GroundMethod::Pca;
-    } else if (name == "ransac") {
-        m = GroundMethod::Ransac;
-    } else {
-        throw std::invalid_argument("ground.method must be \"pca\" or \"ransac\", got \"" + name + "\"");
-    }
+    for (const GroundMethod candidate : {GroundMethod::Pca, GroundMethod::Ransac, GroundMethod::Zones})
+        if (name == to_string(candidate)) return void(m = candidate);
+    throw std::invalid_argument("ground.method must be \"pca\", \"ransac\" or \"zones\", got \"" + name + "\"");
 }
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_m, roi_x_max_m, roi_y_abs_max_m,
                                                 pca_iterations, pca_threshold_m, ransac_distance_m,
-                                                ransac_max_tilt_deg, ransac_max_iterations, ransac_seed)
+                                                ransac_max_iterations, ransac_seed, max_tilt_deg,
+                                                zone_ring_edges_m, zone_sectors, zone_root_m, zone_min_points, zone_seed_points,
+                                                zone_max_step_m, zone_max_flatness_m)
 
 const char* to_string(FusionMethod method) {
     switch (method) {
@@ -132,6 +138,32 @@ void require(bool ok, const std::string& what) {
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
+void validate_zones(const GroundConfig& g) {
+    const auto& edges = g.zone_ring_edges_m;
+    require(edges.size() >= 2 && edges.size() <= 1001, "ground.zone_ring_edges_m must hold 2 to 1001 edges");
+    require(edges.front() >= 0.0, "ground.zone_ring_edges_m must start at >= 0 m");
+    for (std::size_t i = 0; i + 1 < edges.size(); ++i)
+        require(std::isfinite(edges[i + 1]) && edges[i] < edges[i + 1], "ground.zone_ring_edges_m must ascend");
+    require(g.zone_sectors.size() + 1 == edges.size(), "ground.zone_sectors needs one count per ring");
+    for (const int s : g.zone_sectors) require(s >= 1 && s <= 100000, "ground.zone_sectors must be in [1, 100000]");
+    require(positive(g.zone_root_m), "ground.zone_root_m must be > 0");
+    require(g.zone_min_points >= 3, "ground.zone_min_points must be >= 3");
+    require(g.zone_seed_points >= 1, "ground.zone_seed_points must be >= 1");
+    require(positive(g.zone_max_step_m), "ground.zone_max_step_m must be > 0");
+    require(positive(g.zone_max_flatness_m), "ground.zone_max_flatness_m must be > 0");
+}
+
+// Config files written before the tilt limit applied to every method name it ransac_max_tilt_deg.
+void migrate_old_names(json& j) {
+    if (!j.is_object() || !j.contains("ground") || !j["ground"].is_object()) return;
+    json& g = j["ground"];
+    if (!g.contains("ransac_max_tilt_deg")) return;
+    if (g.contains("max_tilt_deg"))
+        throw std::invalid_argument("set ground.max_tilt_deg or its old name ground.ransac_max_tilt_deg, not both");
+    g["max_tilt_deg"] = g["ransac_max_tilt_deg"];
+    g.erase("ransac_max_tilt_deg");
+}
+
 }  // namespace
 
 void validate(const Config& c) {
@@ -153,9 +185,9 @@ void validate(const Config& c) {
     require(g.pca_iterations >= 1, "ground.pca_iterations must be >= 1");
     require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
     require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
-    require(positive(g.ransac_max_tilt_deg) && g.ransac_max_tilt_deg < 90.0,
-            "ground.ransac_max_tilt_deg must be in (0, 90)");
+    require(positive(g.max_tilt_deg) && g.max_tilt_deg < 90.0, "ground.max_tilt_deg must be in (0, 90)");
     require(g.ransac_max_iterations >= 1, "ground.ransac_max_iterations must be >= 1");
+    validate_zones(g);
 
     require(positive(c.path.straight_radius_m), "path.straight_radius_m must be > 0");
     require(std::isfinite(c.path.stopped_speed_mps) && c.path.stopped_speed_mps >= 0.0,
@@ -167,6 +199,7 @@ void validate(const Config& c) {
             "profile.preview_length_m must be >= profile.ds_m");
     require(p.preview_length_m / p.ds_m <= 1e6, "profile.preview_length_m / profile.ds_m must be <= 1e6 bins");
     require(std::isfinite(p.max_gap_m) && p.max_gap_m >= 0.0, "profile.max_gap_m must be >= 0");
+    require(std::isfinite(p.level_band_m) && p.level_band_m >= 0.5, "profile.level_band_m must be >= 0.5");
 
     const RoughnessConfig& r = c.roughness;
     require(positive(r.band_min_cpm) && std::isfinite(r.band_max_cpm) && r.band_min_cpm < r.band_max_cpm,
@@ -185,6 +218,8 @@ void validate(const Config& c) {
     require(std::isfinite(o.safety_margin_m) && o.safety_margin_m >= 0.0, "obstacles.safety_margin_m must be >= 0");
     require(std::isfinite(o.ground_search_m) && o.ground_search_m >= 0.0, "obstacles.ground_search_m must be >= 0");
     require(std::isfinite(o.min_height_m), "obstacles.min_height_m must be finite");
+    require(std::isfinite(o.clearance_m) && o.clearance_m > o.min_height_m,
+            "obstacles.clearance_m must be finite and > obstacles.min_height_m");
 
     require(std::isfinite(r.min_resolved_fraction) && r.min_resolved_fraction > 0.0 && r.min_resolved_fraction <= 1.0,
             "roughness.min_resolved_fraction must be in (0, 1]");
@@ -216,7 +251,8 @@ Extrinsics effective_extrinsics(const Config& c) {
 
 Config config_from_json(const std::string& text, const std::string& source) {
     try {
-        const json j = json::parse(text);
+        json j = json::parse(text);
+        migrate_old_names(j);
         Config known;
         known.extrinsics = Extrinsics{};  // so the nested extrinsics keys are known too
         check_fields(j, json(known), "config");

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "roadpreview/ground/ground.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
@@ -8,28 +9,12 @@
 #include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
 
 #include "ground/ground_pcl.hpp"
+#include "ground/plane_fit.hpp"
+#include "roadpreview/ground/zones.hpp"
 
 namespace roadpreview {
-namespace {
 
-// First and second moments of a point set, accumulated about a shift point so that the one-pass
-// covariance keeps its precision far from the origin.
-struct Moments {
-    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-    std::int64_t count = 0;
-
-    void add(const Eigen::Vector3d& p) {
-        if (count == 0) shift = p;
-        const Eigen::Vector3d q = p - shift;
-        sum += q;
-        outer.noalias() += q * q.transpose();
-        ++count;
-    }
-};
-
-std::optional<Plane> plane_from(const Moments& m) {
+std::optional<PlaneFit> plane_fit(const Moments& m) {
     if (m.count < 3) return std::nullopt;
     const double n = static_cast<double>(m.count);
     const Eigen::Vector3d mean_q = m.sum / n;
@@ -41,7 +26,17 @@ std::optional<Plane> plane_from(const Moments& m) {
     Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();  // eigenvalues ascend
     if (normal.z() < 0.0) normal = -normal;
     const Eigen::Vector3d centre = m.shift + mean_q;
-    return Plane{normal.x(), normal.y(), normal.z(), -normal.dot(centre)};
+    return PlaneFit{{normal.x(), normal.y(), normal.z(), -normal.dot(centre)}, centre,
+                    std::max(0.0, eig.eigenvalues()(0))};
+}
+
+double tilt_deg(const Plane& plane) { return std::acos(std::clamp(plane[2], -1.0, 1.0)) * 180.0 / M_PI; }
+
+namespace {
+
+std::optional<Plane> plane_from(const Moments& m) {
+    const auto fit = plane_fit(m);
+    return fit ? std::optional<Plane>(fit->plane) : std::nullopt;
 }
 
 Eigen::Vector3d row(PointsView pts, Eigen::Index i) { return pts.row(i).cast<double>().transpose(); }
@@ -93,11 +88,15 @@ GroundFit ransac_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     const pcl::Indices in_input_order(roi.input_order.begin(), roi.input_order.end());
     auto model = std::make_shared<SeededPlaneModel>(cloud, in_input_order, cfg.ransac_seed);
     model->setAxis(Eigen::Vector3f::UnitZ());
-    model->setEpsAngle(cfg.ransac_max_tilt_deg * M_PI / 180.0);
+    model->setEpsAngle(cfg.max_tilt_deg * M_PI / 180.0);
     pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, cfg.ransac_distance_m);
     ransac.setMaxIterations(cfg.ransac_max_iterations);
     ransac.setProbability(0.99);
-    if (!ransac.computeModel()) return fit;
+    if (!ransac.computeModel()) {  // no sample within the tilt limit: say so when the points do span a plane
+        const auto any_plane = fit_plane(pts);
+        if (any_plane && !within_tilt(*any_plane, cfg.max_tilt_deg)) fit.reason = kTiltedGround;
+        return fit;
+    }
 
     pcl::Indices inliers;
     ransac.getInliers(inliers);
@@ -126,8 +125,18 @@ std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t
 }
 
 GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
-    if (cfg.method == GroundMethod::Pca) return pca_ground(roi.view(), cfg);
-    return ransac_ground(roi, cfg);
+    GroundFit fit = cfg.method == GroundMethod::Pca      ? pca_ground(roi.view(), cfg)
+                    : cfg.method == GroundMethod::Ransac ? ransac_ground(roi, cfg)
+                                                         : zone_ground(roi.view(), cfg);
+    // A wall, a bank of vegetation: not ground. The zones hold each patch to the limit (their frame plane only
+    // sums up upright patches, on a hillside it may lie steeper).
+    if (cfg.method != GroundMethod::Zones && fit.plane && !within_tilt(*fit.plane, cfg.max_tilt_deg)) {
+        fit = GroundFit{};
+        fit.mask.assign(static_cast<std::size_t>(roi.size()), 0);
+        fit.reason = kTiltedGround;
+    }
+    if (!fit.plane && fit.reason.empty()) fit.reason = "no ground";
+    return fit;
 }
 
 GroundFit fit_ground(PointsView points, const GroundConfig& cfg) {
@@ -137,6 +146,7 @@ GroundFit fit_ground(PointsView points, const GroundConfig& cfg) {
     GroundFit fit;
     fit.plane = in_roi.plane;
     fit.count = in_roi.count;
+    fit.reason = in_roi.reason;
     fit.mask.assign(static_cast<std::size_t>(points.rows()), 0);
     for (std::size_t i = 0; i < in_roi.mask.size(); ++i) fit.mask[static_cast<std::size_t>(roi.input_index[i])] = in_roi.mask[i];
     return fit;

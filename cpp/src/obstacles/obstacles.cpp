@@ -250,9 +250,13 @@ Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const s
         Cluster c = describe(pts, groups[g]);
         c.id = static_cast<std::int32_t>(g);
         c.ground_offset = local_ground(ground_grid, plane, c, cfg.ground_search_m);
-        double top = -kInf;
-        for (const auto i : groups[g]) top = std::max(top, height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2)));
+        double top = -kInf, low = kInf;
+        for (const auto i : groups[g]) {
+            const double h = height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2));
+            top = std::max(top, h), low = std::min(low, h);
+        }
         c.height = top - c.ground_offset;
+        c.bottom = low - c.ground_offset;
         out.clusters.push_back(c);
     }
     return out;
@@ -323,6 +327,7 @@ std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& c
     std::vector<PathObstacle> out;
     for (std::size_t k = 0; k < spans.size(); ++k) {
         if (spans[k].s_start > spans[k].s_end) continue;  // no point in the corridor
+        if (clustering.clusters[k].bottom > cfg.clearance_m) continue;  // overhead: canopy, sign, bridge
         const double height = spans[k].height - clustering.clusters[k].ground_offset;
         if (height < cfg.min_height_m) continue;  // ground the ground fit missed (a rising road, a ramp)
         out.push_back({static_cast<std::int32_t>(k), spans[k].s_start, spans[k].s_end, height});

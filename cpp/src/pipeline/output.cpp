@@ -50,7 +50,8 @@ json clusters_json(const std::optional<std::vector<Cluster>>& clusters) {
                        {"aabb_max", rounded3(c.aabb_max)},
                        {"obb", {{"center", rounded3(c.obb.center)}, {"size", rounded3(c.obb.size)},
                                 {"yaw", rounded(c.obb.yaw)}}},
-                       {"height", rounded(c.height)}});
+                       {"height", rounded(c.height)},
+                       {"bottom", rounded(c.bottom)}});
     return out;
 }
 

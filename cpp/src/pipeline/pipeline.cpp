@@ -24,9 +24,9 @@ double ms_since(Clock::time_point& mark) {
 
 // Why no profile can be built for this frame, or empty when one can. A fused map that holds data stands in
 // for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
-std::string blocking_reason(const Result& r, bool map_has_data) {
+std::string blocking_reason(const Result& r, const GroundFit& ground, bool map_has_data) {
     if (!map_has_data && r.points.finite == 0) return "no finite points";
-    if (!map_has_data && !r.plane) return "no ground";
+    if (!map_has_data && !r.plane) return ground.reason.empty() ? "no ground" : ground.reason;
     if (r.path.status == PathStatus::Stopped) return "vehicle stopped";
     return {};
 }
@@ -149,7 +149,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     // Stopped: the same view again and again is not new evidence, so the map holds.
     if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
     r.timing_ms.fusion += ms_since(mark);
-    r.reason = blocking_reason(r, fusion && fusion->frames() > 0);
+    r.reason = blocking_reason(r, ground, fusion && fusion->frames() > 0);
     if (!r.reason.empty()) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
         r.vehicle.reason = r.reason;
@@ -162,8 +162,13 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.timing_ms.obstacles += ms_since(mark);
 
     const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
+    // Levelling by the local ground model (method.md §3); empty: by the one plane.
+    const std::vector<double> local_z = cfg.profile.level && cfg.profile.level_local && r.plane
+                                            ? local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m)
+                                            : std::vector<double>{};
     WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
-                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked);
+                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
+                                                   local_z.empty() ? nullptr : &local_z);
     r.left = std::move(wheels.left);
     r.right = std::move(wheels.right);
     if (cfg.obstacles.enabled) {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/median.hpp"
+#include "ground/plane_fit.hpp"
 
 namespace roadpreview {
 namespace {
@@ -62,20 +63,47 @@ Levelling levelling_for(const Plane* plane) {
     return L;
 }
 
+std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
+                                         double band_m) {
+    std::vector<std::int64_t> band(mask.size(), -1);
+    std::int64_t bands = 0;
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        if (!mask[static_cast<std::size_t>(i)]) continue;
+        const double r = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
+        band[static_cast<std::size_t>(i)] = static_cast<std::int64_t>(std::min(r / band_m, 1e6));
+        bands = std::max(bands, band[static_cast<std::size_t>(i)] + 1);
+    }
+    std::vector<Moments> moments(static_cast<std::size_t>(bands));
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (band[static_cast<std::size_t>(i)] >= 0)
+            moments[static_cast<std::size_t>(band[static_cast<std::size_t>(i)])].add(points.row(i).cast<double>().transpose());
+    std::vector<Plane> plane(moments.size(), frame);
+    for (std::size_t k = 0; k < moments.size(); ++k)
+        if (const auto fit = plane_fit(moments[k])) plane[k] = fit->plane;
+    std::vector<double> z(mask.size(), kNaN);
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const auto k = band[static_cast<std::size_t>(i)];
+        if (k >= 0) z[static_cast<std::size_t>(i)] = height_above(plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2)) - frame[3];
+    }
+    return z;
+}
+
 std::size_t bin_count(const ProfileConfig& cfg) {
     return static_cast<std::size_t>(std::ceil(cfg.preview_length_m / cfg.ds_m - 1e-9));
 }
 
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                             const BlockedBins* blocked) {
+                             const BlockedBins* blocked, const std::vector<double>* local_z) {
+    if (local_z && local_z->size() != mask.size()) throw std::invalid_argument("local_z and mask differ in length");
     WheelProfiles out;
     if (paths.status == PathStatus::Stopped) return out;
     const std::size_t bins = bin_count(cfg);
     std::vector<Hit> hits[2];
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         if (!mask[static_cast<std::size_t>(i)]) continue;
-        const auto [xl, yl, zl] = L.apply(points(i, 0), points(i, 1), points(i, 2));
+        const auto [xl, yl, z_levelled] = L.apply(points(i, 0), points(i, 1), points(i, 2));
+        const double zl = local_z ? (*local_z)[static_cast<std::size_t>(i)] : z_levelled;
         for (const Wheel w : {Wheel::Left, Wheel::Right}) {
             const auto s = arc_length(paths, w, xl, yl, tire_width);
             if (!s || *s >= cfg.preview_length_m) continue;

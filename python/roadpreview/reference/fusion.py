@@ -15,7 +15,7 @@ import numpy as np
 
 from ..config import Config
 from .frames import check_points, to_base_frame
-from .ground import fit_ground
+from .ground import NO_GROUND, ground_model
 from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
@@ -250,14 +250,15 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, _ = to_base_frame(points, cfg)
-    ground, plane = fit_ground(base_xyz, cfg) if len(base_xyz) else (None, None)
+    model = ground_model(base_xyz, cfg) if len(base_xyz) else None
+    ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
         state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz)
     status["frames"] = state.fused
     # A map that holds data stands in for a frame without ground: the profiles are read from it.
     reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \
-        "no ground" if plane is None and not state.fused else "vehicle stopped" if path["status"] == "stopped" else None
+        (model.reason if model else NO_GROUND) if plane is None and not state.fused else "vehicle stopped" if path["status"] == "stopped" else None
     if reason:
         return FusedResult(Profile(), Profile(), status, reason)
     (left, a_l, n_l), (right, a_r, n_r) = (state.profile(path, w, speed, yaw_rate) for w in ("left", "right"))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,6 +16,10 @@ _DEGENERATE_RATIO = 1e-12
 
 class DegenerateFit(ValueError):
     """A plane cannot be fitted: fewer than 3 points or all of them on one line."""
+
+
+class NoPlaneWithinTilt(DegenerateFit):
+    """The points span a plane, but none within the tilt limit."""
 
 
 def roi_mask(base_xyz: np.ndarray, cfg: Config) -> np.ndarray:
@@ -40,25 +45,62 @@ def fit_plane(points_xyz) -> np.ndarray:
     return np.append(normal, -normal @ centre)
 
 
+def tilt_deg(plane) -> float:
+    """Angle between the plane's normal and the base frame's up axis, degrees."""
+    return math.degrees(math.acos(min(1.0, max(-1.0, float(plane[2])))))
+
+
 def height_above(xyz: np.ndarray, plane: np.ndarray) -> np.ndarray:
     return xyz @ plane[:3] + plane[3]
 
 
+NO_GROUND = "no ground"
+TILTED_GROUND = "no ground within the tilt limit"  #: the only plane found is steeper than ground.max_tilt_deg
+
+
+@dataclass
+class GroundModel:
+    mask: np.ndarray  #: bool per point: ground
+    plane: np.ndarray | None  #: the frame's plane (a, b, c, d), None without ground
+    reason: str | None = None  #: why there is no ground
+
+
 def fit_ground(base_xyz, cfg: Config | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Ground mask over ``base_xyz`` and the ground plane, or (all False, None) when there is no ground."""
+    model = ground_model(base_xyz, cfg)
+    return model.mask, model.plane
+
+
+def ground_model(base_xyz, cfg: Config | None = None) -> GroundModel:
+    """The ground of the ROI points among ``base_xyz`` by cfg.ground.method, with the tilt limit applied."""
+    from .zones import zone_ground  # zones builds on this module's plane fit
+
     cfg = cfg or Config()
     xyz = np.asarray(base_xyz, dtype=np.float64)
     roi = np.flatnonzero(roi_mask(xyz, cfg))
     fitters = {"pca": _pca_ground, "ransac": _ransac_ground}
-    if cfg.ground.method not in fitters:
-        raise ValueError(f"unknown ground method {cfg.ground.method!r}; expected 'pca' or 'ransac'")
+    if cfg.ground.method not in (*fitters, "zones"):
+        raise ValueError(f"unknown ground method {cfg.ground.method!r}; expected 'zones', 'pca' or 'ransac'")
     mask = np.zeros(len(xyz), dtype=bool)
-    try:
-        ground, plane = fitters[cfg.ground.method](xyz[roi], cfg)
-    except DegenerateFit:
-        return mask, None
+    if cfg.ground.method == "zones":
+        in_roi, plane, too_steep = zone_ground(xyz[roi], cfg)
+        ground = np.flatnonzero(in_roi)
+        if plane is None and too_steep:
+            return GroundModel(mask, None, TILTED_GROUND)
+    else:
+        try:
+            ground, plane = fitters[cfg.ground.method](xyz[roi], cfg)
+        except NoPlaneWithinTilt:
+            return GroundModel(mask, None, TILTED_GROUND)
+        except DegenerateFit:
+            plane = None
+    if plane is None:
+        return GroundModel(mask, None, NO_GROUND)
+    # A wall, a bank of vegetation: not ground (zones: each patch was held to the limit, not the frame's plane).
+    if cfg.ground.method != "zones" and tilt_deg(plane) > cfg.ground.max_tilt_deg:
+        return GroundModel(mask, None, TILTED_GROUND)
     mask[roi[ground]] = True
-    return mask, plane
+    return GroundModel(mask, plane)
 
 
 def _pca_ground(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
@@ -91,7 +133,7 @@ def _ransac_best_plane(xyz: np.ndarray, cfg: Config) -> np.ndarray:
     if len(xyz) < 3:
         raise DegenerateFit(f"a plane needs at least 3 points, got {len(xyz)}")
     rng = np.random.default_rng(g.ransac_seed)
-    min_up = math.cos(math.radians(g.ransac_max_tilt_deg))
+    min_up = math.cos(math.radians(g.max_tilt_deg))
     best, best_count = None, 0
     for _ in range(g.ransac_max_iterations):
         plane = _plane_through(xyz[rng.choice(len(xyz), size=3, replace=False)])
@@ -101,7 +143,12 @@ def _ransac_best_plane(xyz: np.ndarray, cfg: Config) -> np.ndarray:
         if count > best_count:
             best, best_count = plane, count
     if best is None:
-        raise DegenerateFit("no RANSAC sample gave a plane within the tilt limit")
+        steep = False
+        try:
+            steep = tilt_deg(fit_plane(xyz)) > g.max_tilt_deg  # do the points span a plane, only a steep one?
+        except DegenerateFit:
+            pass
+        raise (NoPlaneWithinTilt if steep else DegenerateFit)("no RANSAC sample gave a plane within the tilt limit")
     return best
 
 

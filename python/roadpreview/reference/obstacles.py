@@ -40,6 +40,7 @@ class Obstacles:
     obb_yaw: np.ndarray = field(default_factory=lambda: _zeros(0))  #: rad in (−π/2, π/2]
     ground_offset: np.ndarray = field(default_factory=lambda: _zeros(0))  #: m, local ground above the plane
     height: np.ndarray = field(default_factory=lambda: _zeros(0))  #: m, top above the local ground
+    bottom: np.ndarray = field(default_factory=lambda: _zeros(0))  #: m, lowest point above the local ground
 
     def __len__(self) -> int:
         return len(self.id)
@@ -198,8 +199,9 @@ def find_obstacles(base_xyz, ground_mask, plane, cfg: Config | None = None) -> t
         lo, hi = points.min(axis=0), points.max(axis=0)
         offset = local_ground(ground_xyz, plane, lo, hi, cfg.obstacles.ground_search_m)
         centre, size, yaw = oriented_box(points)
+        heights = height_above(points, plane)
         rows.append((cluster_id, len(points), points.mean(axis=0), lo, hi, centre, size, yaw, offset,
-                     height_above(points, plane).max() - offset))
+                     heights.max() - offset, heights.min() - offset))
     return _obstacles_from_rows(rows), labels
 
 
@@ -217,7 +219,8 @@ def _obstacles_from_rows(rows) -> Obstacles:
 def wheel_obstacles(base_xyz, labels, obstacles: Obstacles, plane, path: dict, wheel: str, speed, yaw_rate,
                     cfg: Config | None = None) -> PathObstacles:
     """The clusters with points in the wheel's corridor widened by the safety margin, 0 ≤ s < preview length,
-    whose points there rise at least min_height_m above the cluster's local ground."""
+    whose points there rise at least min_height_m above the cluster's local ground — unless the whole cluster
+    is higher than clearance_m above it (a canopy, a sign, a bridge: the vehicle passes under)."""
     cfg = cfg or Config()
     if path["status"] == "stopped" or len(obstacles) == 0:
         return PathObstacles()
@@ -234,6 +237,8 @@ def wheel_obstacles(base_xyz, labels, obstacles: Obstacles, plane, path: dict, w
     heights = height_above(xyz, np.asarray(plane, dtype=np.float64))
     rows = []
     for cluster_id in np.unique(ids[hit]):
+        if obstacles.bottom[cluster_id] > cfg.obstacles.clearance_m:
+            continue
         mine = hit & (ids == cluster_id)
         height = heights[mine].max() - obstacles.ground_offset[cluster_id]
         if height >= cfg.obstacles.min_height_m:  # lower: ground the ground fit missed (a rising road, a ramp)

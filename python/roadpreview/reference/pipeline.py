@@ -9,7 +9,7 @@ import numpy as np
 
 from ..config import Config
 from .frames import check_points, to_base_frame
-from .ground import fit_ground, roi_mask
+from .ground import ground_model, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
@@ -63,13 +63,14 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
         obstacles = Obstacles() if cfg.obstacles.enabled else None
         return _without_profiles(ground_mask, None, counts, path, "no finite points", cfg, obstacles, labels)
     counts["roi"] = int(np.count_nonzero(roi_mask(base_xyz, cfg)))
-    ground, plane = fit_ground(base_xyz, cfg)
+    model = ground_model(base_xyz, cfg)
+    ground, plane = model.mask, model.plane
     ground_mask[np.flatnonzero(finite)[ground]] = True
     counts["ground"] = int(np.count_nonzero(ground))
     obstacles, finite_labels = _clusters(base_xyz, ground, plane, cfg)
     labels[finite] = finite_labels
     if plane is None:
-        return _without_profiles(ground_mask, None, counts, path, "no ground", cfg, obstacles, labels)
+        return _without_profiles(ground_mask, None, counts, path, model.reason, cfg, obstacles, labels)
     if path["status"] == "stopped":
         return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped", cfg, obstacles, labels)
     left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)

@@ -105,6 +105,24 @@ def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
     return z
 
 
+def local_ground_heights(ground_xyz, plane, cfg: Config) -> np.ndarray:
+    """Each ground point's height above the plane of the ground points in its band ⌊r / level_band_m⌋ of horizontal
+    distance r (the frame plane where that fit is degenerate), plus the frame plane's level −d (method.md §3)."""
+    from .ground import DegenerateFit, fit_plane, height_above  # the profile builds on the ground stage's fit
+
+    xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
+    band = np.floor(np.hypot(xyz[:, 0], xyz[:, 1]) / cfg.profile.level_band_m)
+    z = np.empty(len(xyz))
+    for k in np.unique(band):
+        mine = band == k
+        try:
+            local = fit_plane(xyz[mine])
+        except DegenerateFit:
+            local = np.asarray(plane, dtype=np.float64)
+        z[mine] = height_above(xyz[mine], local) - plane[3]
+    return z
+
+
 def empty_profile(reason: str) -> Profile:
     return Profile(roughness=Roughness(reason=reason, iri=Iri(reason=reason)))
 
@@ -113,13 +131,16 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
                   cfg: Config | None = None, blocked=None) -> Profile:
     """Height profile along one wheel's path from ground points (levelled by ``plane`` unless it is None),
     with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped".
-    ``blocked`` bins (obstacles, method.md §5) get no height and are not interpolated across."""
+    ``blocked`` bins (obstacles, method.md §5) get no height and are not interpolated across.
+    With ``profile.level_local`` the heights are those of :func:`local_ground_heights` (method.md §3)."""
     cfg = cfg or Config()
     if path["status"] == "stopped":
         return empty_profile("vehicle stopped")
     xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
     if cfg.profile.level and plane is not None:
         xyz = level_points(xyz, plane)
+        if cfg.profile.level_local:
+            xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
     median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg)
     blocked = np.zeros(len(median), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)

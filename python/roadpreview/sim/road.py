@@ -130,6 +130,29 @@ class SpeedBump:
 
 
 @dataclass(frozen=True)
+class GradeChange:
+    """The grade changes by `change` (m/m) at world x = x_m: height change·(x − x_m) beyond it, up to x = until_m
+    (level again after it, so the relief stays bounded). A rise then a fall — a positive grade and a negative
+    change — is a crest; the opposite a sag."""
+
+    x_m: float
+    change: float
+    until_m: float = 80.0
+
+    def __post_init__(self):
+        if not self.until_m > self.x_m:
+            raise ValueError(f"grade change needs until_m > x_m, got {self.until_m} <= {self.x_m}")
+
+    def height(self, x, y) -> np.ndarray:
+        run = np.clip(np.asarray(x, float) - self.x_m, 0.0, self.until_m - self.x_m)
+        return self.change * run + 0.0 * np.asarray(y, float)
+
+    def bounds(self) -> tuple[float, float]:
+        reach = self.change * (self.until_m - self.x_m)
+        return min(reach, 0.0), max(reach, 0.0)
+
+
+@dataclass(frozen=True)
 class Pothole:
     """A round depression depth_m deep with radius radius_m centred at world (x_m, y_m).
 
@@ -164,6 +187,7 @@ class Road:
     cross_slope: float = 0.0
     bumps: tuple = ()
     potholes: tuple = ()
+    grade_changes: tuple = ()  #: GradeChange features: crests and sags the plane alone has not
     iso_class: Optional[str] = None  #: the class the rough field was drawn from, if any
 
     @classmethod
@@ -182,7 +206,7 @@ class Road:
         """Height above the mean plane: rough field + bumps + potholes, m."""
         x, y = np.asarray(x, float), np.asarray(y, float)
         z = self.rough.height(x, y) if self.rough is not None else np.zeros(np.broadcast(x, y).shape)
-        for feature in (*self.bumps, *self.potholes):
+        for feature in (*self.bumps, *self.potholes, *self.grade_changes):
             z = z + feature.height(x, y)
         return z
 
@@ -199,4 +223,6 @@ class Road:
             lo, hi = float(self.rough.heights.min()), float(self.rough.heights.max())
         hi += sum(max(b.height_m, 0.0) for b in self.bumps)
         lo -= sum(p.depth_m for p in self.potholes)
+        lo += sum(g.bounds()[0] for g in self.grade_changes)
+        hi += sum(g.bounds()[1] for g in self.grade_changes)
         return lo, hi

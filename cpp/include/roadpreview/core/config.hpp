@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace roadpreview {
 
@@ -19,19 +20,29 @@ struct Extrinsics {
     double yaw_rad = 0.0;
 };
 
-enum class GroundMethod { Pca, Ransac };
+enum class GroundMethod { Pca, Ransac, Zones };
 
 struct GroundConfig {
-    GroundMethod method = GroundMethod::Pca;
+    GroundMethod method = GroundMethod::Zones;
     double roi_x_min_m = 1.0;       ///< front region of interest, base frame
     double roi_x_max_m = 40.0;
     double roi_y_abs_max_m = 10.0;
     int pca_iterations = 3;         ///< plane fits; each drops points too far above the last plane
     double pca_threshold_m = 0.20;  ///< points more than this above the plane are not ground
     double ransac_distance_m = 0.20;
-    double ransac_max_tilt_deg = 15.0;  ///< largest angle between plane normal and the up axis
     int ransac_max_iterations = 200;
     std::uint32_t ransac_seed = 1;  ///< fixed so results are reproducible
+    /// Every method: a plane or patch whose normal is farther than this from the up axis of the base frame
+    /// (the level the extrinsics give) is not ground. Config files may still name it ransac_max_tilt_deg.
+    double max_tilt_deg = 15.0;
+    // Zone ground (docs/method.md §1, method "zones"): rings × sectors of the front ROI, a plane per patch.
+    std::vector<double> zone_ring_edges_m{1, 3, 5, 7, 9, 11, 13, 15.5, 18, 21, 24, 28, 32, 36, 42};
+    std::vector<int> zone_sectors{16, 24, 32, 48, 56, 64, 72, 80, 96, 104, 112, 128, 144, 160};  ///< per ring, full circle
+    double zone_root_m = 10.0;        ///< the paper's plane of the points nearer than this: the first reference
+    int zone_min_points = 10;         ///< fewer points in a patch: no ground there
+    int zone_seed_points = 20;        ///< the mean height of this many lowest points starts the fit
+    double zone_max_step_m = 0.3;     ///< elevation test: ground centroid off the inner ground by at most this
+    double zone_max_flatness_m = 0.08; ///< flatness test: RMS distance of the fitted points from their plane
 };
 
 struct PathConfig {
@@ -44,6 +55,8 @@ struct ProfileConfig {
     double ds_m = 0.1;       ///< resampling step along the wheel path
     double max_gap_m = 1.0;  ///< interior gaps up to this length are linearly interpolated
     bool level = true;       ///< remove the fitted ground plane's tilt before reading heights
+    bool level_local = true; ///< with level: heights above the local ground's plane in bands of level_band_m (§3)
+    double level_band_m = 10.0;  ///< radial width of those bands; sets which long waves the levelling removes
 };
 
 struct RoughnessConfig {
@@ -72,6 +85,8 @@ struct ObstaclesConfig {
     double ground_search_m = 1.0;      ///< ground points this far around a cluster give its local ground
     double safety_margin_m = 0.1;      ///< widens each wheel corridor sideways and each obstacle along s
     double min_height_m = 0.1;         ///< lower clusters do not block a wheel path (ground the fit missed)
+    double clearance_m = 2.5;          ///< clusters entirely higher above their local ground (canopy, signs,
+                                       ///< bridges) do not block a wheel path
 };
 
 enum class FusionMethod { None, Ema, Kalman };

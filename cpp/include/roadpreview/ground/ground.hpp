@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Stage 1 — ground: iterative PCA plane fit (the paper's method) or PCL RANSAC, on ROI points.
+// Stage 1 — ground on ROI points: a plane per patch of a concentric zone model (zones), the paper's iterative
+// PCA plane fit (pca) or PCL RANSAC (ransac); every plane and patch within a tilt limit.
 #pragma once
 
 #include <array>
@@ -29,7 +30,11 @@ struct GroundFit {
     std::vector<std::uint8_t> mask;  ///< 1 = ground, one entry per point given
     std::optional<Plane> plane;      ///< nullopt: no ground found
     std::int64_t count = 0;          ///< ground points
+    std::string reason;              ///< why there is no ground ("no ground", kTiltedGround); empty with a plane
 };
+
+/// The reason of a frame whose only ground plane lies farther from level than ground.max_tilt_deg.
+inline constexpr const char* kTiltedGround = "no ground within the tilt limit";
 
 /// Ground among base-frame `points` by `cfg.method`; only points in the front ROI can be ground.
 /// The mask has one entry per point given.

@@ -33,6 +33,7 @@ struct Cluster {
     OrientedBox obb;
     double ground_offset = 0.0;   ///< m, local ground level above the frame's ground plane
     double height = 0.0;          ///< m, highest point above the local ground
+    double bottom = 0.0;          ///< m, lowest point above the local ground (above clearance_m: overhead)
 };
 
 /// A cluster in one wheel's corridor (widened by the safety margin), ahead within the preview length.
@@ -60,7 +61,7 @@ Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& gr
 
 /// The clusters that cross wheel `w`'s corridor widened by cfg.safety_margin_m, with 0 ≤ s < preview_length_m
 /// after levelling by `L` (as the profiles are), and rise there at least cfg.min_height_m above their local
-/// ground; ordered by s_start then id. `points` and `clustering.label` are those of find_obstacles.
+/// ground, unless the whole cluster is higher than cfg.clearance_m above it (overhead); ordered by s_start then id. `points` and `clustering.label` are those of find_obstacles.
 std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
                                           const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
                                           double preview_length_m, const ObstaclesConfig& cfg);

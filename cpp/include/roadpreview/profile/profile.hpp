@@ -41,6 +41,12 @@ struct Levelling {
 };
 Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 
+/// Levelling by the local ground model (docs/method.md §3): each ground point's height above the PCA plane of
+/// the ground points in its band k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²) (the frame plane where
+/// a band's fit is degenerate), plus the frame plane's level −d. One entry per point, NaN off the ground.
+std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
+                                         double band_m);
+
 /// Bins per profile, K = ceil(preview_length / ds) (docs/method.md §3).
 std::size_t bin_count(const ProfileConfig& cfg);
 
@@ -52,9 +58,11 @@ struct WheelProfiles {
 struct BlockedBins {
     std::vector<std::uint8_t> left, right;
 };
+/// With `local_z` (one per point), a ground point's height is local_z[i] instead of its levelled z (the
+/// positions along and across the path stay those that `L` gives): levelling by the local ground model.
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                             const BlockedBins* blocked = nullptr);
+                             const BlockedBins* blocked = nullptr, const std::vector<double>* local_z = nullptr);
 
 /// Linear interpolation across interior runs of NaN no longer than max_gap_m. With `blocked`, a blocked bin
 /// counts as missing and a run holding one is left as it is: nothing is interpolated across an obstacle.

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal: the PCA plane fit shared by every ground method (docs/method.md §1), from accumulated moments.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "roadpreview/ground/ground.hpp"
+
+namespace roadpreview {
+
+// First and second moments of a point set, accumulated about a shift point so that the one-pass
+// covariance keeps its precision far from the origin.
+struct Moments {
+    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    std::int64_t count = 0;
+
+    void add(const Eigen::Vector3d& p) {
+        if (count == 0) shift = p;
+        const Eigen::Vector3d q = p - shift;
+        sum += q;
+        outer.noalias() += q * q.transpose();
+        ++count;
+    }
+};
+
+struct PlaneFit {
+    Plane plane;
+    Eigen::Vector3d centre;   ///< mean of the points (on the plane)
+    double flatness_m2 = 0.0; ///< smallest covariance eigenvalue: mean squared distance from the plane
+};
+
+/// PCA plane of the moments; nullopt for fewer than 3 points or collinear/coincident points.
+std::optional<PlaneFit> plane_fit(const Moments& m);
+
+/// Angle (degrees) between the plane's normal and the base frame's up axis.
+double tilt_deg(const Plane& plane);
+
+/// The paper's plane fit to accept or reject: within the tilt limit.
+inline bool within_tilt(const Plane& plane, double max_tilt_deg) { return tilt_deg(plane) <= max_tilt_deg; }
+
+}  // namespace roadpreview

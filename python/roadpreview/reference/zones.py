@@ -1,0 +1,115 @@
+"""Zone ground (docs/method.md §1, method ``zones``): rings × sectors over the ROI, the paper's plane fit per patch,
+then the uprightness, elevation and flatness tests. Written from the definition, patch by patch, for clarity."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..config import Config
+from .ground import DegenerateFit, fit_plane, height_above, tilt_deg
+
+LEVEL = np.array([0.0, 0.0, 1.0, 0.0])  # the ground level the extrinsics give: z = 0 in the base frame
+
+
+def patch_rings_sectors(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
+    """(ring, sector) of each point; ring −1 outside every ring. Sector from φ = atan2(y, x) + π, φ = 2π as 0."""
+    g = cfg.ground
+    edges = np.asarray(g.zone_ring_edges_m, dtype=np.float64)
+    sectors = np.asarray(g.zone_sectors, dtype=np.int64)
+    ring = np.searchsorted(edges, np.hypot(xyz[:, 0], xyz[:, 1]), side="right") - 1
+    ring[(ring < 0) | (ring >= len(sectors))] = -1
+    count = sectors[np.maximum(ring, 0)]
+    phi = np.arctan2(xyz[:, 1], xyz[:, 0]) + np.pi
+    sector = np.mod(np.floor(phi / (2 * np.pi) * count).astype(np.int64), count)
+    return ring, sector
+
+
+def paper_fit(xyz: np.ndarray, start: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The paper's iteration from the points `start` selects: (plane of the last fit, the points that fit was
+    made on, the points it keeps — at most pca_threshold_m above it)."""
+    kept = start
+    for _ in range(cfg.ground.pca_iterations):
+        fitted = kept
+        plane = fit_plane(xyz[fitted])
+        kept = height_above(xyz, plane) <= cfg.ground.pca_threshold_m
+    return plane, fitted, kept
+
+
+def _flatness_and_centre(xyz: np.ndarray) -> tuple[float, np.ndarray]:
+    """RMS distance of the points from their PCA plane, and their mean."""
+    centre = xyz.mean(axis=0)
+    offsets = xyz - centre
+    smallest = np.linalg.eigvalsh(offsets.T @ offsets / len(xyz))[0]
+    return math.sqrt(max(smallest, 0.0)), centre
+
+
+def _root_reference(xyz: np.ndarray, cfg: Config) -> np.ndarray:
+    """The innermost ring's reference: the paper's plane of the points within zone_root_m, else the level z = 0."""
+    xyz = xyz[np.hypot(xyz[:, 0], xyz[:, 1]) < cfg.ground.zone_root_m]
+    try:
+        plane, _, _ = paper_fit(xyz, np.ones(len(xyz), dtype=bool), cfg)
+    except DegenerateFit:
+        return LEVEL
+    return plane if tilt_deg(plane) <= cfg.ground.max_tilt_deg else LEVEL
+
+
+def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
+    """(plane, ground mask, too steep) of one patch; the plane is None when it has no plane of its own (too few
+    points or seeds for a fit, or a fit that failed a test: then the points at most pca_threshold_m above the
+    reference are ground), and `too steep` says whether its fit failed the uprightness test."""
+    g = cfg.ground
+    above_reference = height_above(xyz, reference)
+    inherited = above_reference <= g.pca_threshold_m  # the inner ground goes on
+    if len(xyz) < g.zone_min_points:
+        return None, inherited, False
+    # Seeds: up to the threshold above the lowest points, and never above the threshold over the reference.
+    lowest = min(np.sort(above_reference)[:g.zone_seed_points].mean(), 0.0)
+    seeds = above_reference <= lowest + g.pca_threshold_m
+    try:
+        plane, fitted, ground = paper_fit(xyz, seeds, cfg)
+    except DegenerateFit:  # too few seeds for a plane of its own
+        return None, inherited, False
+    flatness, centre = _flatness_and_centre(xyz[fitted])
+    upright = tilt_deg(plane) <= g.max_tilt_deg
+    near_inner = abs(height_above(centre[None, :], reference)[0]) <= g.zone_max_step_m
+    flat = flatness <= g.zone_max_flatness_m
+    if upright and near_inner and flat:
+        return plane, ground, False
+    return None, inherited, not upright  # a rejected fit: the inner ground goes on (its foot is no obstacle)
+
+
+def zone_ground(xyz: np.ndarray, cfg: Config):
+    """(ground mask, frame plane or None, too steep): the frame plane is the PCA plane of all the ground points;
+    `too steep` says, when there is none, that a patch held a plane beyond the tilt limit."""
+    g = cfg.ground
+    ring, sector = patch_rings_sectors(xyz, cfg)
+    first = np.concatenate([[0], np.cumsum(g.zone_sectors)])  # patch number of each ring's sector 0
+    patch = np.where(ring >= 0, first[np.maximum(ring, 0)] + sector, -1)
+    order = np.argsort(patch, kind="stable")  # the points patch by patch, each patch's in input order
+    bounds = np.searchsorted(patch[order], np.arange(first[-1] + 1))
+    ground = np.zeros(len(xyz), dtype=bool)
+    root = _root_reference(xyz, cfg)
+    handed_inward = None
+    too_steep = accepted = False  # the planes ring − 1 hands on, one per sector
+    for r, count in enumerate(g.zone_sectors):
+        handed = []
+        for s in range(count):
+            # The inner patch holding this patch's central azimuth hands on its plane (or its own reference).
+            reference = root if r == 0 else handed_inward[(2 * s + 1) * g.zone_sectors[r - 1] // (2 * count)]
+            rows = order[bounds[first[r] + s]:bounds[first[r] + s + 1]]
+            plane, mine, steep = fit_patch(xyz[rows], reference, cfg)
+            too_steep |= steep
+            accepted |= plane is not None
+            handed.append(reference if plane is None else plane)
+            if mine is not None:
+                ground[rows[mine]] = True
+        handed_inward = handed
+    try:
+        if not accepted:  # ground handed on from references alone is no ground: no patch held a plane
+            raise DegenerateFit("no patch accepted")
+        plane = fit_plane(xyz[ground])
+    except DegenerateFit:
+        return np.zeros(len(xyz), dtype=bool), None, too_steep
+    return ground, plane, False
