@@ -15,7 +15,7 @@ import numpy as np
 
 from ..config import Config
 from .frames import check_points, to_base_frame
-from .ground import fit_ground
+from .ground import fit_ground, roi_facing
 from .iri import profile_iri, vehicle_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
@@ -240,7 +240,8 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, _ = to_base_frame(points, cfg)
-    ground, plane = fit_ground(base_xyz, cfg) if len(base_xyz) else (None, None)
+    facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
+    ground, plane = fit_ground(base_xyz, facing) if len(base_xyz) else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
         state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz)
