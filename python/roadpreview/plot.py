@@ -100,11 +100,12 @@ def _class_bounds() -> np.ndarray:
 
 
 def _class_label(ax, cls: str, gd_n0: float, grid: np.ndarray, ylim) -> None:
-    """The class letter inside the axes, at the right edge of its band, when the band is in view there."""
-    x = grid[-1] / 1.08
+    """The class letter inside the axes at the left edge of its band (below the PSD's first ordinate, where no
+    data are drawn), when the band is in view there."""
+    x = grid[0] * 1.04
     y = gd_n0 * (x / N0) ** -2.0
     if ylim[0] * 1.5 < y < ylim[1] / 1.5:
-        ax.text(x, y, cls, va="center", ha="right", fontsize=8, color="0.3")
+        ax.text(x, y, cls, va="center", ha="left", fontsize=8, color="0.3")
 
 
 def _wrapped(text: str, width: int = 60) -> str:
@@ -197,7 +198,10 @@ def plot_birdseye(base_xyz, ground_mask, line: dict, track_width_m: float = 1.6,
     ax.set_ylabel("y left (m)")
     ax.set_title(f"frame {line['frame']}: {line['motion']['speed']:g} m/s, {line['motion']['yaw_rate']:g} rad/s",
                  fontsize=10)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0, markerscale=8)
+    legend = ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    for handle in getattr(legend, "legend_handles", None) or legend.legendHandles:
+        if hasattr(handle, "set_sizes"):  # the point clouds' dots, large enough to see their colour
+            handle.set_sizes([12])
     return ax
 
 
@@ -326,7 +330,7 @@ def main(argv=None) -> int:
 
 def _save(fig, path: str, dpi: int) -> None:
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")  # keeps the legends outside the axes in the picture
     plt.close(fig)
     print(path, file=sys.stderr)
 
