@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
+from roadpreview import native
 from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, VELODYNE
 from paths import run_cli as run
 
-IMPLEMENTATIONS = {"cpp": rp.native.estimate_mounting, "reference": rp.reference.estimate_mounting}
+IMPLEMENTATIONS = {"cpp": native.estimate_mounting, "reference": rp.reference.estimate_mounting}
 
 
 def sensor_frame_ground(height, roll, pitch, seed=0):
@@ -37,7 +38,7 @@ def test_height_and_tilt_come_back_from_the_ground(impl, height, roll, pitch):
 
 def test_cpp_and_reference_estimates_agree_on_a_kitti_frame():
     points = rp.io.read(KITTI_FRAMES[0])
-    cpp, ref = rp.native.estimate_mounting(points), rp.reference.estimate_mounting(points)
+    cpp, ref = native.estimate_mounting(points), rp.reference.estimate_mounting(points)
     for key in ("height_m", "roll_rad", "pitch_rad"):
         assert cpp[key] == pytest.approx(ref[key], abs=1e-6)
     assert cpp["height_m"] == pytest.approx(KITTI_SENSOR_HEIGHT, abs=0.1)
@@ -45,7 +46,7 @@ def test_cpp_and_reference_estimates_agree_on_a_kitti_frame():
 
 def test_no_ground_gives_no_estimate():
     wall = np.column_stack([np.full(100, 5.0), np.linspace(-3, 3, 100), np.linspace(0, 2, 100)]).astype(np.float32)
-    assert rp.native.estimate_mounting(wall[:2]) is None and rp.reference.estimate_mounting(wall[:2]) is None
+    assert native.estimate_mounting(wall[:2]) is None and rp.reference.estimate_mounting(wall[:2]) is None
 
 
 def test_the_cli_estimates_the_mounting_when_none_is_given_and_says_so(tmp_path):
