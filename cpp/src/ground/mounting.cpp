@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace roadpreview {
 
@@ -15,7 +16,11 @@ Mounting mounting_from_plane(const Plane& p) {
 }
 
 std::optional<Mounting> estimate_mounting(PointsView sensor_points, const GroundConfig& cfg) {
-    const GroundFit fit = fit_ground(sensor_points, cfg);
+    std::vector<float> below;  // the ground lies below the sensor: a ceiling or a canopy cannot be it
+    for (Eigen::Index i = 0; i < sensor_points.rows(); ++i)
+        if (sensor_points(i, 2) < 0.0f)
+            for (int c = 0; c < 3; ++c) below.push_back(sensor_points(i, c));
+    const GroundFit fit = fit_ground(points_view(below.data(), static_cast<Eigen::Index>(below.size() / 3), 3), cfg);
     if (!fit.plane) return std::nullopt;
     Mounting m = mounting_from_plane(*fit.plane);
     m.ground_points = fit.count;

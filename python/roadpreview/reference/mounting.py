@@ -27,11 +27,12 @@ def mounting_from_plane(sensor_plane) -> dict:
 
 
 def estimate_mounting(points, cfg: Config | None = None) -> Optional[dict]:
-    """The mounting the ground of sensor-frame ``points`` implies (fitted as if the sensor were level at the base
-    origin, with cfg's ROI and ground method); None without ground."""
+    """The mounting the ground of sensor-frame ``points`` implies: fitted to the points below the sensor (z < 0;
+    a ceiling cannot be the ground) as if the sensor were level at the base origin, with cfg's ROI and ground
+    method; None without ground."""
     cfg = cfg or Config()
     xyz = check_points(points)[:, :3].astype(np.float64)
-    xyz = xyz[np.isfinite(xyz).all(axis=1)]
+    xyz = xyz[np.isfinite(xyz).all(axis=1) & (xyz[:, 2] < 0)]
     ground, plane = fit_ground(xyz, cfg)
     if plane is None:
         return None

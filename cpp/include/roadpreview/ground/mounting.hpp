@@ -24,8 +24,8 @@ struct Mounting {
 /// the plane becomes z = 0, i.e. its unit normal n = (−sin pitch, cos pitch·sin roll, cos pitch·cos roll) and h = d.
 Mounting mounting_from_plane(const Plane& sensor_plane);
 
-/// Fits the ground to sensor-frame points as if the sensor were level at the base origin (cfg's ROI and
-/// method) and returns the mounting it implies; nullopt without ground.
+/// Fits the ground to the sensor-frame points below the sensor (z < 0) as if the sensor were level at the base
+/// origin (cfg's ROI and method) and returns the mounting it implies; nullopt without ground.
 std::optional<Mounting> estimate_mounting(PointsView sensor_points, const GroundConfig& cfg);
 
 /// Extrinsics (0, 0, height, roll, pitch, 0).
