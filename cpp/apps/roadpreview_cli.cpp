@@ -149,16 +149,20 @@ FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::opti
 // gives it; a given one is checked against each frame's ground.
 rp::Config with_mounting(rp::Config cfg, const rp::Frame& f, bool quiet) {
     if (cfg.sensor_height || cfg.extrinsics) return cfg;
-    const auto m = rp::estimate_mounting(rp::points_view(f.points.data(), f.points.rows(), f.points.cols()), cfg.ground);
+    const rp::PointsView points = rp::points_view(f.points.data(), f.points.rows(), f.points.cols());
+    const auto m = rp::estimate_mounting(points, cfg.ground);
     if (!m) {
-        std::fprintf(stderr, "roadpreview: warning: no --sensor-height or --extrinsics, and no ground in %s to estimate "
-                             "the mounting from: the points are taken as base-frame points\n", frame_label(f).c_str());
+        std::fprintf(stderr,
+                     "roadpreview: warning: no --sensor-height or --extrinsics, and no ground in %s to estimate "
+                     "the mounting from: the points are taken as base-frame points\n",
+                     frame_label(f).c_str());
         return cfg;
     }
     cfg.extrinsics = rp::to_extrinsics(*m);
     if (!quiet)
-        std::fprintf(stderr, "roadpreview: no --sensor-height or --extrinsics: mounting estimated from the ground in %s: "
-                             "height %.2f m, roll %.2f°, pitch %.2f° (mounting.source = \"estimated\" in the output)\n",
+        std::fprintf(stderr,
+                     "roadpreview: no --sensor-height or --extrinsics: mounting estimated from the ground in %s: "
+                     "height %.2f m, roll %.2f°, pitch %.2f° (mounting.source = \"estimated\" in the output)\n",
                      frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
     return cfg;
 }
@@ -169,8 +173,9 @@ void check_mounting(const rp::Result& r, const rp::Frame& f, std::int64_t& disag
     const rp::MountingCheck c = rp::check_mounting(*r.plane);
     if (!c.disagrees) return;
     if (disagreeing++ == 0)
-        std::fprintf(stderr, "roadpreview: warning: %s: the fitted ground is %.2f m %s the base origin and tilted %.1f°: "
-                             "the sensor is about %.2f m up, not %.2f m; check --sensor-height / --extrinsics\n",
+        std::fprintf(stderr,
+                     "roadpreview: warning: %s: the fitted ground is %.2f m %s the base origin and tilted %.1f°: "
+                     "the sensor is about %.2f m up, not %.2f m; check --sensor-height / --extrinsics\n",
                      frame_label(f).c_str(), std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg,
                      r.extrinsics.z_m + c.offset_m, r.extrinsics.z_m);
 }
@@ -178,9 +183,11 @@ void check_mounting(const rp::Result& r, const rp::Frame& f, std::int64_t& disag
 // Options that only a pcap recording reads are an error with frame files, not silently ignored.
 void check_source_options(const CLI::App& run, const rp::SourceInfo& info) {
     if (info.format != "files") return;
-    for (const char* name : {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port", "--skip-bad-packets"})
+    for (const char* name :
+         {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port", "--skip-bad-packets"})
         if (run.count(name))
-            throw std::invalid_argument(std::string(name) + " applies to pcap recordings only; the input is frame files");
+            throw std::invalid_argument(std::string(name) +
+                                        " applies to pcap recordings only; the input is frame files");
 }
 
 // Route outputs (--segments, --export-profile): the frames' profiles stitched along the drive.
@@ -286,8 +293,10 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (!mounting_source.empty()) r.mounting_source = mounting_source;
         check_mounting(r, *frame, disagreeing);
         if (route && index == first && !at.timestamp_s && !at.pose && !o.quiet)
-            std::fprintf(stderr, "roadpreview: route: frames without timestamps are taken %g s apart "
-                                 "(fusion.frame_rate_hz); give --frame-rate or --poses\n", 1.0 / cfg.fusion.frame_rate_hz);
+            std::fprintf(stderr,
+                         "roadpreview: route: frames without timestamps are taken %g s apart "
+                         "(fusion.frame_rate_hz); give --frame-rate or --poses\n",
+                         1.0 / cfg.fusion.frame_rate_hz);
         if (route) route->add(r, at.pose);
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
@@ -306,8 +315,10 @@ int run(const RunOptions& o, const CLI::App& app) {
     for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
     std::fprintf(stderr, "\n");
     if (disagreeing)
-        std::fprintf(stderr, "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
-                             "(mounting.disagrees in the output)\n", static_cast<long long>(disagreeing));
+        std::fprintf(stderr,
+                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
+                     "(mounting.disagrees in the output)\n",
+                     static_cast<long long>(disagreeing));
     if (route) write_route(o, *route);
     return 0;
 }
@@ -385,7 +396,9 @@ int main(int argc, char** argv) {
     motion->excludes(speed)->excludes(yaw);
     run_cmd->add_option("--frames", o.frames, "Frames A:B of the input (0-based, B excluded; A: or :B)");
     add_source_options(run_cmd, o.source);
-    auto* height = run_cmd->add_option("--sensor-height", o.sensor_height, "Sensor height above the ground, m, in (0, 10] (default: estimated from the first frame's ground, see the output's mounting)");
+    auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
+                                       "Sensor height above the ground, m, in (0, 10] (default: estimated from the "
+                                       "first frame's ground, see the output's mounting)");
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
                      ->delimiter(',')
                      ->expected(6);
@@ -411,7 +424,8 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--segments-csv", o.segments_file, "File for the --segments rows (default: OUT.segments.csv, "
                                                             "or segments.csv without -o)");
     run_cmd->add_option("--export-profile", o.profile_dir,
-                        "Directory for each wheel's profile stitched along the drive: left/right .csv and .erd (ProVAL)");
+                        "Directory for each wheel's profile stitched along the drive: left/right .csv and .erd "
+                        "(ProVAL)");
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");

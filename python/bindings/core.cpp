@@ -195,7 +195,9 @@ std::string roughness_repr(const rp::Roughness& r) {
 }
 
 std::string result_repr(const rp::Result& r) {
-    const auto cls = [](const rp::Roughness& x) { return x.iso_class ? std::string(1, *x.iso_class) : std::string("-"); };
+    const auto cls = [](const rp::Roughness& x) {
+        return x.iso_class ? std::string(1, *x.iso_class) : std::string("-");
+    };
     std::string out = "<roadpreview.Result frame " + std::to_string(r.frame);
     if (!r.source.empty()) out += " of " + r.source;
     out += ": " + std::to_string(r.points.input) + " points, " + std::to_string(r.points.ground) + " ground, " +

@@ -29,7 +29,8 @@ TEST(Mounting, EstimatedFromSensorFramePoints) {
             const double b[3] = {2.0 + 0.5 * i, -7.0 + 0.5 * j, 0.0};
             // p_sensor = Rᵀ(p_base − t)
             const double d[3] = {b[0] - T.t[0], b[1] - T.t[1], b[2] - T.t[2]};
-            for (int r = 0; r < 3; ++r) xyz.push_back(static_cast<float>(T.R[0][r] * d[0] + T.R[1][r] * d[1] + T.R[2][r] * d[2]));
+            for (int r = 0; r < 3; ++r)
+                xyz.push_back(static_cast<float>(T.R[0][r] * d[0] + T.R[1][r] * d[1] + T.R[2][r] * d[2]));
         }
     const auto m = rp::estimate_mounting(rp::points_view(xyz.data(), static_cast<Eigen::Index>(xyz.size() / 3), 3),
                                          rp::GroundConfig{});

@@ -86,7 +86,8 @@ def test_route_matches_the_numpy_reference_on_the_same_run(kitti_route):
     expected = route.segments(10.0) + route.segments(100.0)
     assert len(rows) == len(expected)
     for row, seg in zip(rows, expected):
-        assert number(row["start_m"]) == pytest.approx(seg["start_m"]) and number(row["end_m"]) == pytest.approx(seg["end_m"])
+        assert number(row["start_m"]) == pytest.approx(seg["start_m"])
+        assert number(row["end_m"]) == pytest.approx(seg["end_m"])
         for side in ("left", "right", "vehicle"):
             rough, iri = seg[side]["roughness"], seg[side]["iri"]
             assert (row[f"class_{side}"] or None) == rough.iso_class

@@ -97,7 +97,8 @@ Pose2 interpolate(const Pose2& a, const Pose2& b, double t) {
 RouteBuilder::RouteBuilder(const Config& cfg) : cfg_(cfg) { validate(cfg); }
 
 void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
-    const std::string frame = "route: frame " + std::to_string(frames_) + (r.source.empty() ? "" : " (" + r.source + ")");
+    const std::string frame =
+        "route: frame " + std::to_string(frames_) + (r.source.empty() ? "" : " (" + r.source + ")");
     if (frames_ > 0 && pose.has_value() != last_pose_.has_value())
         throw std::invalid_argument(frame + ": poses must be given for every frame or for none");
     if (frames_ > 0 && pose) {
@@ -159,7 +160,8 @@ StitchedProfile RouteBuilder::finished(const WheelSums& w) const {
     out.frames = w.frames;
     for (std::size_t j = 0; j < w.weight.size(); ++j) {
         const double mean = w.weight[j] > 0.0 ? w.weighted_z[j] / w.weight[j] : kNaN;
-        const double variance = w.weight[j] > 0.0 ? std::max(0.0, w.weighted_square[j] / w.weight[j] - mean * mean) : kNaN;
+        const double variance =
+            w.weight[j] > 0.0 ? std::max(0.0, w.weighted_square[j] / w.weight[j] - mean * mean) : kNaN;
         out.z.push_back(mean);
         out.spread.push_back(w.count[j] >= 2 ? std::sqrt(variance) : kNaN);
     }
@@ -193,7 +195,8 @@ std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
     for (std::size_t k = 0;; ++k) {
         const auto j0 = static_cast<std::size_t>(std::llround(static_cast<double>(k) * length_m / ds));
         if (j0 >= bins) break;
-        const auto j1 = std::min(bins, static_cast<std::size_t>(std::llround(static_cast<double>(k + 1) * length_m / ds)));
+        const auto end = static_cast<std::size_t>(std::llround(static_cast<double>(k + 1) * length_m / ds));
+        const auto j1 = std::min(bins, end);
         RouteSegment s;
         s.length_m = length_m;
         s.start_m = static_cast<double>(j0) * ds;

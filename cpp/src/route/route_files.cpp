@@ -40,7 +40,8 @@ constexpr const char* kSides[] = {"left", "right", "vehicle"};
 
 void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segments) {
     out << "segment_length_m,start_m,end_m,x_start_m,y_start_m,x_end_m,y_end_m";
-    for (const char* prefix : {"class_", "gd_n0_m3_", "iri_m_per_km_", "backed_fraction_", "class_reason_", "iri_reason_"})
+    for (const char* prefix :
+         {"class_", "gd_n0_m3_", "iri_m_per_km_", "backed_fraction_", "class_reason_", "iri_reason_"})
         for (const char* side : kSides) out << ',' << prefix << side;
     out << '\n';
     for (const RouteSegment& s : segments) {
@@ -73,14 +74,17 @@ void write_profile_csv(std::ostream& out, const StitchedProfile& p) {
 
 // Header as in the LTPP profile files ProVAL imports: the format line (channels, samples per channel, −1, 1,
 // 5, sample interval, −1), then keyword lines whose keyword fills the first 8 columns, then END.
-void write_profile_erd(std::ostream& out, const StitchedProfile& p, const std::string& wheel, const std::string& title) {
+void write_profile_erd(std::ostream& out, const StitchedProfile& p, const std::string& wheel,
+                       const std::string& title) {
     const auto [first, last] = longest_valid_stretch(p.z);
-    if (last - first < 2) throw std::runtime_error("ERD export: the " + wheel + " wheel's stitched profile has no valid stretch");
+    if (last - first < 2)
+        throw std::runtime_error("ERD export: the " + wheel + " wheel's stitched profile has no valid stretch");
     char line[128];
     std::snprintf(line, sizeof line, "%7d,%8zu,%7d,%7d,%7d,%13.4f,%7d,", 1, last - first, -1, 1, 5, p.ds, -1);
     const double start_m = static_cast<double>(first) * p.ds + 0.5 * p.ds;
     out << "ERDFILEV2.00\n" << line << '\n';
-    out << "TITLE   " << title << ": " << wheel << " wheel path from " << field("%.2f", start_m) << " m along the drive\n";
+    out << "TITLE   " << title << ": " << wheel << " wheel path from " << field("%.2f", start_m)
+        << " m along the drive\n";
     std::snprintf(line, sizeof line, "SHORTNAM%-8s\nUNITSNAM%-8s\nXUNITS  m\nEND\n", wheel.c_str(), "mm");
     out << line;
     for (std::size_t j = first; j < last; ++j) out << field("%.3f", 1000.0 * p.z[j]) << '\n';

@@ -108,7 +108,7 @@ def result_to_dict(result) -> dict:
         "mounting": _mounting(result),
         "path": {k: path[k] for k in ("icr_y", "left_radius", "right_radius")} if arc else None,
         "obstacles": _clusters(result.obstacles),
-        "profiles": {"left": _profile(result.left, cfg.profile.ds_m), "right": _profile(result.right, cfg.profile.ds_m)},
+        "profiles": {side: _profile(getattr(result, side), cfg.profile.ds_m) for side in ("left", "right")},
         "roughness": {"left": _roughness(result.left.roughness), "right": _roughness(result.right.roughness),
                       "vehicle": _roughness(result.vehicle)},
         "reason": result.reason,

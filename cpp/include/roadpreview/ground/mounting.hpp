@@ -21,7 +21,8 @@ struct Mounting {
 };
 
 /// The mounting a ground plane fitted in the sensor frame implies: with extrinsics (0, 0, h, roll, pitch, 0)
-/// the plane becomes z = 0, i.e. its unit normal n = (−sin pitch, cos pitch·sin roll, cos pitch·cos roll) and h = d.
+/// the plane becomes z = 0, i.e. its unit normal n = (−sin pitch, cos pitch·sin roll, cos pitch·cos roll)
+/// and h = d.
 Mounting mounting_from_plane(const Plane& sensor_plane);
 
 /// Fits the ground to the sensor-frame points below the sensor (z < 0) as if the sensor were level at the base

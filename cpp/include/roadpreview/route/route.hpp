@@ -84,6 +84,7 @@ void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segm
 void write_profile_csv(std::ostream& out, const StitchedProfile& p);
 /// One wheel's stitched profile in the ERD text format over its longest valid stretch (heights in mm);
 /// throws std::runtime_error when there is none.
-void write_profile_erd(std::ostream& out, const StitchedProfile& p, const std::string& wheel, const std::string& title);
+void write_profile_erd(std::ostream& out, const StitchedProfile& p, const std::string& wheel,
+                       const std::string& title);
 
 }  // namespace roadpreview
