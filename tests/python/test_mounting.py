@@ -33,7 +33,8 @@ def test_height_and_tilt_come_back_from_the_ground(impl, height, roll, pitch):
     m = IMPLEMENTATIONS[impl](sensor_frame_ground(height, roll, pitch))
     assert m["height_m"] == pytest.approx(height, abs=0.01)
     assert m["roll_rad"] == pytest.approx(roll, abs=1e-3) and m["pitch_rad"] == pytest.approx(pitch, abs=1e-3)
-    assert m["ground_points"] > 15000
+    # only ground below the sensor counts: pitched down 4.6° at 0.6 m, the road beyond ~8 m rises above z = 0
+    assert m["ground_points"] > (15000 if height > 1 else 2500)
 
 
 def test_cpp_and_reference_estimates_agree_on_a_kitti_frame():
@@ -55,7 +56,8 @@ def test_the_cli_estimates_the_mounting_when_none_is_given_and_says_so(tmp_path)
     line = json.loads(out.read_text())
     assert line["mounting"]["source"] == "estimated" and "mounting estimated" in proc.stderr
     assert line["mounting"]["extrinsics"][2] == pytest.approx(KITTI_SENSOR_HEIGHT, abs=0.1)
-    assert abs(line["mounting"]["ground_offset"]) < 0.01 and line["mounting"]["disagrees"] is False
+    # the estimate fits the ground below the sensor, the frame's fit the whole region: within centimetres
+    assert abs(line["mounting"]["ground_offset"]) < 0.03 and line["mounting"]["disagrees"] is False
 
 
 def test_a_given_height_far_from_the_ground_is_warned_about(tmp_path):
