@@ -158,6 +158,14 @@ rp::Config with_mounting(rp::Config cfg, const rp::Frame& f, bool quiet) {
                      frame_label(f).c_str());
         return cfg;
     }
+    constexpr double kMaxTiltRad = 15.0 * M_PI / 180.0;
+    if (m->height_m <= 0.0 || std::abs(m->roll_rad) > kMaxTiltRad || std::abs(m->pitch_rad) > kMaxTiltRad) {
+        std::fprintf(stderr,
+                     "roadpreview: warning: no --sensor-height or --extrinsics, and the ground in %s gives no plausible "
+                     "mounting (height %.2f m, roll %.1f°, pitch %.1f°): the points are taken as base-frame points\n",
+                     frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
+        return cfg;
+    }
     cfg.extrinsics = rp::to_extrinsics(*m);
     if (!quiet)
         std::fprintf(stderr,

@@ -89,3 +89,12 @@ def test_a_sensor_model_that_overrides_the_packets_is_reported():
     info = run("info", VELODYNE / "hdl32_example.pcap", "--sensor-model", "VLP-16").stdout
     assert "model given: VLP-16; the packets say HDL-32E" in info
     assert "the packets say" not in run("info", VELODYNE / "hdl32_example.pcap", "--sensor-model", "HDL-32E").stdout
+
+
+def test_an_implausible_estimate_is_not_used(tmp_path):
+    from paths import PCD_FILE  # this cloud's origin sits on the ground: no sensor height to read off
+
+    out = tmp_path / "o.jsonl"
+    proc = run("run", PCD_FILE, "--speed", 3, "-o", out)
+    assert "gives no plausible mounting" in proc.stderr
+    assert json.loads(out.read_text())["mounting"]["source"] == "none"
