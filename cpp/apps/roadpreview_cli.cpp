@@ -45,6 +45,9 @@ struct RunOptions {
     int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
     double cell = 0.1;    // calibrate: road cell, m
     double max_sigma = 0.01;  // calibrate: deg
+    std::vector<double> segment_lengths_m;  // --segments
+    std::string segments_file;              // --segments-csv
+    std::string profile_dir;                // --export-profile
 };
 
 // True when the subcommand has this option and it was given.
@@ -222,15 +225,117 @@ FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::opti
     return {{o.speed, 0.0}, "default"};
 }
 
+// Mounting: with neither --sensor-height nor --extrinsics (nor either in --config), the first frame's ground
+// gives it; a given one is checked against each frame's ground.
+rp::Config with_mounting(rp::Config cfg, const rp::Frame& f, bool quiet) {
+    if (cfg.sensor_height || cfg.extrinsics) return cfg;
+    const rp::PointsView points = rp::points_view(f.points.data(), f.points.rows(), f.points.cols());
+    const auto m = rp::estimate_mounting(points, cfg.ground);
+    if (!m) {
+        std::fprintf(stderr,
+                     "roadpreview: warning: no --sensor-height or --extrinsics, and no ground in %s to estimate "
+                     "the mounting from: the points are taken as base-frame points\n",
+                     frame_label(f).c_str());
+        return cfg;
+    }
+    constexpr double kMaxTiltRad = 15.0 * M_PI / 180.0;
+    if (m->height_m <= 0.0 || std::abs(m->roll_rad) > kMaxTiltRad || std::abs(m->pitch_rad) > kMaxTiltRad) {
+        std::fprintf(stderr,
+                     "roadpreview: warning: no --sensor-height or --extrinsics, and the ground in %s gives no plausible "
+                     "mounting (height %.2f m, roll %.1f°, pitch %.1f°): the points are taken as base-frame points\n",
+                     frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
+        return cfg;
+    }
+    cfg.extrinsics = rp::to_extrinsics(*m);
+    if (!quiet)
+        std::fprintf(stderr,
+                     "roadpreview: no --sensor-height or --extrinsics: mounting estimated from the ground in %s: "
+                     "height %.2f m, roll %.2f°, pitch %.2f° (mounting.source = \"estimated\" in the output)\n",
+                     frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
+    return cfg;
+}
+
+// Warns at the first frame whose fitted ground disagrees with the given mounting; counts them all.
+void check_mounting(const rp::Result& r, const rp::Frame& f, std::int64_t& disagreeing) {
+    if (!r.plane || r.mounting_source != "given") return;
+    const rp::MountingCheck c = rp::check_mounting(*r.plane);
+    if (!c.disagrees) return;
+    if (disagreeing++ == 0)
+        std::fprintf(stderr,
+                     "roadpreview: warning: %s: the fitted ground is %.2f m %s the base origin and tilted %.1f°: "
+                     "the sensor is about %.2f m up, not %.2f m; check --sensor-height / --extrinsics\n",
+                     frame_label(f).c_str(), std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg,
+                     r.extrinsics.z_m + c.offset_m, r.extrinsics.z_m);
+}
+
+// Options that only a pcap recording reads are an error with frame files, not silently ignored.
+void check_source_options(const CLI::App& run, const rp::SourceInfo& info) {
+    if (info.format != "files") return;
+    for (const char* name :
+         {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port", "--skip-bad-packets"})
+        if (run.count(name))
+            throw std::invalid_argument(std::string(name) +
+                                        " applies to pcap recordings only; the input is frame files");
+}
+
+// Route outputs (--segments, --export-profile): the frames' profiles stitched along the drive.
+bool wants_route(const RunOptions& o) { return !o.segment_lengths_m.empty() || !o.profile_dir.empty(); }
+
+std::string segments_path(const RunOptions& o) {
+    if (!o.segments_file.empty()) return o.segments_file;
+    if (o.output.empty()) return "segments.csv";
+    return std::filesystem::path(o.output).replace_extension(".segments.csv").string();
+}
+
+std::ofstream open_for_writing(const std::string& path) {
+    std::ofstream f(path);
+    if (!f) throw std::runtime_error(path + ": cannot open output file for writing");
+    return f;
+}
+
+void write_segments(const RunOptions& o, const rp::RouteBuilder& route) {
+    std::vector<rp::RouteSegment> segments;
+    for (double length_m : o.segment_lengths_m) {
+        const auto some = route.segments(length_m);
+        segments.insert(segments.end(), some.begin(), some.end());
+    }
+    const std::string path = segments_path(o);
+    std::ofstream f = open_for_writing(path);
+    rp::write_segments_csv(f, segments);
+    if (!o.quiet)
+        std::fprintf(stderr, "roadpreview: %zu segment rows over %.1f m of stitched road -> %s\n", segments.size(),
+                     segments.empty() ? 0.0 : segments.back().end_m, path.c_str());
+}
+
+void export_profiles(const RunOptions& o, const rp::RouteBuilder& route) {
+    std::filesystem::create_directories(o.profile_dir);
+    const std::string title = "roadpreview " + std::filesystem::path(o.inputs[0]).filename().string();
+    for (const auto& [wheel, profile] : {std::pair{"left", route.left()}, std::pair{"right", route.right()}}) {
+        const auto base = std::filesystem::path(o.profile_dir) / wheel;
+        std::ofstream csv = open_for_writing(base.string() + ".csv");
+        rp::write_profile_csv(csv, profile);
+        std::ofstream erd = open_for_writing(base.string() + ".erd");
+        rp::write_profile_erd(erd, profile, wheel, title);
+    }
+    if (!o.quiet)
+        std::fprintf(stderr, "roadpreview: stitched profiles over %.1f m driven -> %s/{left,right}.{csv,erd}\n",
+                     route.distance_m(), o.profile_dir.c_str());
+}
+
+void write_route(const RunOptions& o, const rp::RouteBuilder& route) {
+    if (!o.segment_lengths_m.empty()) write_segments(o, route);
+    if (!o.profile_dir.empty()) export_profiles(o, route);
+}
+
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
-    const rp::Config cfg = build_config(o, app);
-    rp::Estimator est(cfg);
+    rp::Config cfg = build_config(o, app);
     const auto [first, last] = parse_frame_range(o.frames);
     std::optional<rp::MotionTable> table;
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
     const auto source = rp::open_frames(o.inputs, o.source);
+    check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
@@ -242,6 +347,10 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (!file) throw std::runtime_error(o.output + ": cannot open output file for writing");
     }
     std::ostream& out = o.output.empty() ? std::cout : file;
+    std::optional<rp::Estimator> est;  // made at the first frame processed, which may give the mounting
+    std::optional<rp::RouteBuilder> route;
+    std::int64_t disagreeing = 0;
+    std::string mounting_source;  // "estimated" when the first frame gave it
 
     RunSummary summary;
     std::int64_t index = 0;
@@ -250,6 +359,13 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (!frame) break;
         if (index == 0 && !o.quiet) report_source(source->info());
         if (index < first) continue;
+        if (!est) {
+            const bool estimate = !cfg.sensor_height && !cfg.extrinsics;
+            cfg = with_mounting(cfg, *frame, o.quiet);
+            est.emplace(cfg);
+            if (estimate && cfg.extrinsics) mounting_source = "estimated";
+            if (wants_route(o)) route.emplace(cfg);
+        }
         rp::FrameMotion at{frame_time(*frame, index, o.frame_rate), std::nullopt};
         const FrameMotion m = motion_for(o, app, table, *frame, at.timestamp_s, cfg);
         if (!o.poses_file.empty()) {
@@ -259,10 +375,18 @@ int run(const RunOptions& o, const CLI::App& app) {
             at.pose = poses[static_cast<std::size_t>(index)];
         }
         const bool new_sequence = !frame->sequence_break.empty() && index > first;
-        if (new_sequence) est.reset();
-        rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
+        if (new_sequence) est->reset();
+        rp::Result r = est->process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
         r.yaw_rate_source = m.yaw_rate_source;
         if (new_sequence) note_sequence(*frame, r);
+        if (!mounting_source.empty()) r.mounting_source = mounting_source;
+        check_mounting(r, *frame, disagreeing);
+        if (route && index == first && !at.timestamp_s && !at.pose && !o.quiet)
+            std::fprintf(stderr,
+                         "roadpreview: route: frames without timestamps are taken %g s apart "
+                         "(fusion.frame_rate_hz); give --frame-rate or --poses\n",
+                         1.0 / cfg.fusion.frame_rate_hz);
+        if (route) route->add(r, at.pose);
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
         summary.add(r);
@@ -270,6 +394,12 @@ int run(const RunOptions& o, const CLI::App& app) {
     }
     if (summary.ms.empty()) nothing_written(o, first, index);
     summary.print();
+    if (disagreeing)
+        std::fprintf(stderr,
+                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
+                     "(mounting.disagrees in the output)\n",
+                     static_cast<long long>(disagreeing));
+    if (route) write_route(o, *route);
     return 0;
 }
 
@@ -472,7 +602,9 @@ int main(int argc, char** argv) {
                         "Raw float32 .bin files: values per point, x y z first (default 5 for *.pcd.bin, else 4)")
         ->check(CLI::Range(3, 64));
     add_source_options(run_cmd, o.source);
-    auto* height = run_cmd->add_option("--sensor-height", o.sensor_height, "Sensor height above the ground, m");
+    auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
+                                       "Sensor height above the ground, m, in (0, 10] (default: estimated from the "
+                                       "first frame's ground, see the output's mounting)");
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
                      ->delimiter(',')
                      ->expected(6);
@@ -492,6 +624,15 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1.0));
     run_cmd->add_option("--poses", o.poses_file, "KITTI poses file (one 3x4 row-major pose per frame of the input): "
                                                   "moves the fusion map instead of integrating the motion");
+    run_cmd->add_option("--segments", o.segment_lengths_m,
+                        "Segment lengths along the drive, m (e.g. 10,100): per-segment class, G_d(n0), IRI to a CSV")
+        ->delimiter(',')
+        ->check(CLI::PositiveNumber);
+    run_cmd->add_option("--segments-csv", o.segments_file, "File for the --segments rows (default: OUT.segments.csv, "
+                                                            "or segments.csv without -o)");
+    run_cmd->add_option("--export-profile", o.profile_dir,
+                        "Directory for each wheel's profile stitched along the drive: left/right .csv and .erd "
+                        "(ProVAL)");
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");

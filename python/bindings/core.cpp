@@ -3,6 +3,7 @@
 // or a column slice of either); anything else is converted once. Result arrays are read-only numpy
 // views of the C++ result's buffers (no copy), kept alive by the result object.
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <type_traits>
 
@@ -176,6 +177,40 @@ rp::Profile profile_of(const DoubleArray& z, double ds,
 
 py::object optional_value(const std::optional<double>& v) { return optional_number(v.has_value(), v.value_or(0.0)); }
 
+// Short one-line descriptions for the interactive prompt: what a user checks first.
+std::string printed(const char* format, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, format, v);
+    return buf;
+}
+
+std::string iri_text(const rp::Iri& i) {
+    if (!i.value) return "None (" + i.reason + ")";
+    return printed("%.2f", *i.value) + " m/km over " + printed("%.1f", i.length_m) + " m";
+}
+
+std::string iri_repr(const rp::Iri& i) { return "<roadpreview.Iri " + iri_text(i) + ">"; }
+
+std::string roughness_repr(const rp::Roughness& r) {
+    if (!r.iso_class) return "<roadpreview.Roughness no class: " + r.reason + "; IRI " + iri_text(r.iri) + ">";
+    return "<roadpreview.Roughness class " + std::string(1, *r.iso_class) + ", G_d(n0) " + printed("%.3g", r.gd_n0) +
+           " m³, confidence " + printed("%.2f", r.confidence) + ", band " + printed("%.2f", r.band_lo) + "–" +
+           printed("%.2f", r.band_hi) + " cycles/m; IRI " + iri_text(r.iri) + ">";
+}
+
+std::string result_repr(const rp::Result& r) {
+    const auto cls = [](const rp::Roughness& x) {
+        return x.iso_class ? std::string(1, *x.iso_class) : std::string("-");
+    };
+    std::string out = "<roadpreview.Result frame " + std::to_string(r.frame);
+    if (!r.source.empty()) out += " of " + r.source;
+    out += ": " + std::to_string(r.points.input) + " points, " + std::to_string(r.points.ground) + " ground, " +
+           rp::to_string(r.path.status);
+    if (!r.reason.empty()) return out + "; no profiles: " + r.reason + ">";
+    return out + "; class left " + cls(r.left.roughness) + ", right " + cls(r.right.roughness) + ", vehicle " +
+           cls(r.vehicle) + "; " + printed("%.2f", r.timing_ms.total) + " ms>";
+}
+
 void bind_results(py::module_& m) {
     py::class_<rp::Iri>(m, "Iri", "International Roughness Index of one profile (or the mean of both wheels)")
         .def_property_readonly("value", [](const rp::Iri& i) { return optional_value(i.value); }, "m/km, or None with .reason")
@@ -184,7 +219,8 @@ void bind_results(py::module_& m) {
                                "bins of the stretch that hold points (the rest interpolated), or None when unknown")
         .def_property_readonly("reason", [](const rp::Iri& i) -> py::object {
             return i.reason.empty() ? py::object(py::none()) : py::object(py::str(i.reason));
-        });
+        })
+        .def("__repr__", &iri_repr);
 
     py::class_<rp::Roughness>(m, "Roughness", "ISO 8608 roughness of one profile (or of the vehicle)")
         .def_property_readonly("iso_class", [](const rp::Roughness& r) -> py::object {
@@ -222,7 +258,8 @@ void bind_results(py::module_& m) {
         .def_property_readonly("band_limit", [](const rp::Roughness& r) -> py::object {
             return r.band_limit.empty() ? py::object(py::none()) : py::object(py::str(r.band_limit));
         }, "what set the band's upper edge: requested, nyquist, sampling or noise")
-        .def_readonly("iri", &rp::Roughness::iri);
+        .def_readonly("iri", &rp::Roughness::iri)
+        .def("__repr__", &roughness_repr);
 
     py::class_<rp::Profile>(m, "Profile", "Height profile under one wheel, binned along its path")
         .def_readonly("s0", &rp::Profile::s0)
@@ -287,7 +324,8 @@ void bind_results(py::module_& m) {
         }, "the temporal fusion's state after this frame (docs/output.md), or None without fusion")
         .def("to_json", &rp::result_to_json, "The CLI's output line for this frame")
         .def("to_dict", [](const rp::Result& r) { return py::module_::import("json").attr("loads")(rp::result_to_json(r)); },
-             "The CLI's output line for this frame, parsed");
+             "The CLI's output line for this frame, parsed")
+        .def("__repr__", &result_repr);
 }
 
 void bind_estimator(py::module_& m) {
@@ -489,6 +527,16 @@ void bind_stages(py::module_& m) {
         return rp::profile_iri(as_vector(z), ds, config_from(config_json).iri);
     });
     m.def("iso_class", [](double gd) { return std::string(1, rp::iso_class(gd)); });
+    m.def("estimate_mounting", [](py::handle points, const std::string& config_json) -> py::object {
+        py::object holder;
+        const rp::PointsView view = points_from(points, holder);
+        const auto m = rp::estimate_mounting(view, config_from(config_json).ground);
+        if (!m) return py::none();
+        py::dict d;
+        d["height_m"] = m->height_m, d["roll_rad"] = m->roll_rad, d["pitch_rad"] = m->pitch_rad;
+        d["ground_points"] = m->ground_points;
+        return d;
+    }, "Sensor height, roll and pitch from the ground fitted to sensor-frame points, or None without ground");
     bind_obstacle_stages(m);
 }
 

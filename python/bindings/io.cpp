@@ -100,7 +100,14 @@ void bind_io(py::module_& m) {
             if (!f) throw py::stop_iteration();
             return std::move(*f);
         })
-        .def_property_readonly("info", [](const rp::FrameSource& s) { return info_dict(s.info()); });
+        .def_property_readonly("info", [](const rp::FrameSource& s) { return info_dict(s.info()); })
+        .def("__repr__", [](const rp::FrameSource& s) {
+            const rp::SourceInfo i = s.info();
+            std::string out = "<roadpreview.FrameSource " + i.format;
+            for (const std::string* part : {&i.sensor_model, &i.profile, &i.metadata})
+                if (!part->empty()) out += ", " + *part;
+            return out + ">";
+        });
 
     m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
                             const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets,

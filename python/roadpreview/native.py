@@ -117,3 +117,7 @@ def wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_
 def blocked_bins(s_start, s_end, cfg: Config | None = None):
     return core().blocked_bins(np.atleast_1d(np.asarray(s_start, dtype=float)).tolist(),
                                np.atleast_1d(np.asarray(s_end, dtype=float)).tolist(), _cfg(cfg))
+
+
+def estimate_mounting(points, cfg: Config | None = None):
+    return core().estimate_mounting(points, _cfg(cfg))

@@ -21,10 +21,11 @@ def fusion_cfg(method="kalman", **fusion):
     return rp.Config(obstacles={"enabled": False}, fusion={"method": method, **fusion})
 
 
-def noisy_road(pose, n, seed, noise=0.02):
-    """Base-frame points on z = 3 cm·sin(2πx/5) (odometry x) seen from pose (x, y, yaw); density ∝ 1/range."""
+def noisy_road(pose, n, seed, noise=0.02, direction=1.0):
+    """Base-frame points on z = 3 cm·sin(2πx/5) (odometry x) seen from pose (x, y, yaw); density ∝ 1/range; ahead
+    of the vehicle, or behind it for direction < 0 (where a reversing vehicle looks)."""
     rng = np.random.default_rng(seed)
-    x = np.exp(rng.uniform(0, math.log(40), n))
+    x = math.copysign(1.0, direction) * np.exp(rng.uniform(0, math.log(40), n))
     y = rng.uniform(-3, 3, n)
     x_odom = pose[0] + math.cos(pose[2]) * x - math.sin(pose[2]) * y
     z = 0.03 * np.sin(2 * np.pi * x_odom / 5) + rng.normal(0, noise, n)
@@ -65,7 +66,7 @@ def test_cpp_map_equals_the_reference_map(method, alpha, speed, yaw_rate, behind
     poses = [(0.0, 0.0, 0.0)]
     for _ in range(3):
         poses.append(rp.reference.integrate_motion(poses[-1], speed, yaw_rate, 0.1))
-    frames = [noisy_road(p, 4000, seed) for seed, p in enumerate(poses)]
+    frames = [noisy_road(p, 4000, seed, direction=speed) for seed, p in enumerate(poses)]
     cpp, ref = run_sequence(cfg, frames, speed, yaw_rate, [0.1 * i for i in range(4)])
     assert cpp.fusion["frames"] == 4
     assert_profiles_agree(cpp, ref)

@@ -67,3 +67,97 @@ def test_command_line_writes_the_three_pictures(tmp_path):
                           str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode != 0 and "missing.jsonl" in bad.stderr
     json.loads(out_jsonl.read_text().splitlines()[0])  # the input stays a JSONL line
+
+
+def plot_cli(jsonl, out_dir, *args):
+    return subprocess.run([sys.executable, "-m", "roadpreview.plot", str(jsonl), "-o", str(out_dir), *map(str, args)],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_straight_run_draws_straight_corridors(tmp_path):
+    out_jsonl = tmp_path / "straight.jsonl"
+    subprocess.run([cli(), "run", str(KITTI_FRAMES[0]), "--sensor-height", str(KITTI_SENSOR_HEIGHT), "--speed", "5",
+                    "-o", str(out_jsonl), "-q"], check=True)
+    line = json.loads(out_jsonl.read_text().splitlines()[0])
+    assert line["path"]["icr_y"] is None  # the CLI's path object without an arc
+    for wheel, y0 in (("left", 0.8), ("right", -0.8)):
+        x, y = plot.wheel_paths(line, 1.6, 40.0)[wheel]
+        np.testing.assert_allclose(y, y0)
+        assert x[0] == 0 and x[-1] == pytest.approx(40.0)
+    run = plot_cli(out_jsonl, tmp_path / "png", "--sensor-height", KITTI_SENSOR_HEIGHT)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "png" / "frame0_birdseye.png").exists()
+
+
+def test_reversing_corridors_lie_behind(line):
+    back = dict(line, motion=dict(line["motion"], speed=-5.0), path=None)
+    x, _ = plot.wheel_paths(back, 1.6, 40.0)["left"]
+    assert x[-1] == pytest.approx(-40.0)
+
+
+def test_pcap_output_is_plotted_from_the_recording(tmp_path):
+    from paths import OS1_128_HEIGHT, OS1_128_PCAP
+
+    out_jsonl = tmp_path / "demo.jsonl"
+    subprocess.run([cli(), "run", str(OS1_128_PCAP), "--sensor-height", str(OS1_128_HEIGHT), "--speed", "2.5",
+                    "--frames", "1:3", "-o", str(out_jsonl), "-q"], check=True)
+    run = plot_cli(out_jsonl, tmp_path / "png", "--sensor-height", OS1_128_HEIGHT)
+    assert run.returncode == 0, run.stderr
+    assert "differs" not in run.stderr  # frames 1 and 2 of the recording, found by their timestamps
+    for frame in (0, 1):
+        for kind in ("psd", "profiles", "birdseye"):
+            assert (tmp_path / "png" / f"frame{frame}_{kind}.png").exists()
+
+
+def test_a_source_that_cannot_be_read_is_skipped_with_a_note(tmp_path, line):
+    jsonl = tmp_path / "moved.jsonl"
+    jsonl.write_text(json.dumps(dict(line, source=str(tmp_path / "gone.pcap"))) + "\n")
+    run = plot_cli(jsonl, tmp_path / "png")
+    assert run.returncode == 0, run.stderr
+    assert "gone.pcap" in run.stderr and "bird's-eye view skipped" in run.stderr
+    assert (tmp_path / "png" / "frame0_psd.png").exists() and not (tmp_path / "png" / "frame0_birdseye.png").exists()
+
+
+def test_psd_panels_share_one_y_range_and_keep_class_labels_inside(line):
+    ylim = plot.psd_ylim(line["roughness"][side] for side in ("left", "right", "vehicle"))
+    fig, axes = matplotlib.pyplot.subplots(1, 3)
+    for ax, side in zip(axes, ("left", "right", "vehicle")):
+        plot.plot_psd(line["roughness"][side], ax, ylim=ylim)
+    assert len({ax.get_ylim() for ax in axes}) == 1
+    for ax in axes:
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        labels = [t for t in ax.texts if t.get_text() in "ABCDEFGH"]
+        assert labels and all(x0 < t.get_position()[0] < x1 and y0 < t.get_position()[1] < y1 for t in labels)
+        legend = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "ISO 8608 classes A–H" in legend and "analysis band" in legend  # every shading is named
+    matplotlib.pyplot.close(fig)
+
+
+def test_long_titles_are_wrapped(line):
+    ax = plot.plot_psd(line["roughness"]["left"], title="left: " + "a very long reason " * 8)
+    assert "\n" in ax.get_title()
+
+
+def test_profile_plot_shows_blocked_bins_and_names_every_shading(line):
+    blocked = dict(line["profiles"]["left"])
+    n = len(blocked["z"])
+    blocked["blocked"] = [10 <= k < 30 for k in range(n)]
+    blocked["z"] = [None if 10 <= k < 30 else z for k, z in enumerate(blocked["z"])]
+    ax = plot.plot_profiles(dict(line, profiles=dict(line["profiles"], left=blocked)))
+    hatched = [p for p in ax.patches if p.get_hatch()]
+    assert hatched and hatched[0].get_label() == "left: blocked by an obstacle"
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"left: missing", "left: blocked by an obstacle", "left wheel"} <= set(legend)
+
+
+def test_birdseye_keeps_the_icr_marker_in_view_and_the_legend_outside(line):
+    points = rp.io.read(KITTI_FRAMES[0])
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    base, finite = rp.reference.to_base_frame(points, cfg)
+    ground = np.asarray(rp.Estimator(cfg).process(points, 5.0, 0.05).ground_mask)[finite]
+    ax = plot.plot_birdseye(base, ground, line)  # ICR at y = 100 m: far off the view
+    marker = next(l for l in ax.get_lines() if l.get_label().startswith("ICR"))
+    y = marker.get_ydata()[0]
+    assert ax.get_ylim()[0] < y < ax.get_ylim()[1] and "off the view" in marker.get_label()
+    anchor = ax.get_legend().get_bbox_to_anchor().transformed(ax.transAxes.inverted())
+    assert anchor.x0 >= 1.0  # the legend sits right of the axes, clear of the marker and the corridors

@@ -602,7 +602,7 @@ def test_process_reverse_turn_uses_points_behind(impl):
     rng = np.random.default_rng(8)
     points, _ = road_scene(rng)
     points[:, 0] -= 45.0  # the whole scene is behind the vehicle
-    cfg = Config(sensor_height=1.8, ground={"roi_x_min_m": -40.0, "roi_x_max_m": -1.0})
+    cfg = Config(sensor_height=1.8)  # reversing mirrors the (front) region of interest: no ROI to configure
     result = impl.process(points, -5.0, -0.2, cfg)
     assert result.path["status"] == "arc" and result.path["icr_y"] == pytest.approx(25.0)
     assert result.left.count.sum() > 100 and result.right.count.sum() > 100

@@ -7,6 +7,7 @@
 #include "roadpreview/core/frames.hpp"
 #include "roadpreview/fusion/fusion.hpp"
 #include "roadpreview/ground/ground.hpp"
+#include "roadpreview/ground/mounting.hpp"
 #include "roadpreview/io/readers.hpp"
 #include "roadpreview/io/ouster.hpp"
 #include "roadpreview/io/pcap.hpp"
@@ -19,4 +20,5 @@
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/roughness.hpp"
 #include "roadpreview/roughness/support.hpp"
+#include "roadpreview/route/route.hpp"
 #include "roadpreview/version.hpp"

@@ -168,7 +168,10 @@ void migrate_old_names(json& j) {
 
 void validate(const Config& c) {
     require(!(c.sensor_height && c.extrinsics), "set sensor_height or extrinsics, not both");
-    if (c.sensor_height) require(std::isfinite(*c.sensor_height), "sensor_height must be finite");
+    if (c.sensor_height)
+        require(std::isfinite(*c.sensor_height) && *c.sensor_height > 0.0 && *c.sensor_height <= kMaxSensorHeightM,
+                "sensor_height must be above 0 and at most " + std::to_string(static_cast<int>(kMaxSensorHeightM)) +
+                    " m (the sensor's height above the ground), got " + std::to_string(*c.sensor_height));
     if (c.extrinsics) {
         const Extrinsics& e = *c.extrinsics;
         for (double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad})

@@ -19,6 +19,14 @@ RigidTransform to_rigid_transform(const Extrinsics& e) {
                           {e.x_m, e.y_m, e.z_m}};
 }
 
+GroundConfig roi_facing(const GroundConfig& g, double direction) {
+    if (direction >= 0.0) return g;
+    GroundConfig behind = g;
+    behind.roi_x_min_m = -g.roi_x_max_m;
+    behind.roi_x_max_m = -g.roi_x_min_m;
+    return behind;
+}
+
 namespace {
 
 // ROI cells: columns about the clustering's reach and the obstacles' ground columns wide, so that neighbours in

@@ -3,6 +3,8 @@
 // timing (the time between the first two packets): some early VLP-16 firmware reports an HDL-32E.
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/io/velodyne.hpp"
@@ -67,7 +69,11 @@ private:
         VelodyneModel model;
         if (forced_) {
             model = *forced_;
-            info_.notes.push_back(std::string("model given: ") + to_string(model));
+            std::string note = std::string("model given: ") + to_string(model);
+            const auto [detected, how] = detect_model(factory, second);
+            if (detected && *detected != model)
+                note += "; the packets say " + std::string(to_string(*detected)) + " (" + how + "): decoded as given";
+            info_.notes.push_back(note);
         } else {
             model = choose_model(factory, second);
         }
@@ -93,7 +99,10 @@ private:
         }
     }
 
-    VelodyneModel choose_model(const VelodyneFactory& factory, const UdpDatagram* second) {
+    // The model the factory byte and the time between the first two packets point to (the timing wins), and
+    // how it was told.
+    std::pair<std::optional<VelodyneModel>, std::string> detect_model(const VelodyneFactory& factory,
+                                                                      const UdpDatagram* second) const {
         std::optional<VelodyneModel> timed;
         double period = 0.0;
         if (second) {
@@ -106,10 +115,13 @@ private:
         note << "factory byte 0x" << std::hex << factory.product_id << std::dec << " ("
              << (factory.model ? to_string(*factory.model) : "unknown") << ")";
         if (second) note << ", packets " << period << " µs apart (" << (timed ? to_string(*timed) : "no known model") << ")";
-        const auto model = timed ? timed : factory.model;
-        if (!model) fail("cannot tell the Velodyne model: " + note.str() + "; pass --sensor-model");
-        note << ": decoded as " << to_string(*model);
-        info_.notes.push_back(note.str());
+        return {timed ? timed : factory.model, note.str()};
+    }
+
+    VelodyneModel choose_model(const VelodyneFactory& factory, const UdpDatagram* second) {
+        const auto [model, how] = detect_model(factory, second);
+        if (!model) fail("cannot tell the Velodyne model: " + how + "; pass --sensor-model");
+        info_.notes.push_back(how + ": decoded as " + to_string(*model));
         return *model;
     }
 

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "roadpreview/ground/mounting.hpp"
 #include "roadpreview/pipeline/pipeline.hpp"
 
 namespace roadpreview {
@@ -102,6 +103,19 @@ json path_json(const WheelPaths& p, const std::string& yaw_rate_source) {
     return out;
 }
 
+// The extrinsics in force, where they came from, and how the fitted ground sits in the base frame.
+json mounting_json(const Result& r) {
+    const Extrinsics& e = r.extrinsics;
+    json out = {{"extrinsics", {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad}},
+                {"source", r.mounting_source.empty() ? json(nullptr) : json(r.mounting_source)},
+                {"ground_offset", nullptr}, {"ground_tilt_deg", nullptr}, {"disagrees", nullptr}};
+    if (r.plane) {
+        const MountingCheck c = check_mounting(*r.plane);
+        out["ground_offset"] = c.offset_m, out["ground_tilt_deg"] = c.tilt_deg, out["disagrees"] = c.disagrees;
+    }
+    return out;
+}
+
 json fusion_json(const std::optional<FusionStatus>& f, double time_ms) {
     if (!f) return nullptr;
     return {{"method", to_string(f->method)}, {"frames", f->frames}, {"coverage", f->coverage},
@@ -121,6 +135,7 @@ std::string result_to_json(const Result& r) {
                     {"ground", r.points.ground}}},
         {"ground", {{"method", to_string(r.ground_method)},
                     {"plane", r.plane ? json(*r.plane) : json(nullptr)}}},
+        {"mounting", mounting_json(r)},
         {"path", path_json(r.path, r.yaw_rate_source)},
         {"obstacles", clusters_json(r.obstacles)},
         {"profiles", {{"left", profile_json(r.left)}, {"right", profile_json(r.right)}}},

@@ -127,12 +127,14 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     r.yaw_rate_rps = yaw_rate_rps;
     r.ground_method = cfg.ground.method;
     r.timestamp = motion.timestamp_s;
+    r.extrinsics = effective_extrinsics(cfg);
+    r.mounting_source = cfg.sensor_height || cfg.extrinsics ? "given" : "none";
     TemporalFusion* fusion = impl_->fusion ? &*impl_->fusion : nullptr;
     if (fusion) fusion->advance(speed_mps, yaw_rate_rps, motion, r.fusion.emplace());
     r.timing_ms.fusion = ms_since(mark);
 
     RoiCloud& roi = impl_->roi;
-    crop_roi(points, impl_->sensor_to_base, cfg.ground, roi);
+    crop_roi(points, impl_->sensor_to_base, roi_facing(cfg.ground, r.path.direction), roi);  // behind when reversing
     const GroundFit ground = fit_ground(roi, cfg.ground);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;

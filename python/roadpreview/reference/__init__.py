@@ -10,9 +10,11 @@ from .fusion import FusedMap, integrate_motion, process_fused
 from .ground import fit_ground, fit_plane
 from .obstacles import Obstacles, PathObstacles, blocked_bins, cluster_labels, find_obstacles, wheel_obstacles
 from .iri import Iri, profile_iri, rectified_slope
+from .mounting import check_mounting, estimate_mounting, mounting_from_plane
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
+from .route import Route, Stitched
 from .roughness import (
     ISO_CLASSES,
     ISO_GEOMETRIC_MEANS,
@@ -36,7 +38,9 @@ __all__ = [
     "FusedMap",
     "Profile",
     "Result",
+    "Route",
     "Roughness",
+    "Stitched",
     "analyze_roughness",
     "blocked_bins",
     "cluster_labels",
@@ -48,6 +52,9 @@ __all__ = [
     "profile_iri",
     "rectified_slope",
     "resolved_fraction",
+    "check_mounting",
+    "estimate_mounting",
+    "mounting_from_plane",
     "fit_ground",
     "fit_plane",
     "integrate_motion",

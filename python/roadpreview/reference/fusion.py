@@ -15,7 +15,7 @@ import numpy as np
 
 from ..config import Config
 from .frames import check_points, to_base_frame
-from .ground import NO_GROUND, ground_model
+from .ground import NO_GROUND, ground_model, roi_facing
 from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
@@ -250,7 +250,8 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, _ = to_base_frame(points, cfg)
-    model = ground_model(base_xyz, cfg) if len(base_xyz) else None
+    facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
+    model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]

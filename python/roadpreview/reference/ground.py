@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -26,6 +27,16 @@ def roi_mask(base_xyz: np.ndarray, cfg: Config) -> np.ndarray:
     g = cfg.ground
     x, y = base_xyz[:, 0], base_xyz[:, 1]
     return (x >= g.roi_x_min_m) & (x <= g.roi_x_max_m) & (np.abs(y) <= g.roi_y_abs_max_m)
+
+
+def roi_facing(cfg: Config, direction: float) -> Config:
+    """``cfg`` with the region of interest behind the vehicle when reversing (direction < 0): x in
+    [-roi_x_max_m, -roi_x_min_m]; unchanged otherwise."""
+    if direction >= 0:
+        return cfg
+    g = cfg.ground
+    behind = dataclasses.replace(g, roi_x_min_m=-g.roi_x_max_m, roi_x_max_m=-g.roi_x_min_m)
+    return dataclasses.replace(cfg, ground=behind)
 
 
 def fit_plane(points_xyz) -> np.ndarray:

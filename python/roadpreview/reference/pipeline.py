@@ -9,7 +9,7 @@ import numpy as np
 
 from ..config import Config
 from .frames import check_points, to_base_frame
-from .ground import ground_model, roi_mask
+from .ground import ground_model, roi_facing, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
@@ -29,6 +29,22 @@ class Result:
     reason: Optional[str] = None
     obstacles: Optional[Obstacles] = None  #: every cluster; None when clustering is off
     cluster_labels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))  #: per input row
+    speed: float = 0.0  #: m/s, the motion the paths were planned from
+    yaw_rate: float = 0.0  #: rad/s
+    config: Config = field(default_factory=Config)  #: the configuration the frame was processed with
+
+    def to_dict(self) -> dict:
+        """The output line of docs/output.md (timing_ms and fusion are null: the reference has neither)."""
+        from .output import result_to_dict
+
+        return result_to_dict(self)
+
+    def __repr__(self) -> str:
+        classes = ", ".join(f"{name} {r.iso_class or '-'}" for name, r in
+                            (("left", self.left.roughness), ("right", self.right.roughness), ("vehicle", self.vehicle)))
+        head = f"<roadpreview.reference.Result {self.points['input']} points, {self.points['ground']} ground, " \
+               f"{self.path['status']}"
+        return f"{head}; no profiles: {self.reason}>" if self.reason else f"{head}; class {classes}>"
 
 
 def _without_profiles(ground_mask, plane, counts, path, reason: str, cfg: Config, obstacles, labels) -> Result:
@@ -54,7 +70,15 @@ def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
+    result = _process(points, speed, yaw_rate, cfg)
+    result.speed, result.yaw_rate, result.config = speed, yaw_rate, cfg
+    return result
+
+
+def _process(points, speed: float, yaw_rate: float, cfg: Config) -> Result:
     path = plan_path(speed, yaw_rate, cfg)
+    if path["status"] != "stopped":
+        cfg = roi_facing(cfg, speed)  # reversing looks behind
     base_xyz, finite = to_base_frame(points, cfg)
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)

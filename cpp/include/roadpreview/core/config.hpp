@@ -119,6 +119,9 @@ struct Config {
     FusionConfig fusion;
 };
 
+/// Highest sensor_height accepted, m: a mast, not a vehicle, is higher.
+constexpr double kMaxSensorHeightM = 10.0;
+
 /// Throws std::invalid_argument naming the first offending field.
 void validate(const Config& cfg);
 

@@ -59,6 +59,10 @@ struct Result {
     /// output line's `path` is an object for every motion status and carries it (docs/output.md).
     std::string yaw_rate_source;
     std::optional<FusionStatus> fusion;  ///< nullopt when fusion.method is "none" (docs/method.md §7)
+    Extrinsics extrinsics;               ///< the sensor's pose the points were moved into the base frame by
+    /// Where the extrinsics came from: "given" (sensor_height or extrinsics in the config), "none" (neither:
+    /// the points are taken as base-frame points), or the caller's word, e.g. "estimated" (see estimate_mounting).
+    std::string mounting_source;
 };
 
 /// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Route outputs (docs/method.md §10): the frames' wheel-path profiles stitched along the drive into one
+// longitudinal profile per wheel, its segments classified (ISO 8608, IRI), and the files a road engineer reads:
+// a segments CSV, each wheel's profile as CSV and in the ERD text format (UMTRI; read by ProVAL).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/fusion/fusion.hpp"
+#include "roadpreview/pipeline/pipeline.hpp"
+#include "roadpreview/roughness/iri.hpp"
+#include "roadpreview/roughness/roughness.hpp"
+
+namespace roadpreview {
+
+/// One wheel's profile along the drive: bin j covers drive distance [j·ds, (j+1)·ds) from the first frame.
+struct StitchedProfile {
+    double ds = 0.0;
+    std::vector<double> z;              ///< m, levelled height; NaN where missing
+    std::vector<std::int32_t> count;    ///< points behind the bin, summed over the frames that saw it
+    std::vector<double> spread;         ///< m, spread of those points' heights; NaN below two points
+    std::vector<std::int32_t> frames;   ///< frames whose profile backed the bin with points
+};
+
+/// One wheel's (or, for `vehicle`, both wheels') result over one segment.
+struct SegmentWheel {
+    Roughness roughness;           ///< §4 over the segment's longest valid stretch (noise-aware)
+    Iri iri;                       ///< the quarter-car run over the whole stitched stretch, averaged over the segment
+    double backed_fraction = 0.0;  ///< fraction of the segment's bins that hold points
+};
+
+struct RouteSegment {
+    double length_m = 0.0;                ///< the segment length asked for
+    double start_m = 0.0, end_m = 0.0;    ///< drive distance; the last segment may end short
+    std::optional<Pose2> start, end;      ///< where the drive was there (only when poses were given)
+    SegmentWheel left, right, vehicle;
+};
+
+/// Stitches each frame's profiles into the drive's (docs/method.md §10). Feed the frames in order.
+class RouteBuilder {
+public:
+    explicit RouteBuilder(const Config& cfg);  ///< throws std::invalid_argument on a bad config
+
+    /// Adds one frame: its distance along the drive from `pose` (when given) or from |speed| times the time
+    /// since the previous frame (its timestamps, else 1 / fusion.frame_rate_hz). Throws std::invalid_argument
+    /// when the time goes back or poses are given for some frames only.
+    void add(const Result& r, const std::optional<Pose2>& pose = std::nullopt);
+
+    std::size_t frames() const { return frames_; }
+    double distance_m() const { return distance_m_; }  ///< driven by the last frame added
+    /// The stitched profile with interior gaps up to profile.max_gap_m filled (filled bins keep count 0).
+    StitchedProfile left() const;
+    StitchedProfile right() const;
+    /// Consecutive segments of `length_m` from 0 to the end of the stitched profiles.
+    std::vector<RouteSegment> segments(double length_m) const;
+
+private:
+    struct WheelSums {
+        std::vector<double> weight, weighted_z, weighted_square;  // Σc, Σc·z, Σc·(spread² + z²)
+        std::vector<std::int32_t> count, frames;
+        std::vector<std::size_t> last_frame;  // the last frame (1-based) that added to the bin
+    };
+    void stitch(const Profile& p, double scale, WheelSums& w);
+    StitchedProfile finished(const WheelSums& w) const;
+    std::optional<Pose2> pose_at(double distance_m) const;
+
+    Config cfg_;
+    WheelSums left_, right_;
+    std::size_t frames_ = 0;
+    double distance_m_ = 0.0;
+    std::optional<double> last_timestamp_;
+    std::optional<Pose2> last_pose_;
+    std::vector<std::pair<double, Pose2>> track_;  // (distance, pose) of each frame, with poses only
+};
+
+/// The segments as CSV rows, one per segment (columns in docs/output.md, "Route outputs").
+void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segments);
+/// One wheel's stitched profile as CSV: distance_m, z_m, count, frames, filled.
+void write_profile_csv(std::ostream& out, const StitchedProfile& p);
+/// One wheel's stitched profile in the ERD text format over its longest valid stretch (heights in mm);
+/// throws std::runtime_error when there is none.
+void write_profile_erd(std::ostream& out, const StitchedProfile& p, const std::string& wheel,
+                       const std::string& title);
+
+}  // namespace roadpreview

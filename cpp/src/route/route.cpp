@@ -1,0 +1,216 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/route/route.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <stdexcept>
+
+#include "core/median.hpp"
+#include "roadpreview/profile/profile.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kMinSharedBins = 10;  // a frame is levelled onto the drive only over ≥ 1 m of shared road
+
+// Drive distance per metre of a wheel's arc length: |y_icr| / r_w on an arc, 1 on a straight path.
+double drive_per_wheel_metre(const WheelPaths& p, Wheel w) {
+    if (p.status != PathStatus::Arc || p.radius(w) <= 0.0) return 1.0;
+    return std::abs(p.icr_y) / p.radius(w);
+}
+
+template <typename T>
+void grow(std::vector<T>& v, std::size_t size, T fill) {
+    if (v.size() < size) v.resize(size, fill);
+}
+
+// The golden car's rectified slope placed at the bin the car has reached, run over every valid stretch of
+// an all-filled profile (NaN outside them and over each stretch's first moving average).
+std::vector<double> rectified_slope_by_bin(const std::vector<double>& z, double ds) {
+    std::vector<double> out(z.size(), kNaN);
+    std::size_t first = 0;
+    while (first < z.size()) {
+        if (!std::isfinite(z[first])) {
+            ++first;
+            continue;
+        }
+        std::size_t last = first;
+        while (last < z.size() && std::isfinite(z[last])) ++last;
+        const std::vector<double> rs = iri_rectified_slope(z.data() + first, last - first, ds);
+        const std::size_t lag = (last - first) - rs.size();  // the moving average's samples
+        for (std::size_t i = 0; i < rs.size(); ++i) out[first + lag + i] = rs[i];
+        first = last;
+    }
+    return out;
+}
+
+// IRI over bins [j0, j1): the mean rectified slope there, when the car ran over every one of them.
+Iri segment_iri(const std::vector<double>& slope_by_bin, std::size_t j0, std::size_t j1, double ds) {
+    Iri out;
+    double sum = 0.0;
+    for (std::size_t j = j0; j < j1; ++j) {
+        if (j >= slope_by_bin.size() || !std::isfinite(slope_by_bin[j])) {
+            out.reason = "segment not covered by one valid stretch";
+            return out;
+        }
+        sum += slope_by_bin[j];
+    }
+    if (j1 <= j0) {
+        out.reason = "no valid profile";
+        return out;
+    }
+    out.value = 1000.0 * sum / static_cast<double>(j1 - j0);
+    out.length_m = static_cast<double>(j1 - j0) * ds;
+    return out;
+}
+
+Profile segment_profile(const StitchedProfile& p, std::size_t j0, std::size_t j1) {
+    Profile out;
+    out.ds = p.ds;
+    out.s0 = (static_cast<double>(j0) + 0.5) * p.ds;
+    for (std::size_t j = j0; j < j1; ++j) {
+        const bool inside = j < p.z.size();
+        out.s.push_back((static_cast<double>(j) + 0.5) * p.ds);
+        out.z.push_back(inside ? p.z[j] : kNaN);
+        out.count.push_back(inside ? p.count[j] : 0);
+        out.spread.push_back(inside ? p.spread[j] : kNaN);
+    }
+    return out;
+}
+
+double backed_fraction(const Profile& p) {
+    if (p.count.empty()) return 0.0;
+    const auto backed = std::count_if(p.count.begin(), p.count.end(), [](std::int32_t c) { return c > 0; });
+    return static_cast<double>(backed) / static_cast<double>(p.count.size());
+}
+
+Pose2 interpolate(const Pose2& a, const Pose2& b, double t) {
+    const double dyaw = std::remainder(b.yaw_rad - a.yaw_rad, 2.0 * M_PI);
+    return {a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m), a.yaw_rad + t * dyaw};
+}
+
+}  // namespace
+
+RouteBuilder::RouteBuilder(const Config& cfg) : cfg_(cfg) { validate(cfg); }
+
+void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
+    const std::string frame =
+        "route: frame " + std::to_string(frames_) + (r.source.empty() ? "" : " (" + r.source + ")");
+    if (frames_ > 0 && pose.has_value() != last_pose_.has_value())
+        throw std::invalid_argument(frame + ": poses must be given for every frame or for none");
+    if (frames_ > 0 && pose) {
+        distance_m_ += std::hypot(pose->x_m - last_pose_->x_m, pose->y_m - last_pose_->y_m);
+    } else if (frames_ > 0) {
+        double dt_s = 1.0 / cfg_.fusion.frame_rate_hz;
+        if (r.timestamp && last_timestamp_) dt_s = *r.timestamp - *last_timestamp_;
+        if (dt_s < 0.0)
+            throw std::invalid_argument(frame + " is " + std::to_string(-dt_s) + " s before the previous frame");
+        distance_m_ += std::abs(r.speed_mps) * dt_s;
+    }
+    ++frames_;
+    last_timestamp_ = r.timestamp;
+    last_pose_ = pose;
+    if (pose) track_.emplace_back(distance_m_, *pose);
+    if (!r.reason.empty()) return;  // no profiles: the frame only moves the drive on
+    stitch(r.left, drive_per_wheel_metre(r.path, Wheel::Left), left_);
+    stitch(r.right, drive_per_wheel_metre(r.path, Wheel::Right), right_);
+}
+
+// The frame's backed bins, shifted by the median of their differences to the drive's profile where both
+// hold data (each frame's heights are relative to its own ground plane), added with their point counts as
+// weights.
+void RouteBuilder::stitch(const Profile& p, double scale, WheelSums& w) {
+    const double ds = cfg_.profile.ds_m;
+    std::vector<std::pair<std::size_t, std::size_t>> bins;  // (drive bin, profile bin)
+    std::vector<double> differences;
+    for (std::size_t k = 0; k < p.z.size(); ++k) {
+        if (p.count[k] <= 0 || !std::isfinite(p.z[k])) continue;
+        const double d = distance_m_ + p.s[k] * scale;
+        if (d < 0.0) continue;
+        const auto j = static_cast<std::size_t>(std::floor(d / ds));
+        bins.emplace_back(j, k);
+        if (j < w.weight.size() && w.weight[j] > 0.0) differences.push_back(p.z[k] - w.weighted_z[j] / w.weight[j]);
+    }
+    const double offset = differences.size() >= kMinSharedBins ? median(differences.begin(), differences.end()) : 0.0;
+    for (const auto& [j, k] : bins) {
+        grow(w.weight, j + 1, 0.0);
+        grow(w.weighted_z, j + 1, 0.0);
+        grow(w.weighted_square, j + 1, 0.0);
+        grow(w.count, j + 1, 0);
+        grow(w.frames, j + 1, 0);
+        grow(w.last_frame, j + 1, std::size_t{0});
+        const double c = p.count[k], z = p.z[k] - offset;
+        const double spread = std::isfinite(p.spread[k]) ? p.spread[k] : 0.0;
+        w.weight[j] += c;
+        w.weighted_z[j] += c * z;
+        w.weighted_square[j] += c * (spread * spread + z * z);
+        w.count[j] += p.count[k];
+        if (w.last_frame[j] != frames_) w.frames[j] += 1;
+        w.last_frame[j] = frames_;
+    }
+}
+
+StitchedProfile RouteBuilder::finished(const WheelSums& w) const {
+    StitchedProfile out;
+    out.ds = cfg_.profile.ds_m;
+    out.count = w.count;
+    out.frames = w.frames;
+    for (std::size_t j = 0; j < w.weight.size(); ++j) {
+        const double mean = w.weight[j] > 0.0 ? w.weighted_z[j] / w.weight[j] : kNaN;
+        const double variance =
+            w.weight[j] > 0.0 ? std::max(0.0, w.weighted_square[j] / w.weight[j] - mean * mean) : kNaN;
+        out.z.push_back(mean);
+        out.spread.push_back(w.count[j] >= 2 ? std::sqrt(variance) : kNaN);
+    }
+    fill_gaps(out.z, out.ds, cfg_.profile.max_gap_m);
+    return out;
+}
+
+StitchedProfile RouteBuilder::left() const { return finished(left_); }
+StitchedProfile RouteBuilder::right() const { return finished(right_); }
+
+std::optional<Pose2> RouteBuilder::pose_at(double distance_m) const {
+    if (track_.empty()) return std::nullopt;
+    if (distance_m <= track_.front().first) return track_.front().second;
+    for (std::size_t i = 1; i < track_.size(); ++i) {
+        const auto& [d0, p0] = track_[i - 1];
+        const auto& [d1, p1] = track_[i];
+        if (distance_m <= d1) return d1 > d0 ? interpolate(p0, p1, (distance_m - d0) / (d1 - d0)) : p1;
+    }
+    return track_.back().second;  // the road ahead of the last frame: where the drive was last seen
+}
+
+std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
+    if (!(length_m > 0.0) || !std::isfinite(length_m))
+        throw std::invalid_argument("route: segment length must be a positive number of metres, got " +
+                                    std::to_string(length_m));
+    const StitchedProfile l = left(), r = right();
+    const double ds = cfg_.profile.ds_m;
+    const std::size_t bins = std::max(l.z.size(), r.z.size());
+    const std::vector<double> slope_l = rectified_slope_by_bin(l.z, ds), slope_r = rectified_slope_by_bin(r.z, ds);
+    std::vector<RouteSegment> out;
+    for (std::size_t k = 0;; ++k) {
+        const auto j0 = static_cast<std::size_t>(std::llround(static_cast<double>(k) * length_m / ds));
+        if (j0 >= bins) break;
+        const auto end = static_cast<std::size_t>(std::llround(static_cast<double>(k + 1) * length_m / ds));
+        const auto j1 = std::min(bins, end);
+        RouteSegment s;
+        s.length_m = length_m;
+        s.start_m = static_cast<double>(j0) * ds;
+        s.end_m = static_cast<double>(j1) * ds;
+        s.start = pose_at(s.start_m);
+        s.end = pose_at(s.end_m);
+        const Profile pl = segment_profile(l, j0, j1), pr = segment_profile(r, j0, j1);
+        s.left = {analyze_roughness(pl, cfg_.roughness), segment_iri(slope_l, j0, j1, ds), backed_fraction(pl)};
+        s.right = {analyze_roughness(pr, cfg_.roughness), segment_iri(slope_r, j0, j1, ds), backed_fraction(pr)};
+        s.vehicle = {vehicle_roughness(pl, pr, cfg_.roughness), vehicle_iri(s.left.iri, s.right.iri),
+                     0.5 * (s.left.backed_fraction + s.right.backed_fraction)};
+        out.push_back(std::move(s));
+    }
+    return out;
+}
+
+}  // namespace roadpreview

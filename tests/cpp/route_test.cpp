@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// RouteBuilder: frames' profiles stitched along the drive (docs/method.md §8), their segments and files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <roadpreview/route/route.hpp>
+
+namespace rp = roadpreview;
+
+namespace {
+
+constexpr double kDs = 0.1;
+constexpr double kPi = 3.14159265358979323846;
+
+double road(double d) { return 0.01 * std::sin(2.0 * kPi * d / 7.0); }
+
+// A frame at drive distance `at_m` that saw 30 m of the road ahead of each wheel, shifted by `offset`.
+rp::Result frame(int index, double at_m, double offset) {
+    rp::Result r;
+    r.frame = index;
+    r.timestamp = 0.1 * index;
+    r.speed_mps = 10.0;
+    r.path.status = rp::PathStatus::Straight;
+    r.path.direction = 1.0;
+    for (rp::Profile* p : {&r.left, &r.right}) {
+        p->ds = kDs;
+        for (int k = 0; k < 300; ++k) {
+            const double s = (k + 0.5) * kDs;
+            p->s.push_back(s);
+            p->z.push_back(road(at_m + s) + offset);
+            p->count.push_back(3);
+            p->spread.push_back(0.0);
+        }
+    }
+    return r;
+}
+
+}  // namespace
+
+TEST(Route, KnownRoadIsStitchedWholeWhateverEachFrameOffset) {
+    rp::RouteBuilder route{rp::Config{}};
+    const std::vector<double> offsets = {0.02, -0.03, 0.05, 0.0, 0.01};
+    for (int f = 0; f < 5; ++f) route.add(frame(f, f * 1.0, offsets[f]));
+    EXPECT_NEAR(route.distance_m(), 4.0, 1e-12);
+    const rp::StitchedProfile p = route.left();
+    ASSERT_EQ(p.z.size(), 340u);
+    for (std::size_t j = 0; j < p.z.size(); ++j) EXPECT_NEAR(p.z[j], road((j + 0.5) * kDs) + offsets[0], 1e-12) << j;
+    EXPECT_EQ(p.frames[0], 1);
+    EXPECT_EQ(p.frames[45], 5);
+    EXPECT_EQ(p.count[45], 15);
+}
+
+TEST(Route, SegmentsCoverTheStitchedRoadAndRunTheQuarterCarOverTheWholeStretch) {
+    rp::RouteBuilder route{rp::Config{}};
+    for (int f = 0; f < 5; ++f) route.add(frame(f, f * 1.0, 0.0));
+    const auto segments = route.segments(10.0);
+    ASSERT_EQ(segments.size(), 4u);  // 34 m: three of 10 m and one of 4 m
+    EXPECT_DOUBLE_EQ(segments[3].start_m, 30.0);
+    EXPECT_NEAR(segments[3].end_m, 34.0, 1e-9);
+    const rp::StitchedProfile p = route.left();
+    const std::vector<double> slopes = rp::iri_rectified_slope(p.z.data(), p.z.size(), kDs);
+    const std::size_t lag = p.z.size() - slopes.size();
+    double sum = 0.0;
+    for (std::size_t j = 100; j < 200; ++j) sum += slopes[j - lag];
+    ASSERT_TRUE(segments[1].left.iri.value);
+    EXPECT_NEAR(*segments[1].left.iri.value, 1000.0 * sum / 100.0, 1e-9);
+    EXPECT_FALSE(segments[0].left.iri.value);  // its first bins precede the moving average
+    EXPECT_DOUBLE_EQ(segments[1].left.backed_fraction, 1.0);
+    EXPECT_TRUE(segments[1].vehicle.roughness.iso_class.has_value());
+    EXPECT_FALSE(segments[1].start.has_value());  // no poses
+}
+
+TEST(Route, PosesGiveDistanceAndPlace) {
+    rp::RouteBuilder route{rp::Config{}};
+    route.add(frame(0, 0.0, 0.0), rp::Pose2{5.0, 1.0, 0.0});
+    route.add(frame(1, 3.0, 0.0), rp::Pose2{5.0, 4.0, 0.0});
+    EXPECT_NEAR(route.distance_m(), 3.0, 1e-12);
+    const auto segments = route.segments(2.0);
+    ASSERT_TRUE(segments[0].end.has_value());
+    EXPECT_NEAR(segments[0].end->y_m, 3.0, 1e-12);
+    EXPECT_THROW(route.add(frame(2, 4.0, 0.0)), std::invalid_argument);  // a pose for every frame or none
+}
+
+TEST(Route, TimeGoingBackAndBadLengthsAreErrors) {
+    rp::RouteBuilder route{rp::Config{}};
+    route.add(frame(3, 0.0, 0.0));
+    EXPECT_THROW(route.add(frame(1, 0.0, 0.0)), std::invalid_argument);
+    EXPECT_THROW(route.segments(0.0), std::invalid_argument);
+    EXPECT_THROW(route.segments(std::nan("")), std::invalid_argument);
+}
+
+TEST(Route, ErdHeaderAndSamples) {
+    rp::RouteBuilder route{rp::Config{}};
+    route.add(frame(0, 0.0, 0.0));
+    std::ostringstream erd;
+    rp::write_profile_erd(erd, route.left(), "left", "test");
+    std::istringstream in(erd.str());
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "ERDFILEV2.00");
+    std::getline(in, line);
+    EXPECT_NE(line.find("300,"), std::string::npos);
+    EXPECT_NE(line.find("0.1000"), std::string::npos);
+    while (std::getline(in, line) && line != "END") {
+    }
+    double first = 0.0;
+    in >> first;
+    EXPECT_NEAR(first, 1000.0 * road(0.05), 1e-3);
+    rp::RouteBuilder empty{rp::Config{}};
+    EXPECT_THROW(rp::write_profile_erd(erd, empty.left(), "left", "test"), std::runtime_error);
+}

@@ -1,0 +1,100 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Mounting sanity: the sensor's height and tilt read off the ground (C++ and numpy reference), used when none
+is given and checked against a given one; heights and source options that cannot be right are refused."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from roadpreview import native
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, VELODYNE
+from paths import run_cli as run
+
+IMPLEMENTATIONS = {"cpp": native.estimate_mounting, "reference": rp.reference.estimate_mounting}
+
+
+def sensor_frame_ground(height, roll, pitch, seed=0):
+    """A flat ground z = 0 in the base frame with some boxes on it, seen from a sensor at (0, 0, height) tilted
+    by roll and pitch: p_sensor = Rᵀ(p_base − t)."""
+    rng = np.random.default_rng(seed)
+    base = np.column_stack([rng.uniform(2, 38, 20000), rng.uniform(-9, 9, 20000), rng.normal(0, 0.005, 20000)])
+    boxes = np.column_stack([rng.uniform(10, 12, 500), rng.uniform(3, 4, 500), rng.uniform(0.3, 1.5, 500)])
+    base = np.vstack([base, boxes])
+    rotation = rp.reference.frames.rotation_matrix(roll, pitch, 0.0)
+    return ((base - [0, 0, height]) @ rotation).astype(np.float32)
+
+
+@pytest.mark.parametrize("impl", IMPLEMENTATIONS)
+@pytest.mark.parametrize("height, roll, pitch", [(1.73, 0.0, 0.0), (2.1, 0.03, -0.05), (0.6, -0.02, 0.08)])
+def test_height_and_tilt_come_back_from_the_ground(impl, height, roll, pitch):
+    m = IMPLEMENTATIONS[impl](sensor_frame_ground(height, roll, pitch))
+    assert m["height_m"] == pytest.approx(height, abs=0.01)
+    assert m["roll_rad"] == pytest.approx(roll, abs=1e-3) and m["pitch_rad"] == pytest.approx(pitch, abs=1e-3)
+    # only ground below the sensor counts: pitched down 4.6° at 0.6 m, the road beyond ~8 m rises above z = 0
+    assert m["ground_points"] > (15000 if height > 1 else 2500)
+
+
+def test_cpp_and_reference_estimates_agree_on_a_kitti_frame():
+    points = rp.io.read(KITTI_FRAMES[0])
+    cpp, ref = native.estimate_mounting(points), rp.reference.estimate_mounting(points)
+    for key in ("height_m", "roll_rad", "pitch_rad"):
+        assert cpp[key] == pytest.approx(ref[key], abs=1e-6)
+    assert cpp["height_m"] == pytest.approx(KITTI_SENSOR_HEIGHT, abs=0.1)
+
+
+def test_no_ground_gives_no_estimate():
+    wall = np.column_stack([np.full(100, 5.0), np.linspace(-3, 3, 100), np.linspace(0, 2, 100)]).astype(np.float32)
+    assert native.estimate_mounting(wall[:2]) is None and rp.reference.estimate_mounting(wall[:2]) is None
+
+
+def test_the_cli_estimates_the_mounting_when_none_is_given_and_says_so(tmp_path):
+    out = tmp_path / "o.jsonl"
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "-o", out)
+    line = json.loads(out.read_text())
+    assert line["mounting"]["source"] == "estimated" and "mounting estimated" in proc.stderr
+    assert line["mounting"]["extrinsics"][2] == pytest.approx(KITTI_SENSOR_HEIGHT, abs=0.1)
+    # the estimate fits the ground below the sensor, the frame's fit the whole region: within centimetres
+    assert abs(line["mounting"]["ground_offset"]) < 0.03 and line["mounting"]["disagrees"] is False
+
+
+def test_a_given_height_far_from_the_ground_is_warned_about(tmp_path):
+    out = tmp_path / "o.jsonl"
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT + 2, "-o", out)
+    line = json.loads(out.read_text())
+    assert line["mounting"]["source"] == "given" and line["mounting"]["disagrees"] is True
+    assert line["mounting"]["ground_offset"] == pytest.approx(-2.0, abs=0.1)
+    assert "warning" in proc.stderr and f"not {KITTI_SENSOR_HEIGHT + 2:.2f} m" in proc.stderr
+    good = json.loads(run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "-q").stdout)
+    assert good["mounting"]["disagrees"] is False
+
+
+@pytest.mark.parametrize("height", [-1.73, 0, 25])
+def test_impossible_heights_are_refused(height):
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", height, check=False)
+    assert proc.returncode != 0 and "sensor_height must be above 0" in proc.stderr
+    with pytest.raises(ValueError, match="sensor_height"):
+        rp.Estimator(rp.Config(sensor_height=height))
+
+
+@pytest.mark.parametrize("option", [["--meta", "x.json"], ["--sensor-model", "VLP-16"], ["--cut-angle", "90"]])
+def test_pcap_options_with_frame_files_are_an_error(option):
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, *option, check=False)
+    assert proc.returncode != 0 and f"{option[0]} applies to pcap recordings only" in proc.stderr
+
+
+def test_a_sensor_model_that_overrides_the_packets_is_reported():
+    info = run("info", VELODYNE / "hdl32_example.pcap", "--sensor-model", "VLP-16").stdout
+    assert "model given: VLP-16; the packets say HDL-32E" in info
+    assert "the packets say" not in run("info", VELODYNE / "hdl32_example.pcap", "--sensor-model", "HDL-32E").stdout
+
+
+def test_an_implausible_estimate_is_not_used(tmp_path):
+    from paths import PCD_FILE  # this cloud's origin sits on the ground: no sensor height to read off
+
+    out = tmp_path / "o.jsonl"
+    proc = run("run", PCD_FILE, "--speed", 3, "-o", out)
+    assert "gives no plausible mounting" in proc.stderr
+    assert json.loads(out.read_text())["mounting"]["source"] == "none"

@@ -1,0 +1,149 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Route outputs: `roadpreview run --segments L1,L2 --export-profile DIR` stitches the frames' profiles along the
+drive (C++ RouteBuilder) — checked against the numpy reference fed the same run's output lines, against a
+known road, and by reading the ERD file back with an independent reader."""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER
+from paths import run_cli as run
+
+POSES = OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt"
+KITTI_SPEED = 8.6  # m/s: seq 00 moves 0.86 m per 0.1 s frame at its start (its poses)
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def number(text):
+    return float(text) if text != "" else np.nan
+
+
+def read_erd(path):
+    """A small ERD text reader written from the format's description: ERDFILEV2.00, the format line (channels,
+    samples, ..., sample interval at the 6th place), keyword lines up to END, then the numbers."""
+    lines = path.read_text().splitlines()
+    assert lines[0].strip() == "ERDFILEV2.00"
+    fields = [f.strip() for f in lines[1].split(",") if f.strip()]
+    channels, samples, interval = int(fields[0]), int(fields[1]), float(fields[5])
+    end = next(i for i, line in enumerate(lines) if line.strip() == "END")
+    keywords = {line[:8].strip(): line[8:].strip() for line in lines[2:end]}
+    values = np.array([float(v) for line in lines[end + 1:] for v in line.split()])
+    assert values.size == channels * samples
+    return keywords, interval, values.reshape(samples, channels)
+
+
+@pytest.fixture(scope="module")
+def kitti_route(tmp_path_factory):
+    out = tmp_path_factory.mktemp("route")
+    proc = run("run", *KITTI_FRAMES[:3], "--speed", KITTI_SPEED, "--frame-rate", 10, "--sensor-height",
+               KITTI_SENSOR_HEIGHT, "--segments", "10,100", "--export-profile", out / "profiles", "-o",
+               out / "run.jsonl")
+    return out, proc
+
+
+def test_segments_csv_has_a_row_per_segment_with_the_documented_columns(kitti_route):
+    out, proc = kitti_route
+    rows = read_csv(out / "run.segments.csv")
+    assert "segment rows" in proc.stderr
+    tens = [r for r in rows if r["segment_length_m"] == "10"]
+    hundreds = [r for r in rows if r["segment_length_m"] == "100"]
+    assert len(hundreds) == 1 and number(hundreds[0]["end_m"]) > 35  # 2 × 0.86 m driven + up to 40 m ahead
+    assert len(tens) == math.ceil(number(hundreds[0]["end_m"]) / 10)
+    assert number(tens[-1]["end_m"]) == number(hundreds[0]["end_m"])  # the last segment ends short
+    assert [number(r["start_m"]) for r in tens] == [10.0 * k for k in range(len(tens))]
+    for side in ("left", "right", "vehicle"):
+        for key in ("class", "gd_n0_m3", "iri_m_per_km", "backed_fraction", "class_reason", "iri_reason"):
+            assert f"{key}_{side}" in rows[0]
+    classified = [r for r in tens if r["class_vehicle"]]
+    assert classified and all(r["class_vehicle"] in "ABCDEFGH" for r in classified)
+    assert all(r["x_start_m"] == "" for r in rows)  # no poses given
+    assert any(number(r["iri_m_per_km_left"]) > 0 for r in tens)  # IRI of 10 m segments, from the whole stretch
+
+
+def test_route_matches_the_numpy_reference_on_the_same_run(kitti_route):
+    out, _ = kitti_route
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    route = rp.reference.Route(cfg)
+    for line in (json.loads(t) for t in (out / "run.jsonl").read_text().splitlines()):
+        route.add(line)
+    for wheel in ("left", "right"):
+        ref = route.stitched(wheel)
+        rows = read_csv(out / "profiles" / f"{wheel}.csv")
+        assert len(rows) == len(ref.z)
+        np.testing.assert_allclose([number(r["z_m"]) for r in rows], ref.z, atol=1e-5, equal_nan=True)
+        np.testing.assert_array_equal([int(r["count"]) for r in rows], ref.count)
+        np.testing.assert_array_equal([int(r["frames"]) for r in rows], ref.frames)
+    rows = read_csv(out / "run.segments.csv")
+    expected = route.segments(10.0) + route.segments(100.0)
+    assert len(rows) == len(expected)
+    for row, seg in zip(rows, expected):
+        assert number(row["start_m"]) == pytest.approx(seg["start_m"])
+        assert number(row["end_m"]) == pytest.approx(seg["end_m"])
+        for side in ("left", "right", "vehicle"):
+            rough, iri = seg[side]["roughness"], seg[side]["iri"]
+            assert (row[f"class_{side}"] or None) == rough.iso_class
+            if rough.iso_class:
+                assert number(row[f"gd_n0_m3_{side}"]) == pytest.approx(rough.gd_n0, rel=1e-4)
+            assert number(row[f"iri_m_per_km_{side}"]) == pytest.approx(iri.value if iri.value is not None else np.nan,
+                                                                        abs=1e-3, nan_ok=True)
+            assert number(row[f"backed_fraction_{side}"]) == pytest.approx(seg[side]["backed_fraction"], abs=1e-4)
+
+
+def test_erd_export_reads_back_as_the_stitched_profile(kitti_route):
+    out, _ = kitti_route
+    for wheel in ("left", "right"):
+        keywords, interval, values = read_erd(out / "profiles" / f"{wheel}.erd")
+        assert interval == pytest.approx(0.1)
+        assert keywords["UNITSNAM"] == "mm" and keywords["XUNITS"] == "m" and keywords["SHORTNAM"] == wheel
+        z = np.array([number(r["z_m"]) for r in read_csv(out / "profiles" / f"{wheel}.csv")])
+        first, last = rp.reference.longest_valid_stretch(z)
+        np.testing.assert_allclose(values[:, 0], z[first:last] * 1000, atol=6e-3)  # mm, written to 1 µm
+        assert f"{(first + 0.5) * 0.1:.2f} m along the drive" in keywords["TITLE"]
+
+
+def test_a_known_road_is_stitched_whole_whatever_each_frame_s_offset():
+    """Frames 1 m apart each see 30 m of a sinusoidal road, each with its own height offset (its own ground
+    plane): the stitched profile is the road plus the first frame's offset."""
+    cfg = rp.Config()
+    ds, road = 0.1, (lambda d: 0.01 * np.sin(2 * np.pi * d / 7.0))
+    route = rp.reference.Route(cfg)
+    offsets = [0.02, -0.03, 0.05, 0.0, 0.01]
+    for f, offset in enumerate(offsets):
+        s = (np.arange(300) + 0.5) * ds
+        line = {"timestamp": f * 0.1, "motion": {"speed": 10.0}, "path": None, "reason": None,
+                "profiles": {w: {"s": s.tolist(), "z": (road(f + s) + offset).tolist(), "count": [3] * 300,
+                                 "spread": [0.0] * 300} for w in ("left", "right")}}
+        route.add(line)
+    stitched = route.stitched("left")
+    centres = (np.arange(len(stitched.z)) + 0.5) * ds
+    assert route.distance == pytest.approx(4.0)
+    np.testing.assert_allclose(stitched.z, road(centres) + offsets[0], atol=1e-12)
+    assert stitched.frames[0] == 1 and stitched.frames[45] == 5
+
+
+def test_poses_give_the_segments_their_place(tmp_path):
+    run("run", OS1_128_PCAP, "--speed", 2.5, "--sensor-height", OS1_128_HEIGHT, "--fusion", "kalman", "--poses", POSES,
+        "--segments", 10, "--segments-csv", tmp_path / "seg.csv", "-q", "-o", tmp_path / "out.jsonl")
+    rows = read_csv(tmp_path / "seg.csv")
+    assert rows and number(rows[0]["x_start_m"]) == pytest.approx(0.0, abs=1e-6)
+    assert number(rows[-1]["x_end_m"]) == pytest.approx(0.498, abs=0.01)  # the poses' last x: 0.245 + 0.253 m
+
+
+def test_route_errors_name_the_problem(tmp_path):
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--segments", "0,10",
+               check=False)
+    assert proc.returncode != 0 and "--segments" in proc.stderr
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--export-profile",
+               blocked / "sub", "-q", "-o", tmp_path / "o.jsonl", check=False)
+    assert proc.returncode != 0 and "sub" in proc.stderr
