@@ -91,7 +91,8 @@ TEST(GridRadiusSearch, FindsWhatPclsKdTreeFinds) {
 
 TEST(GridRadiusSearch, WidenedColumnsOfAFarSpreadCloudStillFindEveryNeighbour) {
     auto cloud = random_cloud(3000, 2000.0, 3.0, 2);
-    for (const auto& p : *random_cloud(1000, 20.0, 3.0, 3)) cloud->push_back(p);  // a dense patch in one corner
+    const auto patch = random_cloud(1000, 20.0, 3.0, 3);  // a dense patch in one corner
+    for (const auto& p : *patch) cloud->push_back(p);
     expect_same_neighbours(cloud, nullptr, 0.5);
 }
 
