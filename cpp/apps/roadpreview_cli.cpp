@@ -655,7 +655,8 @@ int main(int argc, char** argv) {
     auto* cal_height = cal_cmd->add_option("--sensor-height", c.sensor_height, "Sensor height above the ground, m");
     cal_cmd->add_option("--extrinsics", c.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
         ->expected(6)->delimiter(',')->excludes(cal_height);
-    cal_cmd->add_option("--ground", c.ground, "Ground method (default pca)")->check(CLI::IsMember({"pca", "ransac"}));
+    cal_cmd->add_option("--ground", c.ground, "Ground method (default zones)")
+        ->check(CLI::IsMember({"zones", "pca", "ransac"}));
     cal_cmd->add_option("--config", c.config_file, "JSON or YAML config file with the fields of rp.Config");
     cal_cmd->add_option("--beams", c.beams, "Beams of a sensor whose files do not number them (default 64, HDL-64E)")
         ->check(CLI::PositiveNumber);
