@@ -196,22 +196,35 @@ def test_split_recordings_run_as_one_drive_in_order(tmp_path):
     assert proc.returncode == 1 and "not both" in proc.stderr
 
 
-def test_summary_line_has_the_iri_and_counts_the_reasons_for_declined_classes():
-    proc = run("run", *KITTI_FRAMES[:3], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT)
-    out = lines(proc.stdout)
-    summary = proc.stderr.strip().splitlines()[-1]
-    iris = [o["roughness"]["vehicle"]["iri"]["value"] for o in out if o["roughness"]["vehicle"]["iri"]["value"]]
-    if iris:
-        assert f"vehicle IRI median {sorted(iris)[len(iris) // 2]:.2f} m/km ({len(iris)} of 3 frames)" in summary
-    else:
-        assert "vehicle IRI: none" in summary
+def summary_of(*args):
+    """(output lines, the summary line) of a CLI run on the first three KITTI frames."""
+    proc = run("run", *KITTI_FRAMES[:3], "--sensor-height", KITTI_SENSOR_HEIGHT, *args)
+    summary = [line for line in proc.stderr.splitlines() if " frame(s), pipeline median " in line]
+    assert len(summary) == 1, proc.stderr
+    return lines(proc.stdout), summary[0]
+
+
+def declined_reasons(out) -> dict:
     reasons = {}
     for o in out:
         for side in ("left", "right", "vehicle"):
             r = o["roughness"][side]
             if r["class"] is None:
                 reasons[r["reason"]] = reasons.get(r["reason"], 0) + 1
-    assert reasons, "these frames decline at least one class (the test needs one)"
+    return reasons
+
+
+@pytest.mark.parametrize("speed", [5, 0])  # moving: classes and IRI; stopped: every class declined, no IRI
+def test_summary_line_has_the_iri_and_counts_the_reasons_for_declined_classes(speed):
+    out, summary = summary_of("--speed", speed)
+    iris = [o["roughness"]["vehicle"]["iri"]["value"] for o in out if o["roughness"]["vehicle"]["iri"]["value"]]
+    if iris:
+        assert f"vehicle IRI median {sorted(iris)[len(iris) // 2]:.2f} m/km ({len(iris)} of 3 frames)" in summary
+    else:
+        assert "vehicle IRI: none" in summary
+    reasons = declined_reasons(out)
+    if speed == 0:
+        assert reasons and not iris, "a stopped vehicle declines every class and has no IRI"
     for reason, n in reasons.items():
         assert f"{reason} ×{n}" in summary
 
