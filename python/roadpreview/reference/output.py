@@ -32,7 +32,8 @@ def _rounded3(row) -> list:
 
 
 def _iri(i) -> dict:
-    return {"value": _number(i.value), "length": float(i.length), "reason": i.reason}
+    return {"value": _number(i.value), "length": float(i.length), "reason": i.reason,
+            "backed_fraction": _number(i.backed_fraction)}
 
 
 def _roughness(r) -> dict:
@@ -70,7 +71,8 @@ def _clusters(o):
              "aabb_min": _rounded3(o.aabb_min[k]), "aabb_max": _rounded3(o.aabb_max[k]),
              "obb": {"center": _rounded3(o.obb_center[k]), "size": _rounded3(o.obb_size[k]),
                      "yaw": _rounded(float(o.obb_yaw[k]))},
-             "height": _rounded(float(o.height[k]))} for k in range(len(o.id))]
+             "height": _rounded(float(o.height[k])), "bottom": _rounded(float(o.bottom[k]))}
+            for k in range(len(o.id))]
 
 
 def _profile(p, ds: float) -> dict:
