@@ -17,5 +17,6 @@
 #include "roadpreview/pipeline/pipeline.hpp"
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/roughness.hpp"
+#include "roadpreview/range_sensor/range_sensor.hpp"
 #include "roadpreview/roughness/support.hpp"
 #include "roadpreview/version.hpp"
