@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "range_commands.hpp"
 #include "roadpreview/roadpreview.hpp"
 
 namespace rp = roadpreview;
@@ -302,9 +303,12 @@ int main(int argc, char** argv) {
     info_cmd->add_option("INPUT", info_inputs, "One pcap, or frame files / directories")->required();
     add_source_options(info_cmd, info_options);
 
+    const auto range_action = add_range_commands(app);
+
     CLI11_PARSE(app, argc, argv);
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
+        if (app.got_subcommand("range")) return range_action();
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());
