@@ -4,7 +4,6 @@
 #include "range_commands.hpp"
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -85,28 +84,16 @@ int calibrate_offset(const RangeOptions& o) {
     if (o.runs.size() != o.motions.size())
         throw std::runtime_error("give one --motion file per run (" + std::to_string(o.runs.size()) + " runs, " +
                                  std::to_string(o.motions.size()) + " motion files)");
-    std::vector<double> ref_x, ref_z;
-    read_reference(o.reference, ref_x, ref_z);
+    rp::ReferenceProfile ref;
+    read_reference(o.reference, ref.x_m, ref.z_m);
     const auto layout = rp::read_range_layout(o.sensors);
-    rp::RangeCalibration cal = o.calibration.empty() ? rp::RangeCalibration{} : rp::read_range_calibration(o.calibration);
-    rp::RangeCalibration raw = cal;  // samples where the axle was: b1 = b2 = 0
-    for (const auto& s : layout) raw.sensors[s.id].offset = rp::OffsetCalibration{};
-    std::vector<std::vector<rp::RangeSample>> all;
-    for (std::size_t r = 0; r < o.runs.size(); ++r)
-        all.push_back(rp::read_range_samples(o.runs[r], layout, raw, rp::RangeMotion(rp::MotionTable::read_csv(o.motions[r]))));
-    for (std::size_t k = 0; k < layout.size(); ++k) {
-        const rp::RangeSensor& s = layout[k];
-        std::vector<std::vector<rp::RangeSample>> runs(o.runs.size());
-        for (std::size_t r = 0; r < all.size(); ++r)
-            for (const auto& x : all[r])
-                if (x.sensor == static_cast<std::int32_t>(k)) runs[r].push_back(x);
-        const double guess = s.x_m + s.height_m * std::tan(s.pitch_deg * M_PI / 180.0);
-        try {
-            cal.sensors[s.id].offset = rp::calibrate_offset(runs, o.runs, ref_x, ref_z, guess, o.search_m);
-        } catch (const std::invalid_argument& e) {
-            throw std::runtime_error("sensor '" + s.id + "': " + e.what());
-        }
-        const rp::OffsetCalibration& c = *cal.sensors[s.id].offset;
+    std::vector<rp::RangeMotion> motions;
+    for (const std::string& m : o.motions) motions.emplace_back(rp::MotionTable::read_csv(m));
+    const rp::RangeCalibration cal = rp::calibrate_offsets(
+        layout, o.calibration.empty() ? rp::RangeCalibration{} : rp::read_range_calibration(o.calibration), o.runs,
+        motions, {{ref}}, o.search_m);
+    for (const rp::RangeSensor& s : layout) {
+        const rp::OffsetCalibration& c = *cal.offset_for(s.id);
         std::fprintf(stderr, "sensor %s: x = %.6f s * v + %.6f m  (b1 ± %.3g s, b2 ± %.3g m); cross-correlation: "
                      "b1 %.6f s, b2 %.6f m\n", s.id.c_str(), c.b1_s, c.b2_m, c.b1_sigma_s, c.b2_sigma_m, c.b1_xcorr_s,
                      c.b2_xcorr_m);

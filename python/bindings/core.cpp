@@ -16,6 +16,7 @@ namespace py = pybind11;
 namespace rp = roadpreview;
 
 void bind_io(py::module_& m);  // io.cpp
+void bind_range_sensor(py::module_& m);  // range_sensor.cpp
 
 namespace {
 
@@ -503,6 +504,7 @@ PYBIND11_MODULE(_core, m) {
     bind_estimator(m);
     bind_stages(m);
     bind_io(m);
+    bind_range_sensor(m);
     m.def("read_frame", [](const std::string& path) {
         rp::Frame f = rp::read_frame(path);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));

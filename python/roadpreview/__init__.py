@@ -18,7 +18,7 @@ from .config import (Config, Extrinsics, FusionConfig, GroundConfig, IriConfig, 
 from .estimator import Estimator
 
 if native_available():
-    from . import io
+    from . import io, range_sensor
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
@@ -32,5 +32,5 @@ def cmake_dir() -> str:
 __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
-    "reference", "sim", "cmake_dir", "__version__",
+    "reference", "sim", "cmake_dir", "__version__", "range_sensor",
 ]

@@ -95,6 +95,8 @@ Estimator& Estimator::operator=(Estimator&&) noexcept = default;
 
 const Config& Estimator::config() const { return impl_->cfg; }
 
+const TemporalFusion* Estimator::fusion() const { return impl_->fusion ? &*impl_->fusion : nullptr; }
+
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
     return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
 }

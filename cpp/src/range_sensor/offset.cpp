@@ -8,6 +8,7 @@
 
 #include <pcl/point_types.h>
 #include <pcl/registration/icp.h>
+#include <pcl/search/kdtree.h>
 #include <pcl/registration/transformation_estimation_lm.h>
 #include <pcl/registration/warp_point_rigid.h>
 
@@ -119,9 +120,24 @@ struct IcpFit {
     double shift = 0.0, z_offset = 0.0, fitness = std::numeric_limits<double>::infinity();
 };
 
-IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, double start, double z0, double scale,
-                double max_corr) {
+// Mean squared height residual of the samples over the reference, shifted by (shift, z_offset).
+double height_mse(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref, double shift,
+                  double z_offset) {
+    double sse = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const double r = z[i] + z_offset - ref.at(x[i] + shift);
+        if (std::isnan(r)) continue;
+        sse += r * r;
+        ++n;
+    }
+    return n ? sse / static_cast<double>(n) : std::numeric_limits<double>::infinity();
+}
+
+IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::search::KdTree<Point>::Ptr& tree,
+                double start, double z0, double scale, double max_corr) {
     pcl::IterativeClosestPoint<Point, Point> icp;
+    icp.setSearchMethodTarget(tree, true);  // one tree for every start
     auto estimation = pcl::make_shared<pcl::registration::TransformationEstimationLM<Point, Point, float>>();
     estimation->setWarpFunction(pcl::make_shared<WarpShiftXZ>());
     icp.setTransformationEstimation(estimation);
@@ -138,10 +154,10 @@ IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, double start
     icp.align(aligned, guess);
     IcpFit fit;
     if (!icp.hasConverged()) return fit;
+    fit.fitness = 0.0;
     const Eigen::Matrix4f T = icp.getFinalTransformation();
     fit.shift = T(0, 3);
     fit.z_offset = T(2, 3) / scale;
-    fit.fitness = icp.getFitnessScore(max_corr);
     return fit;
 }
 
@@ -164,10 +180,15 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
         if (!std::isnan(ref.at(x_m[i] + guess_m))) on_ref.push_back(ref.at(x_m[i] + guess_m) - z_m[i]);
     if (on_ref.size() < 10) throw std::invalid_argument("the run's samples do not lie over the reference profile");
     const double z0 = median_of(on_ref);
+    pcl::search::KdTree<Point>::Ptr tree(new pcl::search::KdTree<Point>);
+    tree->setInputCloud(target);
+    // The best start by the height residual over all samples: ICP's own fitness ignores samples beyond the
+    // correspondence distance and so favours alignments that push the slopes out of reach.
     IcpFit best;
     for (int k = 0; k < kStarts; ++k) {
         const double start = guess_m + search_m * (2.0 * k / (kStarts - 1) - 1.0);
-        const IcpFit fit = icp_from(source, target, start, z0, scale, 2.0 * search_m / (kStarts - 1));
+        IcpFit fit = icp_from(source, target, tree, start, z0, scale, 2.0 * search_m / (kStarts - 1));
+        if (std::isfinite(fit.fitness)) fit.fitness = height_mse(x_m, z_m, ref, fit.shift, fit.z_offset);
         if (fit.fitness < best.fitness) best = fit;
     }
     if (!std::isfinite(best.fitness)) throw std::invalid_argument("ICP did not converge for this run");
@@ -221,12 +242,15 @@ void fit_offset_line(const std::vector<double>& v, const std::vector<double>& y,
 }  // namespace
 
 OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& runs,
-                                   const std::vector<std::string>& run_names, const std::vector<double>& ref_x_m,
-                                   const std::vector<double>& ref_z_m, double guess_m, double search_m) {
+                                   const std::vector<std::string>& run_names,
+                                   const std::vector<ReferenceProfile>& references, double guess_m, double search_m) {
     if (runs.size() != run_names.size()) throw std::invalid_argument("one name per run is needed");
+    if (references.size() != 1 && references.size() != runs.size())
+        throw std::invalid_argument("give one reference profile, or one per run");
     OffsetCalibration out;
     std::vector<double> speeds, shifts, sigmas, xcorr;
     for (std::size_t r = 0; r < runs.size(); ++r) {
+        if (runs[r].empty()) throw std::invalid_argument(run_names[r] + ": the run has no samples of this sensor");
         std::vector<double> x, z;
         double speed = 0.0;
         for (const RangeSample& s : runs[r]) {
@@ -234,10 +258,10 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
             z.push_back(s.z_m);
             speed += s.speed_mps;
         }
-        if (runs[r].empty()) throw std::invalid_argument(run_names[r] + ": the run has no samples of this sensor");
+        const ReferenceProfile& ref = references.size() == 1 ? references[0] : references[r];
         RunShift shift;
         try {
-            shift = register_run(x, z, ref_x_m, ref_z_m, guess_m, search_m);
+            shift = register_run(x, z, ref.x_m, ref.z_m, guess_m, search_m);
         } catch (const std::invalid_argument& e) {
             throw std::invalid_argument(run_names[r] + ": " + e.what());
         }
@@ -258,6 +282,35 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
     fit_offset_line(speeds, xcorr, std::vector<double>(speeds.size(), 0.0), out.b1_xcorr_s, out.b2_xcorr_m, nullptr,
                     nullptr);
     return out;
+}
+
+double geometric_foot_m(const RangeSensor& s) { return s.x_m + s.height_m * std::tan(s.pitch_deg * M_PI / 180.0); }
+
+RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, RangeCalibration cal,
+                                   const std::vector<std::string>& run_paths, const std::vector<RangeMotion>& motions,
+                                   const std::vector<std::vector<ReferenceProfile>>& references, double search_m) {
+    if (references.size() != 1 && references.size() != layout.size())
+        throw std::runtime_error("give one set of reference profiles, or one per sensor");
+    if (run_paths.size() != motions.size())
+        throw std::runtime_error("give one motion per run (" + std::to_string(run_paths.size()) + " runs, " +
+                                 std::to_string(motions.size()) + " motions)");
+    RangeCalibration raw = cal;  // samples where the axle was: b1 = b2 = 0
+    for (const RangeSensor& s : layout) raw.sensors[s.id].offset = OffsetCalibration{};
+    std::vector<std::vector<RangeSample>> all;
+    for (std::size_t r = 0; r < run_paths.size(); ++r) all.push_back(read_range_samples(run_paths[r], layout, raw, motions[r]));
+    for (std::size_t k = 0; k < layout.size(); ++k) {
+        std::vector<std::vector<RangeSample>> runs(run_paths.size());
+        for (std::size_t r = 0; r < all.size(); ++r)
+            for (const RangeSample& x : all[r])
+                if (x.sensor == static_cast<std::int32_t>(k)) runs[r].push_back(x);
+        try {
+            cal.sensors[layout[k].id].offset =
+                calibrate_offset(runs, run_paths, references[references.size() == 1 ? 0 : k], geometric_foot_m(layout[k]), search_m);
+        } catch (const std::invalid_argument& e) {
+            throw std::runtime_error("sensor '" + layout[k].id + "': " + e.what());
+        }
+    }
+    return cal;
 }
 
 }  // namespace roadpreview

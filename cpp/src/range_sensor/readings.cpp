@@ -197,7 +197,7 @@ SamplePlacer::SamplePlacer(const std::vector<RangeSensor>& layout, const RangeCa
         distance_.push_back(d ? std::optional(*d) : std::nullopt);
         const OffsetCalibration* o = cal.offset_for(s.id);
         OffsetCalibration geometric;
-        geometric.b2_m = s.x_m + s.height_m * std::tan(s.pitch_deg * kDegToRad);
+        geometric.b2_m = geometric_foot_m(s);
         offset_.push_back(o ? *o : geometric);
     }
 }

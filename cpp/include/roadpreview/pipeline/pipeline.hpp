@@ -92,6 +92,8 @@ public:
     }
 
     const Config& config() const;
+    /// The fused map and pose; nullptr when fusion.method is "none".
+    const TemporalFusion* fusion() const;
 
 private:
     struct Impl;

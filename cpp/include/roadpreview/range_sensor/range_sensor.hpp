@@ -203,15 +203,32 @@ private:
 std::vector<RangeSample> read_range_samples(const std::string& readings_path, const std::vector<RangeSensor>& layout,
                                             const RangeCalibration& cal, RangeMotion motion);
 
-/// Offset calibration of one sensor from runs over a known profile (x, z along the track, metres):
-/// per run the ICP shift (PCL, translation along x plus a height offset) and the cross-correlation shift,
-/// then the weighted least-squares line shift = b1·v + b2. `runs[i]` are that sensor's samples placed with
-/// b1 = 0 and b2 = 0 (s_m is where the axle was). Throws std::invalid_argument for fewer than two distinct
-/// speeds (they must differ by 10 % of the larger), an empty run or a run off the reference.
-/// The shifts are searched within guess_m ± search_m (guess: the layout's geometric foot, x_m + h·tan pitch).
+/// A known profile along the track: x increasing (m, where the axle is at the motion's start = 0), z (m).
+struct ReferenceProfile {
+    std::vector<double> x_m, z_m;
+};
+
+/// Offset calibration of one sensor from runs over a known profile: per run the ICP shift (PCL, translation
+/// along x plus a height offset) and the cross-correlation shift, then the weighted least-squares line
+/// shift = b1·v + b2. `runs[i]` are that sensor's samples placed with b1 = b2 = 0 (s_m: where the axle was,
+/// plus the pitch's share of d's change); `references` holds one profile for all runs or one per run.
+/// Shifts are searched within guess_m ± search_m (guess: the layout's geometric foot, x_m + h·tan pitch).
+/// Throws std::invalid_argument for fewer than two distinct speeds (they must differ by 10 % of the larger),
+/// an empty run or a run off the reference.
 OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& runs,
-                                   const std::vector<std::string>& run_names, const std::vector<double>& ref_x_m,
-                                   const std::vector<double>& ref_z_m, double guess_m, double search_m = 0.5);
+                                   const std::vector<std::string>& run_names,
+                                   const std::vector<ReferenceProfile>& references, double guess_m,
+                                   double search_m = 0.5);
+
+/// Every sensor of the layout calibrated from readings files (one motion per run): `cal` with an offset entry
+/// added per sensor. `references[k]` are sensor k's (one entry: the same for every sensor), each as in
+/// calibrate_offset. Throws std::runtime_error naming the sensor and run.
+RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, RangeCalibration cal,
+                                   const std::vector<std::string>& run_paths, const std::vector<RangeMotion>& motions,
+                                   const std::vector<std::vector<ReferenceProfile>>& references, double search_m = 0.5);
+
+/// The layout's geometric foot of a sensor's beam on the road at rest, ahead of the axle: x_m + h·tan(pitch).
+double geometric_foot_m(const RangeSensor& s);
 
 /// One run's shift by ICP and by cross-correlation (see calibrate_offset); speed_mps is left 0.
 RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m, const std::vector<double>& ref_x_m,
