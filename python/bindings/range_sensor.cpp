@@ -201,4 +201,12 @@ void bind_range_sensor(py::module_& m) {
         }
         return z;
     }, py::arg("estimator"), py::arg("x"), py::arg("y"), "Fused map heights (m, NaN where empty) at odometry x, y");
+    m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z, DoubleArray variance) {
+        if (x.size() != y.size() || x.size() != z.size() || x.size() != variance.size())
+            throw std::invalid_argument("x, y, z and variance must have the same length");
+        std::vector<rp::MapSample> samples(static_cast<std::size_t>(x.size()));
+        for (py::ssize_t i = 0; i < x.size(); ++i)
+            samples[static_cast<std::size_t>(i)] = {x.data()[i], y.data()[i], z.data()[i], variance.data()[i]};
+        return est.fuse_samples(samples);
+    }, py::arg("estimator"), py::arg("x"), py::arg("y"), py::arg("z"), py::arg("variance"));
 }

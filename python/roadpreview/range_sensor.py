@@ -68,6 +68,17 @@ def map_profile(estimator, y_m: float, x_from_m: float, x_to_m: float, step_m: f
     return np.column_stack([x, np.interp(x, x[ok], z[ok])])
 
 
+def fuse_into(estimator, x_m, y_m, z_m, sigma_m) -> int:
+    """Fuses height samples into an estimator's temporal-fusion map (odometry frame, metres; sigma_m: each
+    sample's standard deviation, or one for all), so its next frame's profiles carry them: a vehicle with both
+    sensors gets one profile. For a straight drive from the odometry origin a sample's x is its track position
+    ``s`` and y its sensor's ``y_m``. Returns the cells updated."""
+    x = np.asarray(x_m, dtype=float).ravel()
+    variance = np.broadcast_to(np.asarray(sigma_m, dtype=float) ** 2, x.shape)
+    return core().fuse_map_samples(estimator._impl, x, np.broadcast_to(np.asarray(y_m, float), x.shape),
+                                   np.asarray(z_m, dtype=float).ravel(), variance)
+
+
 def calibrate_offset(runs: Sequence[PathLike], motions: Sequence[PathLike], sensors: PathLike, *, reference,
                      calibration: Optional[PathLike] = None, search_m: float = 0.5,
                      output: Optional[PathLike] = None) -> dict:

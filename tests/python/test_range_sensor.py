@@ -217,3 +217,22 @@ def test_counts_without_a_distance_calibration_are_an_error(bench, tmp_path):
     bad.write_text("t,sensor,count\n0.0,laser_left,1500\n")
     proc = run_cli("range", "run", bad, "--sensors", bench["dir"] / "sensors.yaml", "--speed", 1, check=False)
     assert proc.returncode != 0 and "no distance calibration" in proc.stderr
+
+
+def test_range_samples_enter_the_fusion_map_and_its_profiles():
+    est = rp.Estimator(rp.Config(sensor_height=1.8, fusion={"method": "kalman"}))
+    est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)  # starts the clock at the origin
+    x = np.arange(1.0, 3.0, 0.01)
+    z = 0.02 * np.sin(2 * np.pi * x)
+    assert rp.range_sensor.fuse_into(est, x, 0.8, z, 0.001) == 20
+    cells = rp._native.core().fusion_map_heights(est._impl, np.array([1.55, 2.25]), np.array([0.8, 0.8]))
+    expect = [np.mean(z[(x >= 1.5) & (x < 1.6)]), np.mean(z[(x >= 2.2) & (x < 2.3)])]
+    assert np.allclose(cells, expect, atol=1e-6)
+    res = est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)  # no ground: the map's
+    left = np.asarray(res.left.z)
+    s = np.asarray(res.left.s)
+    near = (s > 1.05) & (s < 2.95)
+    assert np.isfinite(left[near]).all()
+    assert np.allclose(left[near], 0.02 * np.sin(2 * np.pi * s[near]), atol=0.003)
+    with pytest.raises(ValueError, match="fusion"):
+        rp.range_sensor.fuse_into(rp.Estimator(rp.Config(sensor_height=1.8)), x, 0.8, z, 0.001)

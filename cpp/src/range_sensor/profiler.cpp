@@ -2,6 +2,7 @@
 // Range-sensor samples binned into windows along the track, then the roughness and IRI stages
 // (docs/method.md §8.5); the window's output line (docs/output.md).
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -143,19 +144,55 @@ RangeWindow RangeProfiler::close_window() {
     return w;
 }
 
+namespace {
+
+// The samples' arrays, written directly (shortest round-trip numbers): a window holds thousands of samples and
+// building them as JSON values first would cost more than reading them.
+void append_number(std::string& out, double v) {
+    if (!std::isfinite(v)) {
+        out += "null";
+        return;
+    }
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, r.ptr);
+}
+
+template <typename Get>
+void append_array(std::string& out, const char* name, const std::vector<RangeSample>& samples, Get get) {
+    out += '"';
+    out += name;
+    out += "\":[";
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        if (i) out += ',';
+        get(samples[i]);
+    }
+    out += ']';
+}
+
+std::string samples_json(const std::vector<RangeSample>& samples, const std::vector<RangeSensor>& layout) {
+    std::string out = "{";
+    append_array(out, "t", samples, [&](const RangeSample& x) { append_number(out, x.t_s); });
+    out += ',';
+    append_array(out, "sensor", samples, [&](const RangeSample& x) {
+        out += nlohmann::json(layout[static_cast<std::size_t>(x.sensor)].id).dump();
+    });
+    out += ',';
+    append_array(out, "s", samples, [&](const RangeSample& x) { append_number(out, x.s_m); });
+    out += ',';
+    append_array(out, "z", samples, [&](const RangeSample& x) { append_number(out, x.z_m); });
+    out += ',';
+    append_array(out, "ahead", samples, [&](const RangeSample& x) { append_number(out, x.ahead_m); });
+    out += ',';
+    append_array(out, "time_to_wheel", samples, [&](const RangeSample& x) { append_number(out, x.time_to_wheel_s); });
+    return out + "}";
+}
+
+}  // namespace
+
 std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSensor>& layout, const std::string& source) {
     using json = nlohmann::ordered_json;
     const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-    json t = json::array(), sensor = json::array(), s = json::array(), z = json::array(), ahead = json::array(),
-         ttw = json::array();
-    for (const RangeSample& x : w.samples) {
-        t.push_back(x.t_s);
-        sensor.push_back(layout[static_cast<std::size_t>(x.sensor)].id);
-        s.push_back(x.s_m);
-        z.push_back(x.z_m);
-        ahead.push_back(x.ahead_m);
-        ttw.push_back(number(x.time_to_wheel_s));
-    }
     const json line = {
         {"frame", w.index},
         {"source", "range"},
@@ -167,10 +204,11 @@ std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSe
         {"roughness", {{"left", detail::roughness_to_json(w.left.roughness)},
                        {"right", detail::roughness_to_json(w.right.roughness)},
                        {"vehicle", detail::roughness_to_json(w.vehicle)}}},
-        {"samples", {{"t", t}, {"sensor", sensor}, {"s", s}, {"z", z}, {"ahead", ahead}, {"time_to_wheel", ttw}}},
         {"reason", w.reason.empty() ? json(nullptr) : json(w.reason)},
     };
-    return line.dump();
+    std::string text = line.dump();
+    text.pop_back();  // the closing brace: the samples follow
+    return text + ",\"samples\":" + samples_json(w.samples, layout) + "}";
 }
 
 }  // namespace roadpreview
