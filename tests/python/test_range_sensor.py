@@ -27,7 +27,7 @@ def write_drive(dir_, name, drive):
 def bench(tmp_path_factory):
     """A laser on the bench track: layout, reference profile, runs at 0.2 and 1.0 m/s."""
     d = tmp_path_factory.mktemp("bench")
-    sensor = sim.laser("laser_left", x_m=0.3, height_m=0.25, latency_s=0.008, rate_hz=400.0)
+    sensor = sim.laser("laser_left", x_m=0.3, height_m=0.25, latency_s=0.008, rate_hz=200.0)
     (d / "sensors.yaml").write_text(sim.layout_yaml([sensor]))
     xz = sim.bench_reference()
     (d / "ref.csv").write_text("x,z\n" + "".join(f"{x:.4f},{z:.6f}\n" for x, z in xz))

@@ -22,6 +22,7 @@ using Cloud = pcl::PointCloud<Point>;
 
 constexpr double kReferenceStep_m = 0.002;  // the reference is densified to this step for the closest points
 constexpr int kStarts = 11;                 // ICP starts spread over guess ± search (closest points are local)
+constexpr std::size_t kMaxIcpSamples = 2000;  // more add time, not precision (the residual check uses all)
 constexpr double kDistinctSpeeds = 0.1;     // speeds must span this fraction of the largest
 
 // ICP's only free parameters: a shift along x and a height offset (z).
@@ -144,7 +145,7 @@ IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::s
     icp.setInputSource(source);
     icp.setInputTarget(target);
     icp.setMaxCorrespondenceDistance(max_corr);
-    icp.setMaximumIterations(100);
+    icp.setMaximumIterations(50);
     icp.setTransformationEpsilon(1e-12);
     icp.setEuclideanFitnessEpsilon(1e-14);
     Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
@@ -174,7 +175,13 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
     const Reference ref{ref_x_m, ref_z_m};
     const double scale = height_scale(ref);
     const Cloud::Ptr target = dense_reference(ref, scale);
-    const Cloud::Ptr source = cloud_of(x_m, z_m, scale);
+    const std::size_t stride = (x_m.size() + kMaxIcpSamples - 1) / kMaxIcpSamples;
+    std::vector<double> x_icp, z_icp;
+    for (std::size_t i = 0; i < x_m.size(); i += stride) {
+        x_icp.push_back(x_m[i]);
+        z_icp.push_back(z_m[i]);
+    }
+    const Cloud::Ptr source = cloud_of(x_icp, z_icp, scale);
     std::vector<double> on_ref;
     for (std::size_t i = 0; i < x_m.size(); ++i)
         if (!std::isnan(ref.at(x_m[i] + guess_m))) on_ref.push_back(ref.at(x_m[i] + guess_m) - z_m[i]);
@@ -247,16 +254,25 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
     if (runs.size() != run_names.size()) throw std::invalid_argument("one name per run is needed");
     if (references.size() != 1 && references.size() != runs.size())
         throw std::invalid_argument("give one reference profile, or one per run");
-    OffsetCalibration out;
-    std::vector<double> speeds, shifts, sigmas, xcorr;
+    std::vector<double> speeds;
     for (std::size_t r = 0; r < runs.size(); ++r) {
         if (runs[r].empty()) throw std::invalid_argument(run_names[r] + ": the run has no samples of this sensor");
+        double sum = 0.0;
+        for (const RangeSample& s : runs[r]) sum += s.speed_mps;
+        speeds.push_back(sum / static_cast<double>(runs[r].size()));
+    }
+    const auto [lo, hi] = std::minmax_element(speeds.begin(), speeds.end());
+    if (speeds.empty() || !(*hi - *lo > kDistinctSpeeds * std::max(std::abs(*lo), std::abs(*hi))))
+        throw std::invalid_argument("offset calibration needs runs at two or more distinct speeds (got " +
+                                    std::to_string(speeds.size()) + " run(s), all at about the same speed): b1 and b2 "
+                                    "cannot be separated");
+    OffsetCalibration out;
+    std::vector<double> shifts, sigmas, xcorr;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
         std::vector<double> x, z;
-        double speed = 0.0;
         for (const RangeSample& s : runs[r]) {
             x.push_back(s.s_m);
             z.push_back(s.z_m);
-            speed += s.speed_mps;
         }
         const ReferenceProfile& ref = references.size() == 1 ? references[0] : references[r];
         RunShift shift;
@@ -266,18 +282,12 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
             throw std::invalid_argument(run_names[r] + ": " + e.what());
         }
         shift.source = run_names[r];
-        shift.speed_mps = speed / static_cast<double>(runs[r].size());
+        shift.speed_mps = speeds[r];
         out.runs.push_back(shift);
-        speeds.push_back(shift.speed_mps);
         shifts.push_back(shift.shift_m);
         sigmas.push_back(shift.shift_sigma_m);
         xcorr.push_back(shift.xcorr_shift_m);
     }
-    const auto [lo, hi] = std::minmax_element(speeds.begin(), speeds.end());
-    if (speeds.empty() || !(*hi - *lo > kDistinctSpeeds * std::max(std::abs(*lo), std::abs(*hi))))
-        throw std::invalid_argument("offset calibration needs runs at two or more distinct speeds (got " +
-                                    std::to_string(speeds.size()) + " run(s), all at about the same speed): b1 and b2 "
-                                    "cannot be separated");
     fit_offset_line(speeds, shifts, sigmas, out.b1_s, out.b2_m, &out.b1_sigma_s, &out.b2_sigma_m);
     fit_offset_line(speeds, xcorr, std::vector<double>(speeds.size(), 0.0), out.b1_xcorr_s, out.b2_xcorr_m, nullptr,
                     nullptr);
