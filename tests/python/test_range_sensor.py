@@ -108,7 +108,7 @@ def _exact_run(xz, v, shift):
     return axle, np.interp(axle + shift, xz[:, 0], xz[:, 1]), v
 
 
-@settings(max_examples=4, deadline=None)
+@settings(max_examples=3, deadline=None)
 @given(st.floats(-0.2, 0.2))
 def test_shifting_the_reference_moves_b2_by_the_same_amount(delta):
     xz = sim.bench_reference(step_m=0.002)
