@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import roadpreview as rp
-from paths import run_cli
+from paths import DATA, run_cli
 from roadpreview import sim
 from roadpreview.reference import range_sensor as ref
 
@@ -236,3 +236,23 @@ def test_range_samples_enter_the_fusion_map_and_its_profiles():
     assert np.allclose(left[near], 0.02 * np.sin(2 * np.pi * s[near]), atol=0.003)
     with pytest.raises(ValueError, match="fusion"):
         rp.range_sensor.fuse_into(rp.Estimator(rp.Config(sensor_height=1.8)), x, 0.8, z, 0.001)
+
+
+def test_a_real_road_profile_read_by_simulated_lasers_keeps_its_iri(tmp_path):
+    """The real profile of tests/data/profiles (Šroubek & Šorel, 0.25 m) laid under both wheels and read at 10 m/s:
+    every window's IRI within 10 % of the IRI of the profile itself in the same bins."""
+    station, elevation = np.loadtxt(DATA / "profiles" / "sroubek_iri" / "profile_1.txt", unpack=True)
+    x = station - station[0]
+    elevation = elevation - np.polyval(np.polyfit(x, elevation, 1), x)  # the grade: no roughness, out of range
+    road = sim.Road(bumps=(sim.ProfileTrack(x, elevation),))
+    sensors = [sim.laser("l", "left", x_m=1.0, height_m=1.0), sim.laser("r", "right", x_m=1.0, height_m=1.0)]
+    (tmp_path / "sensors.yaml").write_text(sim.layout_yaml(sensors))
+    readings, motion = write_drive(tmp_path, "real", sim.drive_readings(road, sensors, 10.0, 121.0, seed=4))
+    windows = rp.range_sensor.process(readings, tmp_path / "sensors.yaml", motion=motion)
+    assert len(windows) == 4
+    for w in windows[:3]:
+        s = np.array(w["profiles"]["left"]["s"])
+        ok = np.isfinite(np.array(w["profiles"]["left"]["z"], float))  # window 0 starts at the beam's foot
+        expected = rp.reference.profile_iri(np.interp(s[ok], x, elevation), 0.1).value
+        assert w["roughness"]["left"]["iri"]["value"] == pytest.approx(expected, rel=0.10)
+        assert w["roughness"]["vehicle"]["class"] is not None

@@ -11,7 +11,7 @@ distance is d = a1·c + a2 at the bench temperature, d = a1·c·v(T)/v(T_cal) + 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Optional, Sequence
 
 import numpy as np
@@ -121,6 +121,23 @@ class BenchTrack:
 
     def height(self, x, y) -> np.ndarray:
         return bench_profile(np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))[0])
+
+
+@dataclass(frozen=True)
+class ProfileTrack:
+    """A measured longitudinal profile laid on the road (sim.Road's bumps take it): height z(x) linearly
+    interpolated, the same across y, 0 outside."""
+
+    x_m: np.ndarray
+    z_m: np.ndarray
+
+    @property
+    def height_m(self) -> float:
+        return float(np.max(self.z_m, initial=0.0))
+
+    def height(self, x, y) -> np.ndarray:
+        x = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))[0]
+        return np.interp(x, self.x_m, self.z_m, left=0.0, right=0.0)
 
 
 def bench_road() -> Road:
@@ -249,8 +266,3 @@ def bench_counts(sensor: RangeSensorModel, distances_m, repeats: int = 20, seed:
     d = np.repeat(np.asarray(distances_m, float), repeats)
     c = np.round((d + rng.normal(0.0, sensor.noise_m, len(d)) - sensor.a2) / sensor.a1)
     return np.column_stack([c, d])
-
-
-def with_truth(sensor: RangeSensorModel, **changes) -> RangeSensorModel:
-    """A copy with some fields changed (e.g. a layout that differs from the true mounting)."""
-    return replace(sensor, **changes)
