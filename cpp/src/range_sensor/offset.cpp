@@ -70,11 +70,16 @@ Cloud::Ptr cloud_of(const std::vector<double>& x, const std::vector<double>& z, 
     return c;
 }
 
+// The reference as closest-point targets no further apart than kTargetSpacing along the scaled curve: on steep
+// edges a fixed x step leaves gaps that pull the registration towards the denser side.
 Cloud::Ptr dense_reference(const Reference& ref, double scale) {
+    constexpr double kTargetSpacing = 0.0005;
     std::vector<double> x, z;
-    for (double q = ref.x.front(); q <= ref.x.back(); q += kReferenceStep_m) {
+    for (double q = ref.x.front(); q <= ref.x.back();) {
         x.push_back(q);
         z.push_back(ref.at(q));
+        const double g = scale * ref.slope(q + 0.5 * kReferenceStep_m);
+        q += std::isfinite(g) ? std::min(kReferenceStep_m, kTargetSpacing / std::sqrt(1.0 + g * g)) : kReferenceStep_m;
     }
     return cloud_of(x, z, scale);
 }

@@ -171,12 +171,13 @@ void append_array(std::string& out, const char* name, const std::vector<RangeSam
 }
 
 std::string samples_json(const std::vector<RangeSample>& samples, const std::vector<RangeSensor>& layout) {
+    std::vector<std::string> quoted_ids;
+    for (const RangeSensor& s : layout) quoted_ids.push_back(nlohmann::json(s.id).dump());
     std::string out = "{";
+    out.reserve(samples.size() * 96);
     append_array(out, "t", samples, [&](const RangeSample& x) { append_number(out, x.t_s); });
     out += ',';
-    append_array(out, "sensor", samples, [&](const RangeSample& x) {
-        out += nlohmann::json(layout[static_cast<std::size_t>(x.sensor)].id).dump();
-    });
+    append_array(out, "sensor", samples, [&](const RangeSample& x) { out += quoted_ids[static_cast<std::size_t>(x.sensor)]; });
     out += ',';
     append_array(out, "s", samples, [&](const RangeSample& x) { append_number(out, x.s_m); });
     out += ',';
