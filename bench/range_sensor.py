@@ -268,7 +268,8 @@ def main() -> None:
     try:
         print(f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, 1-min load "
               f"{os.getloadavg()[0]:.2f} at the start\n")
-        print("**Distance calibration** (ultrasonic, |error| at most over the seeds; target a1 ≤ 0.5 %, a2 ≤ 1 mm)\n")
+        print("**Distance calibration** (ultrasonic, |error| at most over the seeds; "
+              "target a1 ≤ 0.5 %, a2 ≤ 1 mm)\n")
         print(md_table(["bench", "seeds", "a1 error %", "a2 error mm", "residual RMS mm", "rejected", "met"],
                        distance_rows(2 if args.quick else 10)))
         bench_rows, runs = bench_offset(work)
@@ -281,7 +282,8 @@ def main() -> None:
         print("\n**Profile after calibration** (bench track; target laser RMSE ≤ 3 mm)\n")
         print(md_table(["sensor", "speed m/s", "samples", "RMSE mm (detrended)", "max abs error mm", "met"], prof))
         print("\n**Height bias by the track's slope** (mean measured − true, mm; the ultrasonic cone's first echo)\n")
-        print(md_table(["sensor", "speed m/s", "slope < −0.5", "−0.5 … −0.1", "−0.1 … 0.1", "0.1 … 0.5", "> 0.5"],
+        print(md_table(["sensor", "speed m/s", "slope < −0.5", "−0.5 … −0.1", "−0.1 … 0.1", "0.1 … 0.5",
+                        "> 0.5"],
                        bias))
         print("\n**ISO 8608 class and IRI** (laser, both wheels, 10 m/s, 40 m windows; target within one class, "
               "IRI within 10 %)\n")

@@ -54,7 +54,8 @@ void read_reference(const std::string& path, std::vector<double>& x, std::vector
         if (line.empty() || line[0] == '#') continue;
         std::vector<std::string> cells;
         std::size_t start = 0;
-        for (std::size_t p; (p = line.find(',', start)) != std::string::npos; start = p + 1) cells.push_back(line.substr(start, p - start));
+        for (std::size_t p; (p = line.find(',',
+            start)) != std::string::npos; start = p + 1) cells.push_back(line.substr(start, p - start));
         cells.push_back(line.substr(start));
         for (auto& c : cells)
             while (!c.empty() && (c.back() == '\r' || c.back() == ' ')) c.pop_back();
@@ -63,14 +64,16 @@ void read_reference(const std::string& path, std::vector<double>& x, std::vector
                 if (cells[i] == "x") xi = static_cast<int>(i);
                 if (cells[i] == "z") zi = static_cast<int>(i);
             }
-            if (xi < 0 || zi < 0) throw std::runtime_error(path + ":" + std::to_string(number) + ": expected a header x,z");
+            if (xi < 0 || zi < 0) throw std::runtime_error(path + ":" + std::to_string(number)
+                + ": expected a header x,z");
             continue;
         }
         try {
             const double xv = std::stod(cells.at(static_cast<std::size_t>(xi)));
             const double zv = std::stod(cells.at(static_cast<std::size_t>(zi)));
             if (!std::isfinite(xv) || !std::isfinite(zv)) throw std::invalid_argument("not finite");
-            if (!x.empty() && xv <= x.back()) throw std::runtime_error(path + ":" + std::to_string(number) + ": x must increase");
+            if (!x.empty() && xv <= x.back()) throw std::runtime_error(path + ":" + std::to_string(number)
+                + ": x must increase");
             x.push_back(xv);
             z.push_back(zv);
         } catch (const std::logic_error&) {
@@ -108,7 +111,8 @@ int calibrate_offset(const RangeOptions& o) {
 
 int run_readings(const RangeOptions& o, bool with_motion) {
     auto layout = rp::read_range_layout(o.sensors);
-    rp::RangeCalibration cal = o.calibration.empty() ? rp::RangeCalibration{} : rp::read_range_calibration(o.calibration);
+    rp::RangeCalibration cal = o.calibration.empty()
+        ? rp::RangeCalibration{} : rp::read_range_calibration(o.calibration);
     rp::RangeProfilerConfig cfg;
     cfg.frame_length_m = o.frame_length_m;
     rp::RangeProfiler profiler(std::move(layout), std::move(cal), cfg);
@@ -145,19 +149,23 @@ std::function<int()> add_range_commands(CLI::App& app) {
     CLI::App* range = app.add_subcommand("range", "Point range preview sensors (ultrasonic, laser): calibrate, run");
     range->require_subcommand(1);
 
-    CLI::App* dist = range->add_subcommand("calibrate-distance", "Fit d = a1*c + a2 to bench readings (CSV count,distance)");
+    CLI::App* dist = range->add_subcommand("calibrate-distance",
+        "Fit d = a1*c + a2 to bench readings (CSV count,distance)");
     dist->add_option("BENCH", o->bench, "CSV with header count,distance (m)")->required();
     dist->add_option("--calibration", o->calibration, "Existing calibration file to keep the per-sensor entries of");
     dist->add_option("-o,--output", o->output, "Calibration file to write (YAML)")->required();
 
-    CLI::App* off = range->add_subcommand("calibrate-offset", "Fit x = b1*v + b2 from runs over a known profile at 2+ speeds");
+    CLI::App* off = range->add_subcommand("calibrate-offset",
+        "Fit x = b1*v + b2 from runs over a known profile at 2+ speeds");
     off->add_option("RUNS", o->runs, "Readings CSV of each run")->required();
     off->add_option("--reference", o->reference, "Known profile, CSV with header x,z (m; x where the axle is at the "
                                                   "motion table's first time = 0)")->required();
     off->add_option("--sensors", o->sensors, "Sensor layout (YAML)")->required();
     off->add_option("--calibration", o->calibration, "Calibration file with the distance calibration");
-    off->add_option("--motion", o->motions, "Motion CSV (t,speed,yaw_rate) of each run, in the runs' order")->required();
-    off->add_option("--search", o->search_m, "Search the shift within the layout's geometric foot ± this, m (default 0.5)")
+    off->add_option("--motion", o->motions,
+        "Motion CSV (t,speed,yaw_rate) of each run, in the runs' order")->required();
+    off->add_option("--search", o->search_m,
+        "Search the shift within the layout's geometric foot ± this, m (default 0.5)")
         ->check(CLI::PositiveNumber);
     off->add_option("-o,--output", o->output, "Calibration file to write (YAML)")->required();
 
@@ -177,7 +185,8 @@ std::function<int()> add_range_commands(CLI::App& app) {
     return [o, dist, off, run, motion, speed]() {
         if (dist->parsed()) return calibrate_distance(*o);
         if (off->parsed()) return calibrate_offset(*o);
-        if (!motion->count() && !speed->count()) throw std::runtime_error("range run needs --motion M.csv or --speed V");
+        if (!motion->count() && !speed->count())
+            throw std::runtime_error("range run needs --motion M.csv or --speed V");
         return run_readings(*o, motion->count() > 0);
     };
 }

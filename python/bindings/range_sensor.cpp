@@ -134,7 +134,8 @@ void bind_range_sensor(py::module_& m) {
     m.def("range_calibration_yaml", [](const std::string& path) {
         return rp::range_calibration_to_yaml(rp::read_range_calibration(path));
     }, py::arg("path"));
-    m.def("range_write_distance_calibration", [](DoubleArray counts, DoubleArray distances, const std::string& keep_path,
+    m.def("range_write_distance_calibration", [](DoubleArray counts, DoubleArray distances,
+        const std::string& keep_path,
                                                  const std::string& out_path) {
         rp::RangeCalibration cal = calibration_from(keep_path);
         cal.distance = rp::calibrate_distance(to_vector(counts), to_vector(distances));
@@ -156,7 +157,8 @@ void bind_range_sensor(py::module_& m) {
     });
     m.def("range_register_run", [](DoubleArray x, DoubleArray z, DoubleArray ref_x, DoubleArray ref_z, double guess,
                                    double search) {
-        return shift_dict(rp::register_run(to_vector(x), to_vector(z), to_vector(ref_x), to_vector(ref_z), guess, search));
+        return shift_dict(rp::register_run(to_vector(x), to_vector(z), to_vector(ref_x), to_vector(ref_z), guess,
+            search));
     });
     m.def("range_calibrate_offsets", [](const std::vector<std::string>& runs, const std::vector<std::string>& motions,
                                         const std::string& layout, const std::string& calibration,
@@ -201,7 +203,8 @@ void bind_range_sensor(py::module_& m) {
         }
         return z;
     }, py::arg("estimator"), py::arg("x"), py::arg("y"), "Fused map heights (m, NaN where empty) at odometry x, y");
-    m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z, DoubleArray variance) {
+    m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z,
+        DoubleArray variance) {
         if (x.size() != y.size() || x.size() != z.size() || x.size() != variance.size())
             throw std::invalid_argument("x, y, z and variance must have the same length");
         std::vector<rp::MapSample> samples(static_cast<std::size_t>(x.size()));

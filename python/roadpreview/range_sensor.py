@@ -62,7 +62,8 @@ def map_profile(estimator, y_m: float, x_from_m: float, x_to_m: float, step_m: f
     z = core().fusion_map_heights(estimator._impl, x, np.full_like(x, y_m))
     ok = np.isfinite(z)
     if ok.sum() < 2:
-        raise ValueError(f"the fused map holds fewer than 2 cells along y = {y_m} m between x = {x_from_m} and {x_to_m} m")
+        raise ValueError(f"the fused map holds fewer than 2 cells along y = {y_m} m "
+                         f"between x = {x_from_m} and {x_to_m} m")
     first, last = np.flatnonzero(ok)[[0, -1]]
     x, z, ok = x[first:last + 1], z[first:last + 1], ok[first:last + 1]
     return np.column_stack([x, np.interp(x, x[ok], z[ok])])

@@ -100,12 +100,14 @@ TEST(RangeSensor, CountsFollowTheSpeedOfSound) {
 }
 
 TEST(RangeSensor, LayoutErrorsNameFileAndSensor) {
-    const std::string ok = write_file("ok.yaml", "sensors:\n  - {id: a, kind: ultrasonic, wheel: left, x_m: 0.5, y_m: 0.8, "
+    const std::string ok = write_file("ok.yaml",
+        "sensors:\n  - {id: a, kind: ultrasonic, wheel: left, x_m: 0.5, y_m: 0.8, "
                                                  "height_m: 0.3, pitch_deg: 0, beam_half_angle_deg: 12}\n");
     const auto layout = rp::read_range_layout(ok);
     ASSERT_EQ(layout.size(), 1u);
     EXPECT_EQ(layout[0].kind, rp::RangeKind::Ultrasonic);
-    const std::string bad = write_file("bad.yaml", "sensors:\n  - {id: a, kind: radar, wheel: left, x_m: 0.5, y_m: 0.8, "
+    const std::string bad = write_file("bad.yaml",
+        "sensors:\n  - {id: a, kind: radar, wheel: left, x_m: 0.5, y_m: 0.8, "
                                                    "height_m: 0.3}\n");
     try {
         rp::read_range_layout(bad);
@@ -183,7 +185,8 @@ TEST(RangeSensor, IcpAndCrossCorrelationFindAKnownShift) {
 TEST(RangeSensor, OffsetCalibrationExactOnNoiseFreeRuns) {
     const rp::ReferenceProfile ref = bench_like();
     const double b1 = -0.02, b2 = 0.45;
-    const std::vector<std::vector<rp::RangeSample>> runs = {run_over(ref, 0.2, b1 * 0.2 + b2), run_over(ref, 1.0, b1 * 1.0 + b2)};
+    const std::vector<std::vector<rp::RangeSample>> runs = {run_over(ref, 0.2, b1 * 0.2 + b2), run_over(ref, 1.0,
+        b1 * 1.0 + b2)};
     const rp::OffsetCalibration o = rp::calibrate_offset(runs, {"slow", "fast"}, {ref}, 0.5, 0.3);
     EXPECT_NEAR(o.b1_s, b1, 0.002);
     EXPECT_NEAR(o.b2_m, b2, 0.002);  // point-to-point ICP on a 0.5 mm target spacing: about 1 mm per shift
@@ -202,7 +205,8 @@ TEST(RangeSensor, ProfilerWindowsAndBins) {
     const std::string readings = write_file("long.csv", text);
     rp::RangeProfiler profiler(layout, {});
     std::vector<rp::RangeWindow> windows;
-    const auto n = profiler.run(readings, rp::RangeMotion(10.0, 0.0), [&](const rp::RangeWindow& w) { windows.push_back(w); });
+    const auto n = profiler.run(readings, rp::RangeMotion(10.0, 0.0),
+        [&](const rp::RangeWindow& w) { windows.push_back(w); });
     EXPECT_EQ(n, 20000);
     ASSERT_EQ(windows.size(), 6u);  // 0.5 … 200.5 m in 40 m windows
     const rp::Profile& p = windows[1].left;

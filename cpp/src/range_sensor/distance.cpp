@@ -61,7 +61,8 @@ DistanceCalibration calibrate_distance(const std::vector<double>& counts, const 
             c.push_back(counts[i]);
             d.push_back(distances[i]);
         }
-    if (c.size() < 3) throw std::invalid_argument("distance calibration needs at least 3 finite (count, distance) pairs");
+    if (c.size() < 3)
+        throw std::invalid_argument("distance calibration needs at least 3 finite (count, distance) pairs");
     if (*std::min_element(c.begin(), c.end()) == *std::max_element(c.begin(), c.end()))
         throw std::invalid_argument("distance calibration needs readings at two or more distinct counts");
     DistanceCalibration cal;
@@ -107,7 +108,8 @@ void read_bench_csv(const std::string& path, std::vector<double>& counts, std::v
         distances.push_back(csv::finite_cell(cells, header.at("distance"), where, "distance"));
     }
     if (header.empty()) throw std::runtime_error(path + ": empty file, expected a header count,distance");
-    if (counts.size() < 3) throw std::runtime_error(path + ": need at least 3 readings, got " + std::to_string(counts.size()));
+    if (counts.size() < 3) throw std::runtime_error(path + ": need at least 3 readings, got "
+        + std::to_string(counts.size()));
 }
 
 }  // namespace roadpreview

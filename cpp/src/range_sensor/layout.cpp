@@ -19,7 +19,8 @@ double finite_field(const YAML::Node& node, const char* key, const std::string& 
         throw std::runtime_error(where + ": missing field '" + key + "'");
     }
     const double v = node[key].as<double>();
-    if (std::isnan(v) || (std::isinf(v) && !fallback)) throw std::runtime_error(where + ": field '" + key + "' is not finite");
+    if (std::isnan(v) || (std::isinf(v) && !fallback)) throw std::runtime_error(where + ": field '" + key
+        + "' is not finite");
     return v;
 }
 
@@ -29,16 +30,19 @@ RangeSensor sensor_from(const YAML::Node& node, const std::string& where) {
     s.id = node["id"].as<std::string>();
     const std::string at = where + " (sensor '" + s.id + "')";
     const std::string kind = node["kind"] ? node["kind"].as<std::string>() : "";
-    if (kind != "ultrasonic" && kind != "laser") throw std::runtime_error(at + ": kind must be ultrasonic or laser, got '" + kind + "'");
+    if (kind != "ultrasonic" && kind != "laser") throw std::runtime_error(at
+        + ": kind must be ultrasonic or laser, got '" + kind + "'");
     s.kind = kind == "ultrasonic" ? RangeKind::Ultrasonic : RangeKind::Laser;
     const std::string wheel = node["wheel"] ? node["wheel"].as<std::string>() : "";
-    if (wheel != "left" && wheel != "right") throw std::runtime_error(at + ": wheel must be left or right, got '" + wheel + "'");
+    if (wheel != "left" && wheel != "right") throw std::runtime_error(at + ": wheel must be left or right, got '"
+        + wheel + "'");
     s.wheel = wheel == "left" ? Wheel::Left : Wheel::Right;
     s.x_m = finite_field(node, "x_m", at, std::nullopt);
     s.y_m = finite_field(node, "y_m", at, std::nullopt);
     s.height_m = finite_field(node, "height_m", at, std::nullopt);
     s.pitch_deg = finite_field(node, "pitch_deg", at, 0.0);
-    s.beam_half_angle_deg = finite_field(node, "beam_half_angle_deg", at, s.kind == RangeKind::Laser ? std::optional(0.0) : std::nullopt);
+    s.beam_half_angle_deg = finite_field(node, "beam_half_angle_deg", at,
+        s.kind == RangeKind::Laser ? std::optional(0.0) : std::nullopt);
     s.min_count = finite_field(node, "min_count", at, 0.0);
     s.max_count = finite_field(node, "max_count", at, s.max_count);
     s.max_distance_m = finite_field(node, "max_distance_m", at, s.max_distance_m);
@@ -138,7 +142,8 @@ std::vector<RangeSensor> read_range_layout(const std::string& path) {
         std::set<std::string> ids;
         for (std::size_t i = 0; i < sensors.size(); ++i) {
             layout.push_back(sensor_from(sensors[i], path + ": sensors[" + std::to_string(i) + "]"));
-            if (!ids.insert(layout.back().id).second) throw std::runtime_error(path + ": sensor id '" + layout.back().id + "' appears twice");
+            if (!ids.insert(layout.back().id).second) throw std::runtime_error(path + ": sensor id '"
+                + layout.back().id + "' appears twice");
         }
     } catch (const YAML::Exception& e) {
         throw std::runtime_error(path + ": not a valid sensor layout (" + e.what() + ")");
@@ -147,9 +152,8 @@ std::vector<RangeSensor> read_range_layout(const std::string& path) {
 }
 
 double distance_of_count(const DistanceCalibration& cal, double count, double temperature_c) {
-    const double scale = std::isnan(temperature_c) ? 1.0
-                                                   : speed_of_sound_mps(temperature_c) / speed_of_sound_mps(cal.temperature_c);
-    return cal.a1 * count * scale + cal.a2;
+    if (std::isnan(temperature_c)) return cal.a1 * count + cal.a2;
+    return cal.a1 * count * speed_of_sound_mps(temperature_c) / speed_of_sound_mps(cal.temperature_c) + cal.a2;
 }
 
 const DistanceCalibration* RangeCalibration::distance_for(const std::string& id) const {

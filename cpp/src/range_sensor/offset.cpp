@@ -42,12 +42,14 @@ struct Reference {
     const std::vector<double>& z;
     double at(double q) const {
         if (!(q >= x.front() && q <= x.back())) return std::numeric_limits<double>::quiet_NaN();
-        const auto hi = std::min<std::size_t>(static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), q) - x.begin()),
+        const auto hi = std::min<std::size_t>(static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(),
+            q) - x.begin()),
                                               x.size() - 1);
         const double w = (q - x[hi - 1]) / (x[hi] - x[hi - 1]);
         return z[hi - 1] + w * (z[hi] - z[hi - 1]);
     }
-    double slope(double q) const { return (at(q + 0.5 * kReferenceStep_m) - at(q - 0.5 * kReferenceStep_m)) / kReferenceStep_m; }
+    double slope(double q) const { return (at(q
+        + 0.5 * kReferenceStep_m) - at(q - 0.5 * kReferenceStep_m)) / kReferenceStep_m; }
 };
 
 // Heights are scaled so the reference's RMS slope is about 1: closest points then carry x information.
@@ -112,7 +114,8 @@ double xcorr_shift(const std::vector<double>& x, const std::vector<double>& z, c
                    double search) {
     const int k = static_cast<int>(std::ceil(search / kReferenceStep_m));
     std::vector<double> c(static_cast<std::size_t>(2 * k + 1));
-    for (int i = -k; i <= k; ++i) c[static_cast<std::size_t>(i + k)] = correlation(x, z, ref, guess + i * kReferenceStep_m);
+    for (int i = -k; i <= k; ++i) c[static_cast<std::size_t>(i + k)] = correlation(x, z, ref,
+        guess + i * kReferenceStep_m);
     const auto best = static_cast<std::size_t>(std::max_element(c.begin(), c.end()) - c.begin());
     double frac = 0.0;
     if (best > 0 && best + 1 < c.size()) {
@@ -169,14 +172,17 @@ IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::s
 
 }  // namespace
 
-RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m, const std::vector<double>& ref_x_m,
+RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m,
+    const std::vector<double>& ref_x_m,
                       const std::vector<double>& ref_z_m, double guess_m, double search_m) {
     if (ref_x_m.size() < 2 || ref_x_m.size() != ref_z_m.size())
         throw std::invalid_argument("the reference profile needs 2 or more (x, z) points of equal count");
     for (std::size_t i = 1; i < ref_x_m.size(); ++i)
         if (!(ref_x_m[i] > ref_x_m[i - 1]) || !std::isfinite(ref_z_m[i]))
-            throw std::invalid_argument("the reference profile's x must increase and its z be finite (row " + std::to_string(i) + ")");
-    if (x_m.size() < 10) throw std::invalid_argument("a run needs at least 10 samples, got " + std::to_string(x_m.size()));
+            throw std::invalid_argument("the reference profile's x must increase and its z be finite (row "
+                + std::to_string(i) + ")");
+    if (x_m.size() < 10) throw std::invalid_argument("a run needs at least 10 samples, got "
+        + std::to_string(x_m.size()));
     const Reference ref{ref_x_m, ref_z_m};
     const double scale = height_scale(ref);
     const Cloud::Ptr target = dense_reference(ref, scale);
@@ -312,7 +318,8 @@ RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, Range
     RangeCalibration raw = cal;  // samples where the axle was: b1 = b2 = 0
     for (const RangeSensor& s : layout) raw.sensors[s.id].offset = OffsetCalibration{};
     std::vector<std::vector<RangeSample>> all;
-    for (std::size_t r = 0; r < run_paths.size(); ++r) all.push_back(read_range_samples(run_paths[r], layout, raw, motions[r]));
+    for (std::size_t r = 0; r < run_paths.size(); ++r) all.push_back(read_range_samples(run_paths[r], layout, raw,
+        motions[r]));
     for (std::size_t k = 0; k < layout.size(); ++k) {
         std::vector<std::vector<RangeSample>> runs(run_paths.size());
         for (std::size_t r = 0; r < all.size(); ++r)
@@ -320,7 +327,8 @@ RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, Range
                 if (x.sensor == static_cast<std::int32_t>(k)) runs[r].push_back(x);
         try {
             cal.sensors[layout[k].id].offset =
-                calibrate_offset(runs, run_paths, references[references.size() == 1 ? 0 : k], geometric_foot_m(layout[k]), search_m);
+                calibrate_offset(runs, run_paths, references[references.size() == 1 ? 0 : k],
+                    geometric_foot_m(layout[k]), search_m);
         } catch (const std::invalid_argument& e) {
             throw std::runtime_error("sensor '" + layout[k].id + "': " + e.what());
         }

@@ -177,7 +177,8 @@ std::string samples_json(const std::vector<RangeSample>& samples, const std::vec
     out.reserve(samples.size() * 96);
     append_array(out, "t", samples, [&](const RangeSample& x) { append_number(out, x.t_s); });
     out += ',';
-    append_array(out, "sensor", samples, [&](const RangeSample& x) { out += quoted_ids[static_cast<std::size_t>(x.sensor)]; });
+    append_array(out, "sensor", samples,
+        [&](const RangeSample& x) { out += quoted_ids[static_cast<std::size_t>(x.sensor)]; });
     out += ',';
     append_array(out, "s", samples, [&](const RangeSample& x) { append_number(out, x.s_m); });
     out += ',';
@@ -191,7 +192,8 @@ std::string samples_json(const std::vector<RangeSample>& samples, const std::vec
 
 }  // namespace
 
-std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSensor>& layout, const std::string& source) {
+std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSensor>& layout,
+    const std::string& source) {
     using json = nlohmann::ordered_json;
     const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
     const json line = {

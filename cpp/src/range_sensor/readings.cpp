@@ -131,7 +131,8 @@ bool RangeReadingReader::next(Reading& out) {
         fail("expected " + std::to_string(columns_) + " columns like the header, got \"" + std::string(b, e) + "\"");
     out.line = line_;
     if (!parse_double(cells[t_col_], out.t_s) || !std::isfinite(out.t_s)) fail("t is not a finite number");
-    if (out.t_s < last_t_) fail("time goes backwards (t = " + number_text(out.t_s) + " s after " + number_text(last_t_) + " s)");
+    if (out.t_s < last_t_) fail("time goes backwards (t = " + number_text(out.t_s) + " s after "
+        + number_text(last_t_) + " s)");
     last_t_ = out.t_s;
     const std::string_view id = cells[sensor_col_];
     if (out.sensor < 0 || out.sensor >= static_cast<std::int32_t>(layout_.size()) ||
@@ -148,7 +149,8 @@ bool RangeReadingReader::next(Reading& out) {
         fail("count " + number_text(out.value) + " outside the layout's range [" + number_text(s.min_count) + ", " +
              number_text(s.max_count) + "] of sensor '" + s.id + "'");
     if (!counts_ && (out.value < 0 || out.value > s.max_distance_m))
-        fail("distance " + number_text(out.value) + " m outside the layout's range [0, " + number_text(s.max_distance_m) +
+        fail("distance " + number_text(out.value) + " m outside the layout's range [0, "
+            + number_text(s.max_distance_m) +
              "] m of sensor '" + s.id + "'");
     out.temperature_c = std::numeric_limits<double>::quiet_NaN();
     if (temperature_col_ >= 0 && !cells[temperature_col_].empty() &&
@@ -208,7 +210,8 @@ RangeSample SamplePlacer::place(const RangeReadingReader::Reading& r, const std:
     const RangeSensor& s = layout_[k];
     double d = r.value;
     if (counts_) {
-        if (!distance_[k]) throw std::runtime_error(where() + ": sensor '" + s.id + "' reads counts but the calibration "
+        if (!distance_[k]) throw std::runtime_error(where() + ": sensor '" + s.id
+            + "' reads counts but the calibration "
                                                     "has no distance calibration for it (range calibrate-distance)");
         d = distance_of_count(*distance_[k], r.value, r.temperature_c);
     }

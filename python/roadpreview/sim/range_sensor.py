@@ -242,18 +242,22 @@ def drive_readings(road: Road, sensors: Sequence[RangeSensorModel], speed_mps: f
         true_z = road.height(x_meas + s.foot_m, np.full_like(t, s.y_m))
         d = d_true + rng.normal(0.0, s.noise_m, len(t)) if s.noise_m > 0 else d_true
         if counts:
-            scale = 1.0 if temperature_c is None else speed_of_sound_mps(temperature_c) / speed_of_sound_mps(s.temperature_c)
+            scale = 1.0
+            if temperature_c is not None:
+                scale = speed_of_sound_mps(temperature_c) / speed_of_sound_mps(s.temperature_c)
             value = np.round((d - s.a2) / (s.a1 * scale))
         else:
             value = d
         keep = rng.random(len(t)) >= s.dropout
-        parts.append((t[keep], np.full(keep.sum(), s.id, dtype=object), value[keep], x_meas[keep] + speed_mps * s.latency_s,
+        parts.append((t[keep], np.full(keep.sum(), s.id, dtype=object), value[keep],
+                      x_meas[keep] + speed_mps * s.latency_s,
                       true_z[keep]))
     t = np.concatenate([p[0] for p in parts])
     order = np.argsort(t, kind="stable")
     motion_t = np.linspace(0.0, duration + 0.01, max(2, int(duration * 10) + 2))
     return RangeDrive(
-        t=t[order], sensor=np.concatenate([p[1] for p in parts])[order], value=np.concatenate([p[2] for p in parts])[order],
+        t=t[order], sensor=np.concatenate([p[1] for p in parts])[order],
+        value=np.concatenate([p[2] for p in parts])[order],
         counts=counts, temperature_c=None if temperature_c is None else np.full(len(t), float(temperature_c)),
         motion=np.column_stack([motion_t, np.full_like(motion_t, speed_mps), np.zeros_like(motion_t)]),
         x_axle=np.concatenate([p[3] for p in parts])[order], true_z=np.concatenate([p[4] for p in parts])[order])

@@ -231,7 +231,8 @@ RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, Range
 double geometric_foot_m(const RangeSensor& s);
 
 /// One run's shift by ICP and by cross-correlation (see calibrate_offset); speed_mps is left 0.
-RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m, const std::vector<double>& ref_x_m,
+RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m,
+    const std::vector<double>& ref_x_m,
                       const std::vector<double>& ref_z_m, double guess_m, double search_m);
 
 struct RangeProfilerConfig {
@@ -279,7 +280,7 @@ private:
     RangeProfilerConfig cfg_;
     std::int64_t index_ = 0;
     std::vector<RangeSample> open_, next_;
-    std::vector<double> latest_;  // per sensor, the furthest s_m so far  // the open window's samples and those already beyond it
+    std::vector<double> latest_;  // per sensor, the furthest s_m so far
 };
 
 /// Profile of samples s_m ∈ [s0, s0 + length) binned at ds: median, count, spread, gaps filled (max_gap_m).
