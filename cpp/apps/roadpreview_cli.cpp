@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "range_commands.hpp"
 #include "roadpreview/roadpreview.hpp"
 
 namespace rp = roadpreview;
@@ -667,10 +668,13 @@ int main(int argc, char** argv) {
     cal_cmd->add_flag("-q,--quiet", c.quiet, "No per-frame progress on stderr");
     add_source_options(cal_cmd, c.source);
 
+    const auto range_action = add_range_commands(app);
+
     if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
         if (cal_cmd->parsed()) return calibrate(c, *cal_cmd);
+        if (app.got_subcommand("range")) return range_action();
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

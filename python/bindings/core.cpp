@@ -18,6 +18,7 @@ namespace rp = roadpreview;
 
 void bind_io(py::module_& m);  // io.cpp
 void bind_calibration(py::module_& m);  // calibration.cpp
+void bind_range_sensor(py::module_& m);  // range_sensor.cpp
 
 namespace {
 
@@ -558,6 +559,7 @@ PYBIND11_MODULE(_core, m) {
     bind_stages(m);
     bind_io(m);
     bind_calibration(m);
+    bind_range_sensor(m);
     m.def("read_frame", [](const std::string& path, int columns) {
         rp::Frame f = rp::read_frame(path, columns);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));

@@ -19,6 +19,7 @@
 #include "roadpreview/pipeline/pipeline.hpp"
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/roughness.hpp"
+#include "roadpreview/range_sensor/range_sensor.hpp"
 #include "roadpreview/roughness/support.hpp"
 #include "roadpreview/route/route.hpp"
 #include "roadpreview/version.hpp"

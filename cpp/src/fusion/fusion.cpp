@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -220,6 +221,26 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     for (std::size_t c = 0; c < cells; ++c)
         fuse_cell(map_.cell(touched[c]), medians[c], variances[c], counts[c], frame_, cfg_.fusion);
     ++fused_;
+}
+
+std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) {
+    struct Sum {
+        double weight = 0.0, weighted_z = 0.0;
+        std::int32_t count = 0;
+    };
+    std::map<std::int64_t, Sum> cells;
+    for (const MapSample& m : samples) {
+        const std::int64_t k = map_.slot(m.x_m, m.y_m);
+        if (k < 0 || !std::isfinite(m.z_m) || !(m.variance_m2 >= 0)) continue;
+        const double w = 1.0 / std::max(m.variance_m2, kMinVariance);
+        Sum& sum = cells[k];
+        sum.weight += w;
+        sum.weighted_z += w * m.z_m;
+        ++sum.count;
+    }
+    for (const auto& [k, sum] : cells)
+        fuse_cell(map_.cell(k), sum.weighted_z / sum.weight, 1.0 / sum.weight, sum.count, frame_, cfg_.fusion);
+    return cells.size();
 }
 
 void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,

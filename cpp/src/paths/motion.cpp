@@ -68,8 +68,27 @@ MotionTable MotionTable::read_csv(const std::string& path) {
         table.yaw_rate_.push_back(v[2]);
     }
     if (column.empty() || table.t_.size() < 2) fail(number, "need a header t,speed,yaw_rate and at least two rows");
+    table.distance_.assign(1, 0.0);
+    table.heading_.assign(1, 0.0);
+    for (std::size_t i = 1; i < table.t_.size(); ++i) {
+        const double dt = table.t_[i] - table.t_[i - 1];
+        table.distance_.push_back(table.distance_.back() + 0.5 * dt * (table.speed_[i - 1] + table.speed_[i]));
+        table.heading_.push_back(table.heading_.back() + 0.5 * dt * (table.yaw_rate_[i - 1] + table.yaw_rate_[i]));
+    }
     return table;
 }
+
+double MotionTable::integral(const std::vector<double>& rate, const std::vector<double>& cumulative, double t) const {
+    at(t);  // the span check and its message
+    const auto hi = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
+    const std::size_t i = std::min(hi, t_.size() - 1) - 1;
+    const double dt = t - t_[i];
+    const double rate_t = rate[i] + dt / (t_[i + 1] - t_[i]) * (rate[i + 1] - rate[i]);
+    return cumulative[i] + 0.5 * dt * (rate[i] + rate_t);
+}
+
+double MotionTable::distance_m(double t) const { return integral(speed_, distance_, t); }
+double MotionTable::heading_rad(double t) const { return integral(yaw_rate_, heading_, t); }
 
 Motion MotionTable::at(double t) const {
     if (!(t >= t_.front() && t <= t_.back())) {

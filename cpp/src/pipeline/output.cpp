@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "roadpreview/ground/mounting.hpp"
+#include "pipeline/output_json.hpp"
 #include "roadpreview/pipeline/pipeline.hpp"
 
 namespace roadpreview {
@@ -124,6 +125,11 @@ json fusion_json(const std::optional<FusionStatus>& f, double time_ms) {
 }
 
 }  // namespace
+
+namespace detail {
+nlohmann::ordered_json profile_to_json(const Profile& p) { return profile_json(p); }
+nlohmann::ordered_json roughness_to_json(const Roughness& r) { return roughness_json(r); }
+}  // namespace detail
 
 std::string result_to_json(const Result& r) {
     const json line = {

@@ -107,6 +107,13 @@ Estimator& Estimator::operator=(Estimator&&) noexcept = default;
 
 const Config& Estimator::config() const { return impl_->cfg; }
 
+const TemporalFusion* Estimator::fusion() const { return impl_->fusion ? &*impl_->fusion : nullptr; }
+
+std::size_t Estimator::fuse_samples(const std::vector<MapSample>& samples) {
+    if (!impl_->fusion) throw std::invalid_argument("fusing samples needs a fusion map (fusion.method is \"none\")");
+    return impl_->fusion->fuse_samples(samples);
+}
+
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
     return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
 }

@@ -16,10 +16,14 @@ from .drive import Frame, Pose, drive, scan, trajectory, truth_profiles, wheel_p
 from .lidar import PRESETS, Lidar, hdl_64e, os1_128, preset, vlp_16
 from .road import ISO_CLASSES, GradeChange, Pothole, Road, RoughField, SpeedBump, class_gd_n0, iso_psd
 from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
+from .range_sensor import (BenchTrack, ProfileTrack, RangeDrive, RangeSensorModel, bench_counts, bench_profile, bench_reference,
+                           bench_road, drive_readings, laser, layout_yaml, measured_distance, ultrasonic)
 
 __all__ = [
     "Box", "Frame", "ISO_CLASSES", "LABEL_NONE", "LABEL_OBSTACLE", "LABEL_ROAD", "Lidar", "PRESETS", "Pose",
     "GradeChange", "Pothole", "Road", "RoughField", "Scene", "SpeedBump", "cast", "class_gd_n0", "drive", "hdl_64e",
     "iso_psd",
     "os1_128", "preset", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
+    "BenchTrack", "ProfileTrack", "RangeDrive", "RangeSensorModel", "bench_counts", "bench_profile", "bench_reference", "bench_road",
+    "drive_readings", "laser", "layout_yaml", "measured_distance", "ultrasonic",
 ]

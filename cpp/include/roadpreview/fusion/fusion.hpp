@@ -39,6 +39,13 @@ Pose2 pose_from_matrix(const double (&m)[12]);
 /// std::runtime_error naming the file and line for a line that is not 12 finite numbers.
 std::vector<Pose2> read_kitti_poses(const std::string& path);
 
+/// A height sample in the odometry frame with its variance, e.g. a point range sensor's (docs/method.md §8.6).
+struct MapSample {
+    double x_m = 0.0, y_m = 0.0;  ///< odometry frame
+    double z_m = 0.0;             ///< height on the map's datum (the road at rest below the vehicle)
+    double variance_m2 = 0.0;     ///< of z_m
+};
+
 struct MapCell {
     float height = 0.0f;           ///< m, fused height (levelled frames)
     float variance = 0.0f;         ///< m², estimated variance of `height`
@@ -101,6 +108,10 @@ public:
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
     /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map.
     void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L);
+    /// Fuses height samples into the map: per cell the inverse-variance mean of its samples and that mean's
+    /// variance, fused like a frame's cell (not aligned: the samples carry their own datum). Samples outside the
+    /// window are skipped; returns the cells updated.
+    std::size_t fuse_samples(const std::vector<MapSample>& samples);
     /// Both wheels' profiles sampled from the map along the paths, from −fusion.behind_m to the preview length;
     /// `blocked` (bins 0 ≤ s < preview) as in build_profiles. Fills status.coverage and frame_coverage.
     WheelProfiles profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status) const;

@@ -31,9 +31,18 @@ public:
 
     const std::string& source() const { return source_; }
 
+    /// Distance driven (m) and heading change (rad) from the table's first time to t: the exact integrals of
+    /// the linearly interpolated speed and yaw rate. Throws like at() outside the span.
+    double distance_m(double t) const;
+    double heading_rad(double t) const;
+    double first_time() const { return t_.front(); }
+
 private:
+    double integral(const std::vector<double>& rate, const std::vector<double>& cumulative, double t) const;
+
     std::string source_;
     std::vector<double> t_, speed_, yaw_rate_;
+    std::vector<double> distance_, heading_;  // integrals at each row's time
 };
 
 /// The yaw rate (rad/s about the base frame's z axis) of the mean angular velocity of `samples` (sensor

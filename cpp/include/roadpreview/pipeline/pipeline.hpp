@@ -96,6 +96,11 @@ public:
     }
 
     const Config& config() const;
+    /// The fused map and pose; nullptr when fusion.method is "none".
+    const TemporalFusion* fusion() const;
+    /// Fuses height samples (odometry frame; e.g. point range sensors') into the map, so the next frame's
+    /// profiles carry them. Throws std::invalid_argument when fusion.method is "none". Returns the cells updated.
+    std::size_t fuse_samples(const std::vector<MapSample>& samples);
 
 private:
     struct Impl;

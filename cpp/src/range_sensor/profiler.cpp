@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Range-sensor samples binned into windows along the track, then the roughness and IRI stages
+// (docs/method.md §11.5); the window's output line (docs/output.md).
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/output_json.hpp"
+#include "roadpreview/range_sensor/range_sensor.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kQuietSensorMargin_m = 5.0;  // beyond any layout's spread of sample positions
+
+double median_in_place(std::vector<double>& v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    if (v.size() % 2) return *mid;
+    return 0.5 * (*mid + *std::max_element(v.begin(), mid));
+}
+
+double sample_std(const std::vector<double>& v) {
+    if (v.size() < 2) return kNaN;
+    const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    double ss = 0.0;
+    for (double x : v) ss += (x - mean) * (x - mean);
+    return std::sqrt(ss / static_cast<double>(v.size() - 1));
+}
+
+// Noise-aware roughness needs bins of 2+ readings to measure the noise; with single-reading bins only, the
+// plain fit of §4 (its reason names the fallback).
+Roughness wheel_roughness(const Profile& p, const RangeProfilerConfig& cfg) {
+    Roughness r = analyze_roughness(p, cfg.roughness);
+    if (r.reason == "noise floor unknown") {
+        RoughnessConfig plain = cfg.roughness;
+        plain.noise_aware = false;
+        r = analyze_roughness(p.z, p.ds, plain);
+    }
+    r.iri = profile_iri(p.z, p.ds, cfg.iri);
+    return r;
+}
+
+}  // namespace
+
+Profile bin_samples(const std::vector<RangeSample>& samples, const std::vector<std::uint8_t>& take, double s0_m,
+                    double length_m, double ds_m, double max_gap_m) {
+    const auto bins = static_cast<std::size_t>(std::ceil(length_m / ds_m - 1e-9));
+    std::vector<std::vector<double>> heights(bins);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        if (!take[i]) continue;
+        const double u = (samples[i].s_m - s0_m) / ds_m;
+        if (u >= 0 && u < static_cast<double>(bins)) heights[static_cast<std::size_t>(u)].push_back(samples[i].z_m);
+    }
+    Profile p;
+    p.ds = ds_m;
+    p.s0 = s0_m + 0.5 * ds_m;
+    for (std::size_t k = 0; k < bins; ++k) {
+        p.s.push_back(p.s0 + static_cast<double>(k) * ds_m);
+        p.count.push_back(static_cast<std::int32_t>(heights[k].size()));
+        p.spread.push_back(sample_std(heights[k]));
+        p.z.push_back(heights[k].empty() ? kNaN : median_in_place(heights[k]));
+    }
+    p.blocked.assign(bins, 0);
+    fill_gaps(p.z, ds_m, max_gap_m);
+    return p;
+}
+
+RangeProfiler::RangeProfiler(std::vector<RangeSensor> layout, RangeCalibration cal, RangeProfilerConfig cfg)
+    : layout_(std::move(layout)), cal_(std::move(cal)), cfg_(cfg) {
+    if (layout_.empty()) throw std::invalid_argument("the sensor layout is empty");
+    if (!(cfg_.frame_length_m > 0 && cfg_.ds_m > 0 && cfg_.frame_length_m >= 2 * cfg_.ds_m))
+        throw std::invalid_argument("frame_length_m and ds_m must be > 0 with at least two bins per window");
+    latest_.assign(layout_.size(), -std::numeric_limits<double>::infinity());
+}
+
+std::optional<RangeWindow> RangeProfiler::add(const RangeSample& sample) {
+    const double end = static_cast<double>(index_ + 1) * cfg_.frame_length_m;
+    if (sample.s_m < end) open_.push_back(sample);
+    else next_.push_back(sample);
+    double& latest = latest_[static_cast<std::size_t>(sample.sensor)];
+    latest = std::max(latest, sample.s_m);
+    // Closed once every sensor heard from is past its end (sensors further ahead reach it first), or one is
+    // far past it (another has gone quiet): memory stays bounded.
+    if (latest >= end + kQuietSensorMargin_m) return close_window();
+    for (double s : latest_)
+        if (s != -std::numeric_limits<double>::infinity() && s < end) return std::nullopt;
+    return close_window();
+}
+
+std::optional<RangeWindow> RangeProfiler::finish() {
+    std::optional<RangeWindow> out;
+    if (!open_.empty()) out = close_window();
+    return out;
+}
+
+RangeWindow RangeProfiler::close_window() {
+    RangeWindow w;
+    w.index = index_;
+    w.s_start_m = static_cast<double>(index_) * cfg_.frame_length_m;
+    w.s_end_m = w.s_start_m + cfg_.frame_length_m;
+    std::vector<RangeSample> kept;
+    for (const RangeSample& s : open_)  // samples behind the window (reversing) are dropped
+        if (s.s_m >= w.s_start_m) kept.push_back(s);
+    w.samples = std::move(kept);
+    std::vector<std::uint8_t> left(w.samples.size()), right(w.samples.size());
+    double speed = 0.0;
+    for (std::size_t i = 0; i < w.samples.size(); ++i) {
+        const bool is_left = layout_[static_cast<std::size_t>(w.samples[i].sensor)].wheel == Wheel::Left;
+        left[i] = is_left;
+        right[i] = !is_left;
+        speed += w.samples[i].speed_mps;
+    }
+    if (!w.samples.empty()) {
+        w.t_first_s = w.samples.front().t_s;
+        w.t_last_s = w.samples.back().t_s;
+        w.mean_speed_mps = speed / static_cast<double>(w.samples.size());
+    }
+    w.left = bin_samples(w.samples, left, w.s_start_m, cfg_.frame_length_m, cfg_.ds_m, cfg_.max_gap_m);
+    w.right = bin_samples(w.samples, right, w.s_start_m, cfg_.frame_length_m, cfg_.ds_m, cfg_.max_gap_m);
+    w.left.roughness = wheel_roughness(w.left, cfg_);
+    w.right.roughness = wheel_roughness(w.right, cfg_);
+    w.vehicle = vehicle_roughness(w.left, w.right, cfg_.roughness);
+    if (w.vehicle.reason == "noise floor unknown") {
+        RoughnessConfig plain = cfg_.roughness;
+        plain.noise_aware = false;
+        w.vehicle = vehicle_roughness(w.left.z, w.right.z, cfg_.ds_m, plain);
+    }
+    w.vehicle.iri = vehicle_iri(w.left.roughness.iri, w.right.roughness.iri);
+    if (std::none_of(left.begin(), left.end(), [](auto v) { return v; })) w.reason = "no left-wheel samples";
+    else if (std::none_of(right.begin(), right.end(), [](auto v) { return v; })) w.reason = "no right-wheel samples";
+    ++index_;
+    open_.clear();
+    // Samples already beyond this window wait for theirs (a window may also be empty).
+    const double end = static_cast<double>(index_ + 1) * cfg_.frame_length_m;
+    std::vector<RangeSample> later;
+    for (const RangeSample& s : next_) (s.s_m < end ? open_ : later).push_back(s);
+    next_ = std::move(later);
+    return w;
+}
+
+namespace {
+
+// The samples' arrays, written directly (shortest round-trip numbers): a window holds thousands of samples and
+// building them as JSON values first would cost more than reading them.
+void append_number(std::string& out, double v) {
+    if (!std::isfinite(v)) {
+        out += "null";
+        return;
+    }
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, r.ptr);
+}
+
+template <typename Get>
+void append_array(std::string& out, const char* name, const std::vector<RangeSample>& samples, Get get) {
+    out += '"';
+    out += name;
+    out += "\":[";
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        if (i) out += ',';
+        get(samples[i]);
+    }
+    out += ']';
+}
+
+std::string samples_json(const std::vector<RangeSample>& samples, const std::vector<RangeSensor>& layout) {
+    std::vector<std::string> quoted_ids;
+    for (const RangeSensor& s : layout) quoted_ids.push_back(nlohmann::json(s.id).dump());
+    std::string out = "{";
+    out.reserve(samples.size() * 96);
+    append_array(out, "t", samples, [&](const RangeSample& x) { append_number(out, x.t_s); });
+    out += ',';
+    append_array(out, "sensor", samples,
+        [&](const RangeSample& x) { out += quoted_ids[static_cast<std::size_t>(x.sensor)]; });
+    out += ',';
+    append_array(out, "s", samples, [&](const RangeSample& x) { append_number(out, x.s_m); });
+    out += ',';
+    append_array(out, "z", samples, [&](const RangeSample& x) { append_number(out, x.z_m); });
+    out += ',';
+    append_array(out, "ahead", samples, [&](const RangeSample& x) { append_number(out, x.ahead_m); });
+    out += ',';
+    append_array(out, "time_to_wheel", samples, [&](const RangeSample& x) { append_number(out, x.time_to_wheel_s); });
+    return out + "}";
+}
+
+}  // namespace
+
+std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSensor>& layout,
+    const std::string& source) {
+    using json = nlohmann::ordered_json;
+    const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+    const json line = {
+        {"frame", w.index},
+        {"source", "range"},
+        {"input", source},
+        {"timestamp", w.samples.empty() ? json(nullptr) : json(w.t_first_s)},
+        {"window", {{"s_start", w.s_start_m}, {"s_end", w.s_end_m}, {"t_first", number(w.t_first_s)},
+                    {"t_last", number(w.t_last_s)}, {"mean_speed", w.mean_speed_mps}}},
+        {"profiles", {{"left", detail::profile_to_json(w.left)}, {"right", detail::profile_to_json(w.right)}}},
+        {"roughness", {{"left", detail::roughness_to_json(w.left.roughness)},
+                       {"right", detail::roughness_to_json(w.right.roughness)},
+                       {"vehicle", detail::roughness_to_json(w.vehicle)}}},
+        {"reason", w.reason.empty() ? json(nullptr) : json(w.reason)},
+    };
+    std::string text = line.dump();
+    text.pop_back();  // the closing brace: the samples follow
+    return text + ",\"samples\":" + samples_json(w.samples, layout) + "}";
+}
+
+}  // namespace roadpreview
