@@ -8,29 +8,9 @@
 #include <stdexcept>
 
 #include "roadpreview/core/frames.hpp"
+#include "core/csv.hpp"
 
 namespace roadpreview {
-namespace {
-
-std::vector<std::string> split_csv(const std::string& line) {
-    std::vector<std::string> cells;
-    std::stringstream in(line);
-    std::string cell;
-    while (std::getline(in, cell, ',')) {
-        const auto first = cell.find_first_not_of(" \t\r");
-        const auto last = cell.find_last_not_of(" \t\r");
-        cells.push_back(first == std::string::npos ? "" : cell.substr(first, last - first + 1));
-    }
-    return cells;
-}
-
-bool skipped(const std::string& line) {
-    const auto first = line.find_first_not_of(" \t\r");
-    return first == std::string::npos || line[first] == '#';
-}
-
-}  // namespace
-
 MotionTable MotionTable::read_csv(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open motion file");
@@ -44,8 +24,8 @@ MotionTable MotionTable::read_csv(const std::string& path) {
     std::vector<int> column;  // index of t, speed, yaw_rate in a row
     while (std::getline(in, line)) {
         ++number;
-        if (skipped(line)) continue;
-        const auto cells = split_csv(line);
+        if (csv::skipped(line)) continue;
+        const auto cells = csv::split(line);
         if (column.empty()) {
             for (const char* name : {"t", "speed", "yaw_rate"}) {
                 const auto it = std::find(cells.begin(), cells.end(), name);

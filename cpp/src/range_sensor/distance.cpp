@@ -7,7 +7,7 @@
 
 #include <Eigen/Dense>
 
-#include "range_sensor/csv.hpp"
+#include "core/csv.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
