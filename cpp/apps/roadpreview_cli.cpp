@@ -38,6 +38,9 @@ struct RunOptions {
     std::string fusion;
     double alpha = 0.0;
     std::string poses_file;
+    std::vector<std::string> stereo;  // LEFT RIGHT: image files or directories of them
+    std::string calib;
+    std::string disparity;
 };
 
 // Config file first, then the flags that were given on the command line.
@@ -117,6 +120,11 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
 
 void report_source(const rp::SourceInfo& s) {
     if (s.format == "files") return;
+    if (s.lidar_port == 0) {  // stereo: no packets
+        std::fprintf(stderr, "roadpreview: %s, %s, %s, %s\n", s.format.c_str(), s.sensor_model.c_str(), s.profile.c_str(),
+                     s.metadata.c_str());
+        return;
+    }
     std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
                  s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
                  s.metadata.empty() ? "" : ", ", s.metadata.c_str());
@@ -141,15 +149,44 @@ FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::opti
     return {{o.speed, 0.0}, "default"};
 }
 
+bool is_stereo(const RunOptions& o) { return !o.stereo.empty() || !o.disparity.empty(); }
+
+// The frames of the run: stereo pairs / disparity images, or the INPUT files and recordings.
+std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const rp::Config& cfg) {
+    if (!is_stereo(o)) return rp::open_frames(o.inputs, o.source);
+    rp::StereoInputs in;
+    if (!o.stereo.empty()) in.left = {o.stereo[0]}, in.right = {o.stereo[1]};
+    if (!o.disparity.empty()) in.disparity = {o.disparity};
+    in.calibration = o.calib;
+    return std::make_unique<rp::StereoSource>(in, cfg);
+}
+
+// The config's camera pose, else the stereo calibration's (a YAML with extrinsics).
+rp::Config with_camera_pose(rp::Config cfg, const RunOptions& o) {
+    if (!is_stereo(o) || cfg.extrinsics || cfg.sensor_height) return cfg;
+    const rp::StereoCalibration calib = rp::read_stereo_calibration(o.calib);
+    cfg.extrinsics = rp::stereo_camera_pose(cfg, calib);
+    return cfg;
+}
+
+void check_inputs(const RunOptions& o) {
+    if (is_stereo(o) && !o.inputs.empty())
+        throw std::invalid_argument("give INPUT files or --stereo/--disparity, not both");
+    if (!is_stereo(o) && o.inputs.empty())
+        throw std::invalid_argument("give INPUT files, or --stereo LEFT RIGHT / --disparity DISP with --calib");
+    if (is_stereo(o) && o.calib.empty()) throw std::invalid_argument("--stereo and --disparity need --calib FILE");
+}
+
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
-    const rp::Config cfg = build_config(o, app);
+    check_inputs(o);
+    const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     rp::Estimator est(cfg);
     const auto [first, last] = parse_frame_range(o.frames);
     std::optional<rp::MotionTable> table;
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
-    const auto source = rp::open_frames(o.inputs, o.source);
+    const auto source = open_source(o, cfg);
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
@@ -179,7 +216,7 @@ int run(const RunOptions& o, const CLI::App& app) {
                                          std::to_string(poses.size()) + ")");
             at.pose = poses[static_cast<std::size_t>(index)];
         }
-        rp::Result r = est.process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
+        rp::Result r = est.process(*frame, m.motion.speed_mps, m.motion.yaw_rate_rps, at);
         r.yaw_rate_source = m.yaw_rate_source;
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
@@ -188,7 +225,7 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (!o.quiet) report_frame(static_cast<std::size_t>(index), total, *frame, r);
     }
     if (ms.empty())
-        throw std::runtime_error(o.inputs[0] + ": no frames" +
+        throw std::runtime_error((o.inputs.empty() ? o.calib : o.inputs[0]) + ": no frames" +
                                  (first > 0 ? " from index " + std::to_string(first) + " on (it has " +
                                                   std::to_string(index) + ")"
                                             : std::string()));
@@ -265,7 +302,14 @@ int main(int argc, char** argv) {
 
     RunOptions o;
     CLI::App* run_cmd = app.add_subcommand("run", "Process KITTI .bin / .pcd frames (files or directories) or a pcap recording");
-    run_cmd->add_option("INPUT", o.inputs, "Frame files, or directories of them (sorted by name), or one Ouster/Velodyne .pcap")->required();
+    run_cmd->add_option("INPUT", o.inputs, "Frame files, or directories of them (sorted by name), or one Ouster/Velodyne .pcap");
+    run_cmd->add_option("--stereo", o.stereo, "Rectified stereo pairs: LEFT RIGHT image files, or directories of PNGs "
+                                               "(paired in name order); matched with StereoSGBM")
+        ->expected(2);
+    run_cmd->add_option("--calib", o.calib, "Stereo calibration: KITTI calib.txt (P2/P3) or YAML (fx, fy, cx, cy, "
+                                             "baseline, optional extrinsics)");
+    run_cmd->add_option("--disparity", o.disparity, "Precomputed disparity: a 16-bit PNG (disparity x 256) or a "
+                                                     "directory of them, used instead of matching");
     auto* speed = run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)");
     auto* yaw = run_cmd->add_option("--yaw-rate", o.yaw_rate,
                                     "Yaw rate ω in rad/s (positive turning left); default: the Ouster IMU's gyro if the pcap has one, else 0");

@@ -99,8 +99,10 @@ public:
     /// Moves the vehicle to this frame's pose and the map with it. Resets the map (saying why in
     /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
-    /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map.
-    void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L);
+    /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
+    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread).
+    void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+              const std::vector<float>* height_variances = nullptr);
     /// Both wheels' profiles sampled from the map along the paths, from −fusion.behind_m to the preview length;
     /// `blocked` (bins 0 ≤ s < preview) as in build_profiles. Fills status.coverage and frame_coverage.
     WheelProfiles profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status) const;
@@ -126,6 +128,7 @@ private:
     bool started_ = false;
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
+    std::vector<float> variance_;  // this frame's point height variances, by point (reused)
 };
 
 }  // namespace roadpreview

@@ -35,6 +35,9 @@ struct Frame {
     std::int64_t frame_id = -1;       ///< Ouster: the packets' frame id; Velodyne: sweep count; files: index
     std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
+    /// m², one per point: variance of its distance from the sensor along its line of sight (stereo cameras);
+    /// empty when unknown (LiDAR). Estimator::process takes it to rate the profiles' and the map's noise.
+    std::vector<float> range_variances;
     FrameDiagnostics diagnostics;
 };
 

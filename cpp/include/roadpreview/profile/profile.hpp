@@ -44,7 +44,8 @@ Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 /// Bins per profile, K = ceil(preview_length / ds) (docs/method.md §3).
 std::size_t bin_count(const ProfileConfig& cfg);
 
-/// Profiles of both wheels from ground points (base frame) selected by `mask`.
+/// Profiles of both wheels from ground points (base frame) selected by `mask`. With `height_variances` (m², one
+/// per point), a bin's spread is at least the root of its points' mean height variance (noise_spread).
 struct WheelProfiles {
     Profile left, right;
 };
@@ -54,7 +55,8 @@ struct BlockedBins {
 };
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                             const BlockedBins* blocked = nullptr);
+                             const BlockedBins* blocked = nullptr,
+                             const std::vector<float>* height_variances = nullptr);
 
 /// Linear interpolation across interior runs of NaN no longer than max_gap_m. With `blocked`, a blocked bin
 /// counts as missing and a run holding one is left as it is: nothing is interpolated across an obstacle.
