@@ -13,6 +13,7 @@ from .iri import Iri, profile_iri, rectified_slope
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
+from . import stereo
 from .roughness import (
     ISO_CLASSES,
     ISO_GEOMETRIC_MEANS,
@@ -57,6 +58,7 @@ __all__ = [
     "plan_path",
     "process",
     "process_fused",
+    "stereo",
     "to_base_frame",
     "vehicle_roughness",
     "wheel_obstacles",

@@ -1,4 +1,5 @@
-"""roadpreview.sim — simulated roads of known roughness scanned by simulated spinning LiDARs (numpy only).
+"""roadpreview.sim — simulated roads of known roughness scanned by simulated spinning LiDARs and stereo cameras
+(numpy only).
 
     from roadpreview import sim
     road = sim.Road.iso8608("C", seed=1, bumps=(sim.SpeedBump(x_m=15, height_m=0.05, length_m=0.6),))
@@ -16,9 +17,11 @@ from .drive import Frame, Pose, drive, scan, trajectory, truth_profiles, wheel_p
 from .lidar import PRESETS, Lidar, hdl_64e, os1_128, preset, vlp_16
 from .road import ISO_CLASSES, Pothole, Road, RoughField, SpeedBump, class_gd_n0, iso_psd
 from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
+from .stereo import StereoCamera, StereoFrame, drive_stereo, kitti_stereo, render
 
 __all__ = [
     "Box", "Frame", "ISO_CLASSES", "LABEL_NONE", "LABEL_OBSTACLE", "LABEL_ROAD", "Lidar", "PRESETS", "Pose",
     "Pothole", "Road", "RoughField", "Scene", "SpeedBump", "cast", "class_gd_n0", "drive", "hdl_64e", "iso_psd",
     "os1_128", "preset", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
+    "StereoCamera", "StereoFrame", "drive_stereo", "kitti_stereo", "render",
 ]
