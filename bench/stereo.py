@@ -140,12 +140,12 @@ def camera_extrinsics(calib_path: Path, lidar_height_m: float) -> dict:
 
 def real_pair(pair_dir: Path = PAIR) -> dict:
     """Both sensors through the same pipeline (5 m/s straight ahead, the motion is unknown for one frame)."""
-    PAIR = pair_dir  # noqa: N806
-    camera_cfg = rp.Config(extrinsics=camera_extrinsics(PAIR / "calib.txt", LIDAR_HEIGHT_M))
-    found = rp.io.stereo_points(PAIR / "left.png", PAIR / "right.png", PAIR / "calib.txt", config=camera_cfg)
+    camera_cfg = rp.Config(extrinsics=camera_extrinsics(pair_dir / "calib.txt", LIDAR_HEIGHT_M))
+    found = rp.io.stereo_points(pair_dir / "left.png", pair_dir / "right.png", pair_dir / "calib.txt",
+                                config=camera_cfg)
     stereo = rp.Estimator(camera_cfg).process(found.points, 5.0, 0.0, source="left.png",
                                               range_variances=found.range_variances)
-    lidar_points = rp.io.read(PAIR / "lidar.bin")
+    lidar_points = rp.io.read(pair_dir / "lidar.bin")
     lidar = rp.Estimator(rp.Config(sensor_height=LIDAR_HEIGHT_M)).process(lidar_points, 5.0, 0.0, source="lidar.bin")
     return {"stereo": stereo, "lidar": lidar, "found": found, "extrinsics": camera_cfg.extrinsics}
 
@@ -169,7 +169,7 @@ def print_real(pair: dict) -> None:
           f"x {e.x_m:.3f}, y {e.y_m:.3f}, z {e.z_m:.3f} m, roll {math.degrees(e.roll_rad):.2f}°, "
           f"pitch {math.degrees(e.pitch_rad):.2f}°, yaw {math.degrees(e.yaw_rad):.2f}°. Stereo: "
           f"{len(pair['found'].points)} points from rows {pair['found'].first_row}–374, "
-          f"{stereo.points['ground'] if isinstance(stereo.points, dict) else ''} ground.\n")
+          f"{stereo.points['ground']} ground.\n")
     print(md_table(["wheel", "distance m", "bins with both", "RMS difference cm", "median difference cm"], rows) + "\n")
     rows = []
     for name, res in (("stereo", stereo), ("LiDAR", lidar)):
