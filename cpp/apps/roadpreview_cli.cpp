@@ -49,6 +49,9 @@ struct RunOptions {
     std::vector<double> segment_lengths_m;  // --segments
     std::string segments_file;              // --segments-csv
     std::string profile_dir;                // --export-profile
+    std::vector<std::string> stereo;  // LEFT RIGHT: image files or directories of them
+    std::string calib;
+    std::string disparity;
 };
 
 // True when the subcommand has this option and it was given.
@@ -141,10 +144,15 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
 }
 
 void report_source(const rp::SourceInfo& s) {
-    if (s.format != "files")
-        std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
-                     s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
-                     s.metadata.empty() ? "" : ", ", s.metadata.c_str());
+    if (s.format == "files") return;
+    if (s.lidar_port == 0) {  // stereo: no packets
+        std::fprintf(stderr, "roadpreview: %s, %s, %s, %s\n", s.format.c_str(), s.sensor_model.c_str(), s.profile.c_str(),
+                     s.metadata.c_str());
+        return;
+    }
+    std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
+                 s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
+                 s.metadata.empty() ? "" : ", ", s.metadata.c_str());
     for (const auto& note : s.notes) std::fprintf(stderr, "roadpreview: %s\n", note.c_str());
 }
 
@@ -189,6 +197,12 @@ void note_sequence(const rp::Frame& f, rp::Result& r) {
 }
 
 // A run that writes nothing fails, and leaves no empty output file behind.
+// The input named in messages: the first INPUT, else the stereo pair's left images or the disparity.
+std::string input_label(const RunOptions& o) {
+    if (!o.inputs.empty()) return o.inputs[0];
+    return o.stereo.empty() ? o.disparity : o.stereo[0];
+}
+
 [[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -197,7 +211,7 @@ void note_sequence(const rp::Frame& f, rp::Result& r) {
     std::string where = first > 0 ? " from index " + std::to_string(first) + " on (the input has " +
                                         std::to_string(frames_seen) + ")"
                                   : " in the input";
-    throw std::runtime_error(o.inputs[0] + (o.inputs.size() > 1 ? " ..." : "") + ": no frames" + where +
+    throw std::runtime_error(input_label(o) + (o.inputs.size() > 1 ? " ..." : "") + ": no frames" + where +
                              "; nothing was written");
 }
 
@@ -310,7 +324,7 @@ void write_segments(const RunOptions& o, const rp::RouteBuilder& route) {
 
 void export_profiles(const RunOptions& o, const rp::RouteBuilder& route) {
     std::filesystem::create_directories(o.profile_dir);
-    const std::string title = "roadpreview " + std::filesystem::path(o.inputs[0]).filename().string();
+    const std::string title = "roadpreview " + std::filesystem::path(input_label(o)).filename().string();
     for (const auto& [wheel, profile] : {std::pair{"left", route.left()}, std::pair{"right", route.right()}}) {
         const auto base = std::filesystem::path(o.profile_dir) / wheel;
         std::ofstream csv = open_for_writing(base.string() + ".csv");
@@ -328,14 +342,43 @@ void write_route(const RunOptions& o, const rp::RouteBuilder& route) {
     if (!o.profile_dir.empty()) export_profiles(o, route);
 }
 
+bool is_stereo(const RunOptions& o) { return !o.stereo.empty() || !o.disparity.empty(); }
+
+// The frames of the run: stereo pairs / disparity images, or the INPUT files and recordings.
+std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const rp::Config& cfg) {
+    if (!is_stereo(o)) return rp::open_frames(o.inputs, o.source);
+    rp::StereoInputs in;
+    if (!o.stereo.empty()) in.left = {o.stereo[0]}, in.right = {o.stereo[1]};
+    if (!o.disparity.empty()) in.disparity = {o.disparity};
+    in.calibration = o.calib;
+    return std::make_unique<rp::StereoSource>(in, cfg);
+}
+
+// The config's camera pose, else the stereo calibration's (a YAML with extrinsics).
+rp::Config with_camera_pose(rp::Config cfg, const RunOptions& o) {
+    if (!is_stereo(o) || cfg.extrinsics || cfg.sensor_height) return cfg;
+    const rp::StereoCalibration calib = rp::read_stereo_calibration(o.calib);
+    cfg.extrinsics = rp::stereo_camera_pose(cfg, calib);
+    return cfg;
+}
+
+void check_inputs(const RunOptions& o) {
+    if (is_stereo(o) && !o.inputs.empty())
+        throw std::invalid_argument("give INPUT files or --stereo/--disparity, not both");
+    if (!is_stereo(o) && o.inputs.empty())
+        throw std::invalid_argument("give INPUT files, or --stereo LEFT RIGHT / --disparity DISP with --calib");
+    if (is_stereo(o) && o.calib.empty()) throw std::invalid_argument("--stereo and --disparity need --calib FILE");
+}
+
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
-    rp::Config cfg = build_config(o, app);
+    check_inputs(o);
+    rp::Config cfg = with_camera_pose(build_config(o, app), o);
     const auto [first, last] = parse_frame_range(o.frames);
     std::optional<rp::MotionTable> table;
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
-    const auto source = rp::open_frames(o.inputs, o.source);
+    const auto source = open_source(o, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
@@ -377,7 +420,7 @@ int run(const RunOptions& o, const CLI::App& app) {
         }
         const bool new_sequence = !frame->sequence_break.empty() && index > first;
         if (new_sequence) est->reset();
-        rp::Result r = est->process(frame->points, m.motion.speed_mps, m.motion.yaw_rate_rps, frame->source, at);
+        rp::Result r = est->process(*frame, m.motion.speed_mps, m.motion.yaw_rate_rps, at);
         r.yaw_rate_source = m.yaw_rate_source;
         if (new_sequence) note_sequence(*frame, r);
         if (!mounting_source.empty()) r.mounting_source = mounting_source;
@@ -587,11 +630,18 @@ int main(int argc, char** argv) {
 
     RunOptions o;
     CLI::App* run_cmd =
-        app.add_subcommand("run", "Process .bin / .pcd / .ply frames (files or directories) or pcap recordings");
+        app.add_subcommand("run", "Process .bin / .pcd / .ply frames (files or directories), pcap recordings or "
+                                  "stereo pairs");
     run_cmd->add_option("INPUT", o.inputs,
                         "Frame files, or directories of them (sorted by name), or Ouster/Velodyne .pcap recordings "
-                        "(several: one drive split into files, in time order)")
-        ->required();
+                        "(several: one drive split into files, in time order)");
+    run_cmd->add_option("--stereo", o.stereo, "Rectified stereo pairs: LEFT RIGHT image files, or directories of PNGs "
+                                               "(paired in name order); matched with StereoSGBM")
+        ->expected(2);
+    run_cmd->add_option("--calib", o.calib, "Stereo calibration: KITTI calib.txt (P2/P3) or YAML (fx, fy, cx, cy, "
+                                             "baseline, optional extrinsics)");
+    run_cmd->add_option("--disparity", o.disparity, "Precomputed disparity: a 16-bit PNG (disparity x 256) or a "
+                                                     "directory of them, used instead of matching");
     auto* speed = run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)");
     auto* yaw = run_cmd->add_option("--yaw-rate", o.yaw_rate,
                                     "Yaw rate ω in rad/s (positive turning left); default: the Ouster IMU's gyro if the pcap has one, else 0");

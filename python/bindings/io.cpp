@@ -41,6 +41,95 @@ py::array imu_vectors(const rp::Frame& f, std::array<double, 3> rp::ImuSample::*
     return out;
 }
 
+rp::DisparityImage disparity_from(const py::array_t<float, py::array::c_style | py::array::forcecast>& a) {
+    if (a.ndim() != 2) throw py::value_error("a disparity image must be 2-D (rows, columns), got " + std::to_string(a.ndim()) + "-D");
+    return Eigen::Map<const rp::DisparityImage>(a.data(), a.shape(0), a.shape(1));
+}
+
+using Grey8 = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+Grey8 grey8_from(const py::array& a, const char* name) {
+    if (a.ndim() != 2 || !py::isinstance<py::array_t<std::uint8_t>>(a))
+        throw py::type_error(std::string(name) + " must be a 2-D uint8 grey image");
+    const auto g = a.cast<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>();
+    return Eigen::Map<const Grey8>(g.data(), g.shape(0), g.shape(1));
+}
+
+py::dict points_dict(rp::StereoPoints&& p, int first_row) {
+    py::dict d;
+    auto owned = std::make_unique<rp::StereoPoints>(std::move(p));
+    const rp::StereoPoints& s = *owned;
+    py::capsule owner(owned.release(), [](void* q) { delete static_cast<rp::StereoPoints*>(q); });
+    d["points"] = py::array(py::dtype::of<float>(), {s.points.rows(), Eigen::Index(4)},
+                            {Eigen::Index(4 * sizeof(float)), Eigen::Index(sizeof(float))}, s.points.data(), owner);
+    d["range_variances"] = py::array(py::dtype::of<float>(), {static_cast<py::ssize_t>(s.range_variances.size())},
+                                     {py::ssize_t(sizeof(float))}, s.range_variances.data(), owner);
+    d["pixels"] = py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(s.pixels.size())},
+                            {py::ssize_t(sizeof(std::int32_t))}, s.pixels.data(), owner);
+    d["first_row"] = first_row;
+    return d;
+}
+
+py::array disparity_array(const rp::DisparityImage& d) {
+    py::array_t<float> out({static_cast<py::ssize_t>(d.rows()), static_cast<py::ssize_t>(d.cols())});
+    std::copy(d.data(), d.data() + d.size(), out.mutable_data());
+    return out;
+}
+
+void bind_stereo(py::module_& m) {
+    m.def("read_stereo_calibration", [](const std::string& path) {
+        const rp::StereoCalibration c = rp::read_stereo_calibration(path);
+        py::dict d;
+        d["fx"] = c.fx_px, d["fy"] = c.fy_px, d["cx"] = c.cx_px, d["cy"] = c.cy_px, d["baseline"] = c.baseline_m;
+        d["source"] = c.source;
+        if (c.extrinsics) {
+            const rp::Extrinsics& e = *c.extrinsics;
+            py::dict x;
+            x["x_m"] = e.x_m, x["y_m"] = e.y_m, x["z_m"] = e.z_m, x["roll_rad"] = e.roll_rad, x["pitch_rad"] = e.pitch_rad;
+            x["yaw_rad"] = e.yaw_rad;
+            d["extrinsics"] = x;
+        } else {
+            d["extrinsics"] = py::none();
+        }
+        return d;
+    });
+    // (points dict, disparity) of one pair: files or arrays; a precomputed disparity (file or array) skips matching.
+    m.def("stereo_points", [](py::object left, py::object right, const std::string& calib_path, py::object disparity,
+                              const std::string& config_json) {
+        const rp::Config cfg = rp::config_from_json(config_json, "config");
+        const rp::StereoCalibration calib = rp::read_stereo_calibration(calib_path);
+        const rp::Extrinsics camera = rp::stereo_camera_pose(cfg, calib);
+        std::optional<rp::StereoImages> pair;
+        if (py::isinstance<py::str>(left)) {
+            pair = rp::read_stereo_pair(left.cast<std::string>(), right.cast<std::string>());
+        } else if (!left.is_none()) {
+            pair = rp::StereoImages{grey8_from(left, "left"), grey8_from(right, "right")};
+            if (pair->left.rows() != pair->right.rows() || pair->left.cols() != pair->right.cols())
+                throw py::value_error("left and right images differ in size");
+        }
+        rp::DisparityImage d;
+        if (py::isinstance<py::str>(disparity)) d = rp::read_disparity_png(disparity.cast<std::string>());
+        else if (!disparity.is_none()) d = disparity_from(disparity);
+        if (pair && !disparity.is_none() && (d.rows() != pair->left.rows() || d.cols() != pair->left.cols()))
+            throw py::value_error("the disparity image and the images differ in size");
+        const auto rows = static_cast<int>(pair ? pair->left.rows() : d.rows());
+        const int first_row = rp::first_road_row(calib, camera, rows, cfg.stereo);
+        std::optional<rp::GreyImage> grey;
+        {
+            py::gil_scoped_release release;
+            if (disparity.is_none()) d = rp::match_stereo(*pair, first_row, cfg.stereo);
+            if (pair) grey = rp::GreyImage(pair->left.cast<float>() / 255.0f);
+        }
+        rp::StereoPoints p = rp::disparity_to_points(d, first_row, calib, cfg.stereo, grey ? &*grey : nullptr);
+        return py::make_tuple(points_dict(std::move(p), first_row), disparity_array(d));
+    });
+    m.def("open_stereo", [](const std::vector<std::string>& left, const std::vector<std::string>& right,
+                            const std::vector<std::string>& disparity, const std::string& calib, const std::string& config_json) {
+        rp::StereoInputs in{left, right, disparity, calib};
+        return std::unique_ptr<rp::FrameSource>(new rp::StereoSource(in, rp::config_from_json(config_json, "config")));
+    });
+}
+
 }  // namespace
 
 void bind_io(py::module_& m) {
@@ -65,6 +154,11 @@ void bind_io(py::module_& m) {
             return read_only(py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(b.size())},
                                        {py::ssize_t(sizeof(std::int32_t))}, b.data(), self));
         }, "int32 beam of each point (Ouster row from the top, Velodyne laser id, -1: none); empty when unknown")
+        .def_property_readonly("range_variances", [](py::object self) {
+            const auto& v = self.cast<const rp::Frame&>().range_variances;
+            return read_only(py::array(py::dtype::of<float>(), {static_cast<py::ssize_t>(v.size())},
+                                       {py::ssize_t(sizeof(float))}, v.data(), self));
+        }, "float32 m² per point: variance along its line of sight (stereo); empty when unknown")
         .def_property_readonly("imu_timestamps", [](const rp::Frame& f) {
             std::vector<double> t;
             for (const auto& s : f.imu) t.push_back(s.timestamp);
@@ -116,6 +210,7 @@ void bind_io(py::module_& m) {
                             lidar_port,  skip_bad_packets, columns,     beam_calibration};
         return rp::open_frames(inputs, o);
     });
+    bind_stereo(m);
     m.def("imu_yaw_rate", [](const rp::Frame& f, const std::string& config_json) {
         return rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(rp::config_from_json(config_json, "config")));
     });

@@ -118,6 +118,27 @@ class FusionConfig:
     align_tilt_sigma: float = 1e-4  #: rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
 
 
+@dataclass
+class StereoConfig:
+    """Stereo cameras (docs/method.md §12): OpenCV StereoSGBM's settings, the disparity noise and the rows matched."""
+
+    min_disparity: int = 0  #: px, smallest disparity searched
+    num_disparities: int = 128  #: px, width of the search (a multiple of 16)
+    block_size: int = 5  #: px, odd, matching window
+    p1: int = 600  #: smoothness penalty for ±1 px disparity changes (8·3·block_size²)
+    p2: int = 2400  #: penalty for larger changes (32·3·block_size²), > p1
+    disp12_max_diff: int = 1  #: px, left-right consistency check; < 0 turns it off
+    pre_filter_cap: int = 63
+    uniqueness_ratio: int = 10  #: %, margin of the best match over the second best
+    speckle_window_size: int = 100  #: px, largest speckle removed; 0 turns the filter off
+    speckle_range: int = 2  #: px, disparity variation within a connected component
+    mode: str = "sgbm_3way"  #: "sgbm" (5 directions), "hh" (8), "sgbm_3way" or "hh4"
+    threads: int = 0  #: OpenCV threads for matching; 0: OpenCV's default (all cores)
+    disparity_sigma_px: float = 0.4  #: σ_d of a matched disparity; a point's range σ is z²·σ_d/(f·B)·r/z
+    max_depth_m: float = 40.0  #: farther points are dropped; rows that only see beyond it are not matched
+    road_rise_m: float = 2.0  #: the road may rise this far above the base plane at max_depth_m
+
+
 _STAGES = {
     "extrinsics": Extrinsics,
     "ground": GroundConfig,
@@ -127,6 +148,7 @@ _STAGES = {
     "obstacles": ObstaclesConfig,
     "iri": IriConfig,
     "fusion": FusionConfig,
+    "stereo": StereoConfig,
 }
 
 
@@ -150,6 +172,7 @@ class Config:
     obstacles: ObstaclesConfig = field(default_factory=ObstaclesConfig)
     iri: IriConfig = field(default_factory=IriConfig)
     fusion: FusionConfig = field(default_factory=FusionConfig)
+    stereo: StereoConfig = field(default_factory=StereoConfig)
 
     def __post_init__(self) -> None:
         for name, cls in _STAGES.items():

@@ -21,7 +21,7 @@ class Estimator:
         self._impl = core().Estimator(self.config.to_json())
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
-                timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None):
+                timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None, range_variances=None):
         """One frame.
 
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
@@ -32,13 +32,16 @@ class Estimator:
         timestamp: s; with ``cfg.fusion.method`` "ema" or "kalman" the map moves by the speed and yaw rate
         integrated since the previous frame's timestamp (1/``fusion.frame_rate_hz`` without timestamps).
         pose: (x, y, yaw) of the vehicle in the odometry frame (m, m, rad), used instead of that integration.
+        range_variances: (N,) m², each point's variance along its line of sight (a stereo frame's
+        ``range_variances``); it sets a floor under the noise of the profiles' bins and the map's cells.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
         if pose is not None:
             pose = tuple(float(v) for v in pose)
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
-        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose)
+        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose,
+                                  range_variances)
 
     def reset(self):
         """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""

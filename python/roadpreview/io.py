@@ -1,4 +1,5 @@
-"""Reading frames: KITTI ``.bin`` / ``.pcd`` files and Ouster / Velodyne pcap recordings (decoded in C++).
+"""Reading frames: KITTI ``.bin`` / ``.pcd`` files, Ouster / Velodyne pcap recordings and stereo camera pairs
+(decoded and matched in C++).
 
     for frame in rp.io.open("tests/data/ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap"):
         frame.points, frame.timestamp, frame.frame_id      # (N, 4) float32 in the sensor frame, s, int
@@ -7,6 +8,7 @@
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -69,3 +71,58 @@ def imu_yaw_rate(frame, cfg=None) -> Optional[float]:
     from .config import Config
 
     return core().imu_yaw_rate(frame, (cfg if cfg is not None else Config()).to_json())
+
+
+@dataclass
+class StereoPoints:
+    """Points of one stereo pair (see :func:`stereo_points`)."""
+
+    points: np.ndarray  #: (N, 4) float32: x, y, z (m, camera frame: x ahead, y left, z up), grey level 0..1
+    range_variances: np.ndarray  #: (N,) float32 m²: variance of each point's distance along its line of sight
+    pixels: np.ndarray  #: (N,) int32: row · width + column of each point's pixel in the left image
+    first_row: int  #: the first image row matched (rows above it see no road within stereo.max_depth_m)
+    disparity: np.ndarray  #: (rows, columns) float32 px, 0 where invalid
+
+
+def stereo_points(left, right, calib: PathLike, *, disparity=None, config=None) -> StereoPoints:
+    """Points of one rectified stereo pair, matched in C++ with OpenCV's StereoSGBM (``config.stereo``).
+
+    left, right: image files (PNG, grey or colour, 8 or 16 bit) or 2-D uint8 grey arrays; None with ``disparity``.
+    calib: KITTI ``calib.txt`` (P2/P3) or a YAML with fx, fy, cx, cy, baseline and optional extrinsics.
+    disparity: a precomputed disparity, a 16-bit PNG (KITTI: disparity × 256) or a float (rows, columns) array in
+    px (≤ 0 or NaN invalid), used instead of matching. config: a :class:`roadpreview.Config`; its
+    sensor_height / extrinsics (else the calibration's extrinsics) pose the camera for the road rows.
+    Bad input (unreadable images, a pair of different sizes, a calibration without P2/P3, a zero or negative
+    baseline, an 8-bit image as disparity) raises RuntimeError or ValueError naming the file.
+    """
+    from .config import Config
+
+    cfg = config if config is not None else Config()
+    as_input = (lambda x: os.fspath(x) if isinstance(x, (str, os.PathLike)) else x)
+    found, disp = core().stereo_points(as_input(left), as_input(right), os.fspath(calib), as_input(disparity),
+                                       cfg.to_json())
+    return StereoPoints(found["points"], found["range_variances"], found["pixels"], found["first_row"], disp)
+
+
+def open_stereo(left: Optional[PathLike] = None, right: Optional[PathLike] = None, calib: Optional[PathLike] = None, *,
+                disparity: Optional[PathLike] = None, config=None):
+    """An iterable of frames from stereo pairs, as ``roadpreview run --stereo LEFT RIGHT --calib FILE`` reads them.
+
+    left, right: image files or directories of PNGs (paired in name order); disparity: a 16-bit disparity PNG or a
+    directory of them (used instead of matching). Each frame has ``.points`` ((N, 4) float32, camera frame),
+    ``.range_variances`` (m² per point; pass them to ``Estimator.process(..., range_variances=...)``), ``.source``
+    and ``.frame_id``. The camera's pose comes from ``config`` (sensor_height / extrinsics), else from the
+    calibration YAML; neither raises ValueError.
+    """
+    from .config import Config
+
+    if calib is None:
+        raise ValueError("open_stereo needs calib: a KITTI calib.txt or a stereo calibration YAML")
+    cfg = config if config is not None else Config()
+    paths = (lambda x: [os.fspath(x)] if x is not None else [])
+    return core().open_stereo(paths(left), paths(right), paths(disparity), os.fspath(calib), cfg.to_json())
+
+
+def read_stereo_calibration(path: PathLike) -> dict:
+    """fx, fy, cx, cy (px), baseline (m), extrinsics (dict or None) and source of a stereo calibration file."""
+    return core().read_stereo_calibration(os.fspath(path))

@@ -6,6 +6,7 @@ docs/output.md) and draws on a matplotlib Axes:
 * ``plot_psd``: one roughness object's PSD on log-log axes, the ISO 8608 class bands shaded, the fitted line
   over the band used, and the noise PSD;
 * ``plot_profiles``: both wheels' height profiles along s, points-backed bins marked, missing stretches shaded;
+* ``plot_sensor_comparison``: one frame's wheel profiles as several sensors saw it (stereo and LiDAR);
 * ``plot_birdseye``: one frame from above, ground and other points, the wheel corridors and the ICR arcs
   (needs the points too).
 
@@ -147,6 +148,29 @@ def _shade(ax, s, mask, ds: float, style: dict, label: str) -> None:
     """Spans over the runs of ``mask``; the first one carries the legend label."""
     for i, (start, stop) in enumerate(_runs(mask)):
         ax.axvspan(s[start] - ds / 2, s[stop - 1] + ds / 2, lw=0, label=label if i == 0 else None, **style)
+
+
+def plot_sensor_comparison(lines: dict, title: str | None = None):
+    """One frame seen by several sensors ({name: output line}, e.g. a stereo pair and the LiDAR scan of the same
+    instant): each wheel's profile per sensor, dots where points back a bin. Returns the figure."""
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    colors = ("tab:blue", "tab:orange", "tab:green", "tab:red")
+    for ax, (wheel, _) in zip(axes, WHEELS):
+        for (name, line), color in zip(lines.items(), colors):
+            p = line["profiles"][wheel]
+            s = np.asarray(p["s"], float)
+            z = np.array([np.nan if v is None else v for v in p["z"]], float) * 100
+            backed = np.asarray(p["count"]) > 0
+            ax.plot(s, z, color=color, lw=1, label=name)
+            ax.plot(s[backed], z[backed], ".", color=color, ms=2.5)
+        ax.set_ylabel(f"{wheel} wheel: height (cm)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[-1].set_xlabel("s, arc length ahead along the wheel path (m)")
+    if title:
+        axes[0].set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
 
 
 def _runs(mask) -> list[tuple[int, int]]:

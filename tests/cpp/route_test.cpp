@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// RouteBuilder: frames' profiles stitched along the drive (docs/method.md §8), their segments and files.
+// RouteBuilder: frames' profiles stitched along the drive (docs/method.md §10), their segments and files.
 #include <gtest/gtest.h>
 
 #include <cmath>

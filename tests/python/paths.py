@@ -14,6 +14,16 @@ NUSCENES_BIN = DATA / "nuscenes" / "n015-2018-07-24-11-22-45+0800__LIDAR_TOP__15
 KITTI_SENSOR_HEIGHT = 1.73  # m, Velodyne HDL-64E on the KITTI car
 
 
+def shared_data() -> Path:
+    """The project's shared data set: $ROADPREVIEW_SHARED_DATA, else ../shared/data beside the repository (or beside
+    the directory holding it, for a worktree); tests that need it skip when it is absent."""
+    candidates = [os.environ.get("ROADPREVIEW_SHARED_DATA", "")] + [str(p / "shared" / "data") for p in REPO.parents[:2]]
+    return Path(next((c for c in candidates if c and Path(c).is_dir()), candidates[1]))
+
+
+STEREO_PAIR = shared_data() / "stereo" / "stereo_rcnn_kitti_object"  # KITTI colour pair, calib and Velodyne scan
+
+
 def cli() -> str:
     """The installed `roadpreview` binary: beside this interpreter (a venv), else on PATH."""
     beside = Path(sys.executable).parent / "roadpreview"

@@ -1,4 +1,4 @@
-"""Repeatability (docs/method.md §8): known answers of the metric — identical and offset copies, a shifted copy,
+"""Repeatability (docs/method.md §9): known answers of the metric — identical and offset copies, a shifted copy,
 independent noise — and its errors."""
 
 import math

@@ -68,6 +68,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cel
                                                 frame_rate_hz, max_time_gap_s, behind_m, align,
                                                 align_tilt_sigma)
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(StereoConfig, min_disparity, num_disparities, block_size, p1, p2,
+                                                disp12_max_diff, pre_filter_cap, uniqueness_ratio,
+                                                speckle_window_size, speckle_range, mode, threads,
+                                                disparity_sigma_px, max_depth_m, road_rise_m)
+
 void to_json(json& j, const Config& c) {
     j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
              {"extrinsics", c.extrinsics ? json(*c.extrinsics) : json(nullptr)},
@@ -79,7 +84,8 @@ void to_json(json& j, const Config& c) {
              {"roughness", c.roughness},
              {"obstacles", c.obstacles},
              {"iri", c.iri},
-             {"fusion", c.fusion}};
+             {"fusion", c.fusion},
+             {"stereo", c.stereo}};
 }
 
 void from_json(const json& j, Config& c) {
@@ -95,6 +101,7 @@ void from_json(const json& j, Config& c) {
     c.obstacles = j.value("obstacles", defaults.obstacles);
     c.iri = j.value("iri", defaults.iri);
     c.fusion = j.value("fusion", defaults.fusion);
+    c.stereo = j.value("stereo", defaults.stereo);
 }
 
 namespace {
@@ -162,6 +169,20 @@ void migrate_old_names(json& j) {
         throw std::invalid_argument("set ground.max_tilt_deg or its old name ground.ransac_max_tilt_deg, not both");
     g["max_tilt_deg"] = g["ransac_max_tilt_deg"];
     g.erase("ransac_max_tilt_deg");
+}
+
+void validate_stereo(const StereoConfig& s) {
+    require(s.num_disparities >= 16 && s.num_disparities % 16 == 0, "stereo.num_disparities must be a positive multiple of 16");
+    require(s.block_size >= 1 && s.block_size % 2 == 1 && s.block_size <= 255, "stereo.block_size must be odd, 1..255");
+    require(s.p1 >= 0 && s.p2 > s.p1, "stereo.p1 must be >= 0 and stereo.p2 > stereo.p1");
+    require(s.pre_filter_cap >= 1 && s.uniqueness_ratio >= 0 && s.speckle_window_size >= 0 && s.speckle_range >= 0,
+            "stereo.pre_filter_cap must be >= 1; uniqueness_ratio, speckle_window_size and speckle_range >= 0");
+    require(s.mode == "sgbm" || s.mode == "hh" || s.mode == "sgbm_3way" || s.mode == "hh4",
+            "stereo.mode must be \"sgbm\", \"hh\", \"sgbm_3way\" or \"hh4\", got \"" + s.mode + "\"");
+    require(s.threads >= 0, "stereo.threads must be >= 0");
+    require(positive(s.disparity_sigma_px), "stereo.disparity_sigma_px must be > 0");
+    require(positive(s.max_depth_m), "stereo.max_depth_m must be > 0");
+    require(std::isfinite(s.road_rise_m), "stereo.road_rise_m must be finite");
 }
 
 }  // namespace
@@ -243,6 +264,7 @@ void validate(const Config& c) {
     require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
     require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
     require(positive(f.align_tilt_sigma), "fusion.align_tilt_sigma must be > 0");
+    validate_stereo(c.stereo);
 }
 
 Extrinsics effective_extrinsics(const Config& c) {

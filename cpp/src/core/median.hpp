@@ -27,4 +27,12 @@ inline double sample_spread(std::vector<double>::const_iterator first, std::vect
     return std::sqrt(squares / (n - 1.0));
 }
 
+/// The spread a bin or cell reports for its noise: the sample spread of its heights, raised to the root of its
+/// points' mean height variance when the sensor states one (stereo: correlated matching errors hide from the
+/// sample spread). NaN stays NaN (fewer than two points).
+inline double noise_spread(double sample_spread, double mean_point_variance) {
+    if (std::isnan(sample_spread)) return sample_spread;
+    return std::sqrt(std::max(sample_spread * sample_spread, mean_point_variance));
+}
+
 }  // namespace roadpreview

@@ -177,11 +177,13 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
     status.frames = fused_;
 }
 
-void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L) {
+void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                          const std::vector<float>* height_variances) {
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
     std::vector<std::int64_t> touched;
     z_.resize(static_cast<std::size_t>(points.rows()));
+    variance_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [x, y, z] = L.apply(points(i, 0), points(i, 1), points(i, 2));
@@ -192,6 +194,7 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         next_[static_cast<std::size_t>(i)] = head;
         head = static_cast<std::int32_t>(i);
         z_[static_cast<std::size_t>(i)] = z;
+        if (height_variances) variance_[static_cast<std::size_t>(i)] = (*height_variances)[static_cast<std::size_t>(i)];
     }
     // Per cell: the median of its points, their count and spread; then each median's variance as the
     // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance, pooled
@@ -202,11 +205,16 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     std::vector<std::int32_t> counts(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
+        double variance_sum = 0.0;
         auto& head = head_[static_cast<std::size_t>(touched[c])];
-        for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) cell_z.push_back(z_[static_cast<std::size_t>(i)]);
+        for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) {
+            cell_z.push_back(z_[static_cast<std::size_t>(i)]);
+            variance_sum += variance_[static_cast<std::size_t>(i)];
+        }
         head = -1;
         counts[c] = static_cast<std::int32_t>(cell_z.size());
-        spreads[c] = cell_z.size() >= 2 ? sample_spread(cell_z.begin(), cell_z.end()) : kNaN;
+        spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts[c])
+                                        : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
     }
     cell_z.clear();  // now the spreads of the cells that have one

@@ -9,18 +9,11 @@
 #include "ground/ground_pcl.hpp"
 #include "obstacles/obstacles_pcl.hpp"
 #include "core/roi_cloud.hpp"
+#include "core/stopwatch.hpp"
 
 namespace roadpreview {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point& mark) {
-    const auto now = Clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - mark).count();
-    mark = now;
-    return ms;
-}
 
 // Why no profile can be built for this frame, or empty when one can. A fused map that holds data stands in
 // for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
@@ -118,8 +111,22 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
 }
 
+Result Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion) {
+    const auto rows = static_cast<std::size_t>(frame.points.rows());
+    if (!frame.range_variances.empty() && frame.range_variances.size() != rows)
+        throw std::invalid_argument(frame.source + ": " + std::to_string(frame.range_variances.size()) +
+                                    " range variances for " + std::to_string(rows) + " points");
+    return process(points_view(frame.points.data(), frame.points.rows(), 4), speed_mps, yaw_rate_rps, frame.source, motion,
+                   frame.range_variances.empty() ? nullptr : frame.range_variances.data());
+}
+
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                           const FrameMotion& motion) {
+    return process(points, speed_mps, yaw_rate_rps, source, motion, nullptr);
+}
+
+Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                          const FrameMotion& motion, const float* range_variances_m2) {
     const Config& cfg = impl_->cfg;
     if (points.rows() > std::numeric_limits<std::int32_t>::max())
         throw std::invalid_argument("too many points in one frame: " + std::to_string(points.rows()));
@@ -142,6 +149,8 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
 
     RoiCloud& roi = impl_->roi;
     crop_roi(points, impl_->sensor_to_base, roi_facing(cfg.ground, r.path.direction), roi);  // behind when reversing
+    roi_height_variances(range_variances_m2, impl_->sensor_to_base, roi);
+    const std::vector<float>* height_variances = roi.height_variance.empty() ? nullptr : &roi.height_variance;
     const GroundFit ground = fit_ground(roi, cfg.ground);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
@@ -156,7 +165,8 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
 
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
     // Stopped: the same view again and again is not new evidence, so the map holds.
-    if (fusion && r.plane && r.path.status != PathStatus::Stopped) fusion->fuse(roi.view(), ground.mask, L);
+    if (fusion && r.plane && r.path.status != PathStatus::Stopped)
+        fusion->fuse(roi.view(), ground.mask, L, height_variances);
     r.timing_ms.fusion += ms_since(mark);
     r.reason = blocking_reason(r, ground, fusion && fusion->frames() > 0);
     if (!r.reason.empty()) {
@@ -177,7 +187,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
                                             : std::vector<double>{};
     WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
                                   : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
-                                                   local_z.empty() ? nullptr : &local_z);
+                                                   local_z.empty() ? nullptr : &local_z, height_variances);
     r.left = std::move(wheels.left);
     r.right = std::move(wheels.right);
     if (cfg.obstacles.enabled) {

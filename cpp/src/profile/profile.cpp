@@ -17,6 +17,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct Hit {
     std::int32_t bin;
     double z;
+    double variance;  // m², the point's height variance (0 when unknown)
 };
 
 // Bins the hits of one wheel (counting sort by bin), takes per-bin medians outside blocked bins, fills short gaps.
@@ -30,7 +31,8 @@ Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const Profil
     p.s.resize(bins);
     for (std::size_t k = 0; k < bins; ++k) p.s[k] = (static_cast<double>(k) + 0.5) * cfg.ds_m;
     p.count.assign(bins, 0);
-    for (const Hit& h : hits) ++p.count[static_cast<std::size_t>(h.bin)];
+    std::vector<double> variance_sum(bins, 0.0);
+    for (const Hit& h : hits) ++p.count[static_cast<std::size_t>(h.bin)], variance_sum[static_cast<std::size_t>(h.bin)] += h.variance;
 
     std::vector<std::size_t> start(bins + 1, 0);
     for (std::size_t k = 0; k < bins; ++k) start[k + 1] = start[k] + static_cast<std::size_t>(p.count[k]);
@@ -44,7 +46,7 @@ Profile bin_profile(const std::vector<Hit>& hits, std::size_t bins, const Profil
         if (p.count[k] == 0 || p.blocked[k]) continue;  // an obstacle's points are not road
         const auto first = sorted.begin() + static_cast<std::ptrdiff_t>(start[k]);
         const auto last = sorted.begin() + static_cast<std::ptrdiff_t>(start[k + 1]);
-        if (p.count[k] > 1) p.spread[k] = sample_spread(first, last);
+        if (p.count[k] > 1) p.spread[k] = noise_spread(sample_spread(first, last), variance_sum[k] / p.count[k]);
         p.z[k] = median(first, last);
     }
     fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m, &p.blocked);
@@ -94,8 +96,11 @@ std::size_t bin_count(const ProfileConfig& cfg) {
 
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                             const BlockedBins* blocked, const std::vector<double>* local_z) {
+                             const BlockedBins* blocked, const std::vector<double>* local_z,
+                             const std::vector<float>* height_variances) {
     if (local_z && local_z->size() != mask.size()) throw std::invalid_argument("local_z and mask differ in length");
+    if (height_variances && height_variances->size() != mask.size())
+        throw std::invalid_argument("height_variances and mask differ in length");
     WheelProfiles out;
     if (paths.status == PathStatus::Stopped) return out;
     const std::size_t bins = bin_count(cfg);
@@ -109,7 +114,8 @@ WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>&
             if (!s || *s >= cfg.preview_length_m) continue;
             // s < preview but s/ds can round up to `bins`: such a point belongs to the last bin.
             const auto bin = std::min(static_cast<std::size_t>(*s / cfg.ds_m), bins - 1);
-            hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl});
+            const double variance = height_variances ? (*height_variances)[static_cast<std::size_t>(i)] : 0.0;
+            hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl, variance});
         }
     }
     out.left = bin_profile(hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr);

@@ -15,6 +15,7 @@ from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
 from .route import Route, Stitched
+from . import stereo
 from .roughness import (
     ISO_CLASSES,
     ISO_GEOMETRIC_MEANS,
@@ -64,6 +65,7 @@ __all__ = [
     "plan_path",
     "process",
     "process_fused",
+    "stereo",
     "to_base_frame",
     "vehicle_roughness",
     "wheel_obstacles",

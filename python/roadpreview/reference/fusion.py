@@ -20,6 +20,7 @@ from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
+from .stereo import height_variances
 from .support import backed_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
@@ -127,14 +128,18 @@ class FusedMap:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x0 + c * xy[:, 0] - s * xy[:, 1], y0 + s * xy[:, 0] + c * xy[:, 1]])
 
-    def fuse(self, levelled_ground: np.ndarray):
-        """Median per cell of the frame's levelled ground points, fused into the map."""
+    def fuse(self, levelled_ground: np.ndarray, variances=None):
+        """Median per cell of the frame's levelled ground points, fused into the map. The points' height
+        ``variances`` (m²), when given, raise each cell's spread to the root of their mean (method.md §12)."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
         heights = levelled_ground[np.argsort(inverse.ravel(), kind="stable"), 2]
         groups = np.split(heights, np.cumsum(counts)[:-1])
         spreads = np.array([np.std(z, ddof=1) if len(z) >= 2 else np.nan for z in groups])
+        if variances is not None:
+            mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
+            spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
         medians = np.array([np.median(z) for z in groups])
         # As the roughness stage rates a bin's median; single points get the pooled variance of the cells spread
         # at most _POOL_MAX_SPREAD × the median spread (a wall's foot, ground up to 0.2 m high, is no road noise).
@@ -240,8 +245,10 @@ class FusedResult:
     vehicle: object = None
 
 
-def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, pose=None) -> FusedResult:
-    """One frame through the fusing pipeline without obstacles (cfg.obstacles is not consulted)."""
+def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, pose=None,
+                  range_variances=None) -> FusedResult:
+    """One frame through the fusing pipeline without obstacles (cfg.obstacles is not consulted); with the points'
+    ``range_variances`` (m², stereo) as in method.md §12."""
     cfg = state.cfg
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
@@ -249,13 +256,15 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     reset = state.advance(speed, yaw_rate, timestamp, pose)
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
-    base_xyz, _ = to_base_frame(points, cfg)
+    base_xyz, finite = to_base_frame(points, cfg)
+    variances = None if range_variances is None else \
+        height_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
-        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz)
+        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz, None if variances is None else variances[ground])
     status["frames"] = state.fused
     # A map that holds data stands in for a frame without ground: the profiles are read from it.
     reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \

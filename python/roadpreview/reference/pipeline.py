@@ -13,6 +13,7 @@ from .ground import ground_model, roi_facing, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
 from .profile import Profile, empty_profile, wheel_profile
+from .stereo import height_variances
 from .iri import Iri, vehicle_iri
 from .roughness import Roughness, vehicle_from_wheels, vehicle_roughness
 
@@ -64,9 +65,10 @@ def _clusters(base_xyz, ground, plane, cfg: Config):
     return find_obstacles(base_xyz, ground, plane, cfg)
 
 
-def process(points, speed, yaw_rate, cfg: Config | None = None) -> Result:
+def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=None) -> Result:
     """Road profiles and roughness of one frame. Bad input raises ValueError; an empty scene, no ground
-    or a stopped vehicle give a result with the reason (checked in that order)."""
+    or a stopped vehicle give a result with the reason (checked in that order). ``range_variances`` (m², one per
+    point: a stereo frame's) raise the profile bins' spreads (method.md §12)."""
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
@@ -80,6 +82,12 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config) -> Result:
     if path["status"] != "stopped":
         cfg = roi_facing(cfg, speed)  # reversing looks behind
     base_xyz, finite = to_base_frame(points, cfg)
+    variances = None
+    if range_variances is not None:
+        if np.shape(range_variances) != (len(points),):
+            raise ValueError(f"range_variances must have one entry per point ({len(points)}), got shape "
+                             f"{np.shape(range_variances)}")
+        variances = height_variances(base_xyz, np.asarray(range_variances)[finite], cfg)
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)
     labels = np.full(len(points), -1, dtype=np.int32)
@@ -97,8 +105,8 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config) -> Result:
         return _without_profiles(ground_mask, None, counts, path, model.reason, cfg, obstacles, labels)
     if path["status"] == "stopped":
         return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped", cfg, obstacles, labels)
-    left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
-                   for wheel in ("left", "right"))
+    left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg,
+                          variances) for wheel in ("left", "right"))
     vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
                                 spread_left=left.spread, count_right=right.count, spread_right=right.spread)
     vehicle = vehicle_from_wheels(vehicle, left.roughness, right.roughness)
@@ -106,12 +114,14 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config) -> Result:
     return Result(ground_mask, plane, counts, path, left, right, vehicle, None, obstacles, labels)
 
 
-def _wheel(base_xyz, ground, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config):
+def _wheel(base_xyz, ground, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config, variances=None):
     """One wheel's profile, stopping at the obstacles in its path when clustering is on."""
+    ground_variances = None if variances is None else variances[ground]
     if not cfg.obstacles.enabled:
-        return wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg)
+        return wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg,
+                             height_variances=ground_variances)
     in_path = wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
     blocked = blocked_bins(in_path.s_start, in_path.s_end, cfg)
-    profile = wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg, blocked)
+    profile = wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg, blocked, ground_variances)
     profile.obstacles = in_path
     return profile

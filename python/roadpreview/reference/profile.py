@@ -63,9 +63,11 @@ def bin_count(cfg: Config) -> int:
     return math.ceil(p.preview_length_m / p.ds_m - 1e-9)
 
 
-def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config,
+                   variances=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(median z, count, spread) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m; the spread is
-    the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points."""
+    the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points. With the
+    points' height ``variances`` (m²) it is at least the root of their mean in the bin (method.md §12)."""
     k_bins = bin_count(cfg)
     kept = (s >= 0) & (s < cfg.profile.preview_length_m)
     # s just below the preview length can round to bin K; it still belongs to the last bin.
@@ -84,6 +86,10 @@ def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config) -> tuple[np.ndarra
     spread = np.full(k_bins, np.nan)
     multi = count >= 2
     spread[multi] = np.sqrt(squares[multi] / (count[multi] - 1))
+    if variances is not None:
+        mean_variance = np.bincount(k, weights=np.asarray(variances, float)[kept][order], minlength=k_bins)
+        mean_variance /= np.maximum(count, 1)
+        spread[multi] = np.sqrt(np.maximum(spread[multi] ** 2, mean_variance[multi]))
     return median, count, spread
 
 
@@ -128,11 +134,12 @@ def empty_profile(reason: str) -> Profile:
 
 
 def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
-                  cfg: Config | None = None, blocked=None) -> Profile:
+                  cfg: Config | None = None, blocked=None, height_variances=None) -> Profile:
     """Height profile along one wheel's path from ground points (levelled by ``plane`` unless it is None),
     with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped".
     ``blocked`` bins (obstacles, method.md §5) get no height and are not interpolated across.
-    With ``profile.level_local`` the heights are those of :func:`local_ground_heights` (method.md §3)."""
+    With ``profile.level_local`` the heights are those of :func:`local_ground_heights` (method.md §3);
+    ``height_variances`` (m², one per point) raise the bins' spreads (method.md §12)."""
     cfg = cfg or Config()
     if path["status"] == "stopped":
         return empty_profile("vehicle stopped")
@@ -142,7 +149,8 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
         if cfg.profile.level_local:
             xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
-    median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg)
+    variances = None if height_variances is None else np.asarray(height_variances, float)[in_corridor]
+    median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg, variances)
     blocked = np.zeros(len(median), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
     median[blocked] = np.nan  # an obstacle's points are not road
     spread[blocked] = np.nan

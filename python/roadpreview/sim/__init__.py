@@ -1,4 +1,5 @@
-"""roadpreview.sim — simulated roads of known roughness scanned by simulated spinning LiDARs (numpy only).
+"""roadpreview.sim — simulated roads of known roughness scanned by simulated spinning LiDARs and stereo cameras
+(numpy only).
 
     from roadpreview import sim
     road = sim.Road.iso8608("C", seed=1, bumps=(sim.SpeedBump(x_m=15, height_m=0.05, length_m=0.6),))
@@ -18,6 +19,7 @@ from .road import ISO_CLASSES, GradeChange, Pothole, Road, RoughField, SpeedBump
 from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
 from .range_sensor import (BenchTrack, ProfileTrack, RangeDrive, RangeSensorModel, bench_counts, bench_profile, bench_reference,
                            bench_road, drive_readings, laser, layout_yaml, measured_distance, ultrasonic)
+from .stereo import StereoCamera, StereoFrame, drive_stereo, kitti_stereo, render
 
 __all__ = [
     "Box", "Frame", "ISO_CLASSES", "LABEL_NONE", "LABEL_OBSTACLE", "LABEL_ROAD", "Lidar", "PRESETS", "Pose",
@@ -26,4 +28,5 @@ __all__ = [
     "os1_128", "preset", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
     "BenchTrack", "ProfileTrack", "RangeDrive", "RangeSensorModel", "bench_counts", "bench_profile", "bench_reference", "bench_road",
     "drive_readings", "laser", "layout_yaml", "measured_distance", "ultrasonic",
+    "StereoCamera", "StereoFrame", "drive_stereo", "kitti_stereo", "render",
 ]

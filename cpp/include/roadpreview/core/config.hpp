@@ -105,6 +105,26 @@ struct FusionConfig {
     double align_tilt_sigma = 1e-4;   ///< rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
 };
 
+/// Stereo cameras (docs/method.md §12): OpenCV StereoSGBM's settings, the disparity noise behind each point's
+/// range variance, and the part of the image matched (the rows that can see the road up to max_depth_m).
+struct StereoConfig {
+    int min_disparity = 0;             ///< px, smallest disparity searched
+    int num_disparities = 128;         ///< px, width of the search (a multiple of 16)
+    int block_size = 5;                ///< px, odd, matching window
+    int p1 = 600;                      ///< smoothness penalty for ±1 px disparity changes (8·3·block_size²)
+    int p2 = 2400;                     ///< penalty for larger changes (32·3·block_size²), > p1
+    int disp12_max_diff = 1;           ///< px, left-right consistency check; < 0 turns it off
+    int pre_filter_cap = 63;
+    int uniqueness_ratio = 10;         ///< %, margin of the best match over the second best
+    int speckle_window_size = 100;     ///< px, largest speckle removed; 0 turns the filter off
+    int speckle_range = 2;             ///< px, disparity variation within a connected component
+    std::string mode = "sgbm_3way";    ///< "sgbm" (5 directions), "hh" (8), "sgbm_3way" or "hh4"
+    int threads = 0;                   ///< OpenCV threads for matching; 0: OpenCV's default (all cores)
+    double disparity_sigma_px = 0.4;   ///< σ_d of a matched disparity: range variance (z²·σ_d/(f·B))² per point
+    double max_depth_m = 40.0;         ///< farther points are dropped; rows that only see beyond it are not matched
+    double road_rise_m = 2.0;          ///< the road may rise this far above the base plane at max_depth_m
+};
+
 struct Config {
     std::optional<double> sensor_height;   ///< m; shortcut for extrinsics (0, 0, h, 0, 0, 0)
     std::optional<Extrinsics> extrinsics;  ///< neither set: points are already in the base frame
@@ -117,6 +137,7 @@ struct Config {
     ObstaclesConfig obstacles;
     IriConfig iri;
     FusionConfig fusion;
+    StereoConfig stereo;
 };
 
 /// Highest sensor_height accepted, m: a mast, not a vehicle, is higher.

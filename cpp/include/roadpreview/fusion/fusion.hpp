@@ -39,7 +39,7 @@ Pose2 pose_from_matrix(const double (&m)[12]);
 /// std::runtime_error naming the file and line for a line that is not 12 finite numbers.
 std::vector<Pose2> read_kitti_poses(const std::string& path);
 
-/// A height sample in the odometry frame with its variance, e.g. a point range sensor's (docs/method.md §8.6).
+/// A height sample in the odometry frame with its variance, e.g. a point range sensor's (docs/method.md §11).
 struct MapSample {
     double x_m = 0.0, y_m = 0.0;  ///< odometry frame
     double z_m = 0.0;             ///< height on the map's datum (the road at rest below the vehicle)
@@ -106,8 +106,10 @@ public:
     /// Moves the vehicle to this frame's pose and the map with it. Resets the map (saying why in
     /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
-    /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map.
-    void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L);
+    /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
+    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread).
+    void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+              const std::vector<float>* height_variances = nullptr);
     /// Fuses height samples into the map: per cell the inverse-variance mean of its samples and that mean's
     /// variance, fused like a frame's cell (not aligned: the samples carry their own datum). Samples outside the
     /// window are skipped; returns the cells updated.
@@ -138,6 +140,7 @@ private:
     bool map_has_excess_ = false;  // the map's variances carry an excess disagreement (an alignment has run)
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
+    std::vector<float> variance_;  // this frame's point height variances, by point (reused)
 };
 
 }  // namespace roadpreview

@@ -36,6 +36,9 @@ struct Frame {
     std::vector<float> point_times;   ///< s after `timestamp`, one per point; empty when unknown
     std::vector<std::int32_t> beams;  ///< beam (Ouster row from the top, Velodyne laser id) per point; empty: unknown
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
+    /// m², one per point: variance of its distance from the sensor along its line of sight (stereo cameras);
+    /// empty when unknown (LiDAR). Estimator::process takes it to rate the profiles' and the map's noise.
+    std::vector<float> range_variances;
     FrameDiagnostics diagnostics;
     std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
 };

@@ -13,6 +13,7 @@
 #include "roadpreview/core/config.hpp"
 #include "roadpreview/fusion/fusion.hpp"
 #include "roadpreview/ground/ground.hpp"
+#include "roadpreview/io/frame_source.hpp"
 #include "roadpreview/obstacles/obstacles.hpp"
 #include "roadpreview/paths/path.hpp"
 #include "roadpreview/core/points.hpp"
@@ -80,6 +81,13 @@ public:
     /// The same with the frame's timestamp (copied to the result) and, optionally, its pose for the fusion.
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                    const FrameMotion& motion);
+    /// The same with each point's range variance (m², one per row, or nullptr when unknown; see
+    /// Frame::range_variances): it sets a floor under the noise of the profiles' bins and of the map's cells
+    /// (docs/method.md §12). LiDAR frames pass nullptr and are processed exactly as before.
+    Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                   const FrameMotion& motion, const float* range_variances_m2);
+    /// A frame of a FrameSource: its points, source and range variances (checked: one per point or none).
+    Result process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion = {});
 
     /// Forgets the fused map, the pose and the clock (the frame counter keeps counting).
     void reset();

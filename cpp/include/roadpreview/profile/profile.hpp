@@ -59,10 +59,13 @@ struct BlockedBins {
     std::vector<std::uint8_t> left, right;
 };
 /// With `local_z` (one per point), a ground point's height is local_z[i] instead of its levelled z (the
-/// positions along and across the path stay those that `L` gives): levelling by the local ground model.
+/// positions along and across the path stay those that `L` gives): levelling by the local ground model. With
+/// `height_variances` (m² per point, e.g. stereo depth noise) a bin's spread is at least the root of its points'
+/// mean variance (noise_spread).
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                             const BlockedBins* blocked = nullptr, const std::vector<double>* local_z = nullptr);
+                             const BlockedBins* blocked = nullptr, const std::vector<double>* local_z = nullptr,
+                             const std::vector<float>* height_variances = nullptr);
 
 /// Linear interpolation across interior runs of NaN no longer than max_gap_m. With `blocked`, a blocked bin
 /// counts as missing and a run holding one is left as it is: nothing is interpolated across an obstacle.

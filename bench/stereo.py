@@ -1,0 +1,277 @@
+"""Stereo cameras as a preview sensor: the moving-average paper's experiment, a real KITTI pair against the LiDAR,
+and the time per pair.
+
+  * the paper's experiment (Lee & Yoon, moving-average road profile estimation, a stereo system) in the simulator
+    at KITTI's geometry (f = 721.5 px, B = 0.5327 m, 1.65 m high, 1242 × 375): a smooth road with one bump of
+    1–10 cm under the left wheel and plain road under the right, driven at 10 m/s, 10 Hz; disparity noise
+    0.25 px, 2 % invalid pixels. Bump height = crest minus the road 1–2.5 m around it (bench/accuracy.py),
+    scored in the frames with the bump 5–15 m ahead; the plain road is the right wheel's profile 5–15 m ahead;
+    frame by frame (none), the paper's moving average (ema, α = 0.5) and the Kalman map;
+  * the real pair of ../shared/data/stereo/stereo_rcnn_kitti_object (StereoSGBM in C++) against the Velodyne
+    scan of the same instant, both in one base frame (on the road below the Velodyne): the wheel-path profiles'
+    RMS difference per distance band and the ISO class of each; a picture;
+  * the time per KITTI pair (1242 × 375): reading, matching (road rows only, and the whole image), points and
+    the pipeline, with 1 and 2 OpenCV threads.
+
+    python bench/stereo.py [--quick] [--jobs N] [--runs N] [--picture PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import roadpreview as rp
+from roadpreview import sim
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from accuracy import bump_height, detrended_rms, md_table, run_in_pool  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED_CANDIDATES = [os.environ.get("ROADPREVIEW_SHARED_DATA", "")] + [str(p / "shared" / "data") for p in REPO.parents[:2]]
+SHARED = Path(next((c for c in SHARED_CANDIDATES if c and Path(c).is_dir()), SHARED_CANDIDATES[1]))
+PAIR = SHARED / "stereo" / "stereo_rcnn_kitti_object"  # $ROADPREVIEW_SHARED_DATA, else ../shared/data
+LIDAR_HEIGHT_M = 1.75  # the ground plane fitted to lidar.bin (shared data README, stereo section)
+SPEED_MPS = 10.0
+FRAMES = 12  # the bump goes from 16 m to 5 m ahead
+BUMP_X_M = 16.05
+BUMP_LENGTH_M = 1.0
+BUMP_HALF_WIDTH_M = 0.5  # across the left wheel path (y = 0.8 m), clear of the right one
+BUMP_RANGE_M = (5.0, 15.0)
+HEIGHTS_M = tuple(h / 100 for h in range(1, 11))
+METHODS = (("none", True), ("ema", True), ("kalman", True), ("kalman", False))  # (fusion, range variances)
+BANDS_M = ((5, 10), (10, 15), (15, 20), (20, 30), (30, 40))
+
+
+def method_name(method: str, variances: bool) -> str:
+    return method + ("" if variances else ", no point variances")
+
+
+# ------------------------------------------------------------------------------------------------ the paper
+def paper_run(item: tuple[float, int]) -> dict:
+    """One bump height and frame count: frames rendered once, processed by every method; per-frame bump and road
+    errors."""
+    height_m, frame_count = item
+    camera = sim.kitti_stereo()
+    bump = sim.SpeedBump(BUMP_X_M, height_m, BUMP_LENGTH_M, y_min_m=0.8 - BUMP_HALF_WIDTH_M,
+                         y_max_m=0.8 + BUMP_HALF_WIDTH_M)
+    scene = sim.Scene(sim.Road(bumps=(bump,)))
+    frames = sim.drive_stereo(scene, camera, SPEED_MPS, 0.0, frame_count, seed=int(round(height_m * 1000)))
+    out = {"height": height_m}
+    with tempfile.TemporaryDirectory() as tmp:
+        calib = camera.write_calibration(Path(tmp) / "stereo.yaml")
+        for method, variances in METHODS:
+            cfg = rp.Config(extrinsics=camera.extrinsics(), fusion={"method": method}, obstacles={"enabled": False})
+            est = rp.Estimator(cfg)
+            record = {"bump": [], "road": [], "ms": []}
+            for f in frames:
+                found = rp.io.stereo_points(None, None, calib, disparity=f.disparity, config=cfg)
+                res = est.process(found.points, SPEED_MPS, 0.0, timestamp=f.time_s,
+                                  range_variances=found.range_variances if variances else None)
+                record["ms"].append(res.timing_ms["total"])
+                ahead = BUMP_X_M - f.pose.x_m
+                if not BUMP_RANGE_M[0] <= ahead <= BUMP_RANGE_M[1]:
+                    continue
+                record["bump"].append(bump_height(np.asarray(res.left.s), np.asarray(res.left.z), ahead) - height_m)
+                s, z = np.asarray(res.right.s), np.asarray(res.right.z)
+                near = (s >= BUMP_RANGE_M[0]) & (s <= BUMP_RANGE_M[1]) & np.isfinite(z)
+                record["road"].extend(z[near])  # the truth is 0 under the right wheel
+            out[method_name(method, variances)] = record
+    return out
+
+
+def print_paper(results: list[dict]) -> None:
+    rows = []
+    for method, variances in METHODS:
+        name = method_name(method, variances)
+        bump = np.concatenate([r[name]["bump"] for r in results])
+        road = np.abs(np.concatenate([r[name]["road"] for r in results]))
+        ms = np.concatenate([r[name]["ms"] for r in results])
+        rows.append([name, f"{np.sqrt(np.nanmean(bump ** 2)) * 100:.2f}", f"{np.nanmax(np.abs(bump)) * 100:.2f}",
+                     f"{np.count_nonzero(np.isfinite(bump))}/{len(bump)}", f"{np.percentile(road, 95) * 100:.2f}",
+                     f"{road.max() * 100:.2f}", f"{np.mean(road <= 0.003) * 100:.1f}", f"{np.median(ms):.1f}"])
+    print("## The paper's experiment (simulated KITTI stereo, bumps 1–10 cm under the left wheel)\n")
+    print(md_table(["method", "bump height RMSE cm", "bump max error cm", "bumps scored",
+                    "plain road |z| 95th pct cm", "plain road max |z| cm", "plain road bins within ±0.3 cm %",
+                    "pipeline ms / frame"], rows) + "\n")
+    rows = [[f"{r['height'] * 100:.0f}"] + [
+        f"{np.sqrt(np.nanmean(np.square(r[method_name(m, v)]['bump']))) * 100:.2f}" for m, v in METHODS]
+        for r in results]
+    print(md_table(["bump cm", *(method_name(m, v) for m, v in METHODS)], rows) + "\n")
+    print("The paper: RMSE 0.63 cm without its filter, 0.73 cm with it; road surface within ±0.5 cm.\n")
+
+
+# ------------------------------------------------------------------------------------------------ real pair
+def kitti_matrices(path: Path) -> dict:
+    out = {}
+    for line in path.read_text().splitlines():
+        name, _, values = line.partition(":")
+        if values.strip():
+            out[name.strip()] = np.array(values.split(), float)
+    return out
+
+
+def camera_extrinsics(calib_path: Path, lidar_height_m: float) -> dict:
+    """The colour camera's pose in the base frame on the road below the Velodyne: rectified camera 2 →
+    rectified camera 0 (P2's offset) → Velodyne (R0_rect · Tr_velo_to_cam, inverted) → base (the height)."""
+    m = kitti_matrices(calib_path)
+    p2 = m["P2"].reshape(3, 4)
+    velo_to_rect = np.eye(4)
+    velo_to_rect[:3, :] = m["Tr_velo_to_cam"].reshape(3, 4)
+    r0 = np.eye(4)
+    r0[:3, :3] = m["R0_rect"].reshape(3, 3)
+    rect_to_velo = np.linalg.inv(r0 @ velo_to_rect)
+    centre = -np.linalg.solve(p2[:, :3], p2[:, 3])  # camera 2's optical centre in rectified camera 0
+    optical_from_camera = np.array([[0, -1, 0], [0, 0, -1], [1, 0, 0]], float)  # x ahead, y left, z up → optical
+    rotation = rect_to_velo[:3, :3] @ optical_from_camera
+    origin = rect_to_velo[:3, :3] @ centre + rect_to_velo[:3, 3] + np.array([0.0, 0.0, lidar_height_m])
+    return {"x_m": origin[0], "y_m": origin[1], "z_m": origin[2], "roll_rad": math.atan2(rotation[2, 1], rotation[2, 2]),
+            "pitch_rad": -math.asin(rotation[2, 0]), "yaw_rad": math.atan2(rotation[1, 0], rotation[0, 0])}
+
+
+def real_pair(pair_dir: Path = PAIR) -> dict:
+    """Both sensors through the same pipeline (5 m/s straight ahead, the motion is unknown for one frame)."""
+    camera_cfg = rp.Config(extrinsics=camera_extrinsics(pair_dir / "calib.txt", LIDAR_HEIGHT_M))
+    found = rp.io.stereo_points(pair_dir / "left.png", pair_dir / "right.png", pair_dir / "calib.txt",
+                                config=camera_cfg)
+    stereo = rp.Estimator(camera_cfg).process(found.points, 5.0, 0.0, source="left.png",
+                                              range_variances=found.range_variances)
+    lidar_points = rp.io.read(pair_dir / "lidar.bin")
+    lidar = rp.Estimator(rp.Config(sensor_height=LIDAR_HEIGHT_M)).process(lidar_points, 5.0, 0.0, source="lidar.bin")
+    return {"stereo": stereo, "lidar": lidar, "found": found, "extrinsics": camera_cfg.extrinsics}
+
+
+def print_real(pair: dict) -> None:
+    stereo, lidar = pair["stereo"], pair["lidar"]
+    rows = []
+    for wheel in ("left", "right"):
+        a, b = getattr(stereo, wheel), getattr(lidar, wheel)
+        s = np.asarray(a.s)
+        both = (np.asarray(a.count) > 0) & (np.asarray(b.count) > 0)
+        diff = np.asarray(a.z) - np.asarray(b.z)
+        for lo, hi in BANDS_M:
+            band = both & (s >= lo) & (s < hi)
+            rms = f"{np.sqrt(np.mean(diff[band] ** 2)) * 100:.2f}" if band.any() else "–"
+            bias = f"{np.median(diff[band]) * 100:+.2f}" if band.any() else "–"
+            rows.append([wheel, f"{lo}–{hi}", str(np.count_nonzero(band)), rms, bias])
+    print("## Real KITTI pair against the Velodyne scan of the same instant\n")
+    e = pair["extrinsics"]
+    print(f"Camera pose in the base frame (from calib.txt; base on the road below the Velodyne, {LIDAR_HEIGHT_M} m): "
+          f"x {e.x_m:.3f}, y {e.y_m:.3f}, z {e.z_m:.3f} m, roll {math.degrees(e.roll_rad):.2f}°, "
+          f"pitch {math.degrees(e.pitch_rad):.2f}°, yaw {math.degrees(e.yaw_rad):.2f}°. Stereo: "
+          f"{len(pair['found'].points)} points from rows {pair['found'].first_row}–374, "
+          f"{stereo.points['ground']} ground.\n")
+    print(md_table(["wheel", "distance m", "bins with both", "RMS difference cm", "median difference cm"], rows) + "\n")
+    rows = []
+    for name, res in (("stereo", stereo), ("LiDAR", lidar)):
+        cells = []
+        for r in (res.left.roughness, res.right.roughness, res.vehicle):
+            cells.append(f"{r.iso_class} ({r.gd_n0:.2e} m³)" if r.iso_class else f"– ({r.reason})")
+        rows.append([name, *cells])
+    print(md_table(["sensor", "left class", "right class", "vehicle class"], rows) + "\n")
+
+
+def save_picture(pair: dict, path: Path) -> None:
+    from roadpreview import plot
+
+    fig = plot.plot_sensor_comparison({"stereo (SGBM)": pair["stereo"].to_dict(), "LiDAR (HDL-64E)": pair["lidar"].to_dict()},
+                                      title="KITTI pair, 2011_09_26: wheel-path profiles, stereo vs LiDAR")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    print(f"Picture: {path.relative_to(REPO) if path.is_relative_to(REPO) else path}\n")
+
+
+# ------------------------------------------------------------------------------------------------ timing
+def spread(values: list[float]) -> str:
+    return f"{statistics.median(values):.1f} ({min(values):.1f}–{max(values):.1f})"
+
+
+def time_pair(runs: int) -> list[list[str]]:
+    """Median (min–max) ms of each step per pair, road rows and whole image, 1 and 2 OpenCV threads: CPU time of
+    this process (all its threads; on a busy machine the wall time mostly measures the queue for a core)."""
+    import cv2  # the images, preloaded, to time matching without the PNG decoding
+
+    left = cv2.imread(str(PAIR / "left.png"), cv2.IMREAD_GRAYSCALE)
+    right = cv2.imread(str(PAIR / "right.png"), cv2.IMREAD_GRAYSCALE)
+    extrinsics = camera_extrinsics(PAIR / "calib.txt", LIDAR_HEIGHT_M)
+    rows = []
+    for rows_name, rise in (("road rows", 2.0), ("whole image", 1e6)):
+        for threads in (1, 2):
+            cfg = rp.Config(extrinsics=extrinsics, stereo={"threads": threads, "road_rise_m": rise})
+            est = rp.Estimator(cfg)
+            steps = {"read + match + points": lambda: rp.io.stereo_points(PAIR / "left.png", PAIR / "right.png",
+                                                                          PAIR / "calib.txt", config=cfg),
+                     "match + points": lambda: rp.io.stereo_points(left, right, PAIR / "calib.txt", config=cfg)}
+            found = steps["match + points"]()
+            steps["points"] = lambda: rp.io.stereo_points(None, None, PAIR / "calib.txt", disparity=found.disparity,
+                                                          config=cfg)
+            steps["pipeline"] = lambda: est.process(found.points, 5.0, 0.0, range_variances=found.range_variances)
+            times = {name: [] for name in steps}
+            wall = []
+            for k in range(runs + 1):  # the first run warms up
+                for name, step in steps.items():
+                    start, start_wall = time.process_time(), time.perf_counter()
+                    step()
+                    if k:
+                        times[name].append((time.process_time() - start) * 1000)
+                        if name == "read + match + points":
+                            wall.append((time.perf_counter() - start_wall) * 1000)
+            total = [a + b for a, b in zip(times["read + match + points"], times["pipeline"])]
+            rows.append([rows_name, str(found.first_row), str(len(found.points)), str(threads),
+                         *(spread(times[name]) for name in steps), spread(total), spread(wall)])
+    return rows
+
+
+def print_timing(rows: list[list[str]], runs: int) -> None:
+    print(f"## Time per KITTI pair (1242 × 375): CPU ms of the process, median (min–max) of {runs} runs\n")
+    print(md_table(["rows matched", "first row", "points", "OpenCV threads", "read + match + points",
+                    "match + points", "points", "pipeline", "total CPU", "read + match + points, wall ms"], rows)
+          + "\n")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="one bump, 4 frames, 3 timing runs (smoke test)")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="worker processes")
+    parser.add_argument("--runs", type=int, default=15, help="timing runs per setting")
+    parser.add_argument("--picture", type=Path, help="write the stereo-vs-LiDAR profile picture here")
+    parser.add_argument("--parts", default="paper,real,timing", help="comma-separated parts to run")
+    args = parser.parse_args(argv)
+    heights, frames = ((0.05,), 4) if args.quick else (HEIGHTS_M, FRAMES)
+    runs = 3 if args.quick else args.runs
+    start = time.perf_counter()
+    print("# roadpreview stereo benchmark\n")
+    parts = set(args.parts.split(","))
+    print(f"- Python {platform.python_version()}, numpy {np.__version__}, roadpreview {rp.__version__}; "
+          f"1-min load {os.getloadavg()[0]:.1f}\n")
+    if "paper" in parts:
+        results = run_in_pool(paper_run, [(h, frames) for h in heights], args.jobs,
+                              lambda r: f"bump {r['height'] * 100:.0f} cm")
+        print(f"- {len(heights)} sequences of {frames} frames at 10 Hz, {SPEED_MPS:g} m/s; "
+              f"{time.perf_counter() - start:.0f} s on {args.jobs} worker(s)\n")
+        print_paper(results)
+    if not (PAIR / "left.png").exists():
+        print(f"(the KITTI pair is not at {PAIR}: real-pair comparison and timing skipped)")
+        return 0
+    if "real" in parts:
+        pair = real_pair()
+        print_real(pair)
+        if args.picture:
+            save_picture(pair, args.picture)
+    if "timing" in parts:
+        print_timing(time_pair(runs), runs)
+    print(f"1-min load at the end: {os.getloadavg()[0]:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,11 @@
+"""bench/stereo.py runs and prints its tables (--quick)."""
+
+from paths import STEREO_PAIR, run_bench
+
+
+def test_bench_stereo_quick():
+    out = run_bench("stereo.py", "--quick", timeout=900)
+    assert "## The paper's experiment" in out
+    assert "| kalman |" in out
+    if (STEREO_PAIR / "left.png").exists():
+        assert "## Real KITTI pair" in out and "## Time per KITTI pair" in out
