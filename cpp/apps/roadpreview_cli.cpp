@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <tuple>
 #include <utility>
 
 #include <CLI/CLI.hpp>
@@ -125,10 +126,6 @@ std::pair<std::int64_t, std::int64_t> parse_frame_range(const std::string& text)
     return range;
 }
 
-std::string frame_label(const rp::Frame& f) {
-    return f.source + (f.frame_id >= 0 && rp::is_pcap_path(f.source) ? " #" + std::to_string(f.frame_id) : "");
-}
-
 void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp::Result& r) {
     const std::string counter = total ? std::to_string(i + 1) + "/" + std::to_string(total) : std::to_string(i + 1);
     std::string decode;
@@ -137,7 +134,7 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
     if (!f.sequence_break.empty() && i > 0) decode += ", new sequence (" + f.sequence_break + ")";
     std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
-                 counter.c_str(), frame_label(f).c_str(), static_cast<long long>(r.points.input),
+                 counter.c_str(), rp::frame_label(f).c_str(), static_cast<long long>(r.points.input),
                  static_cast<long long>(r.points.ground), obstacles_of(r).c_str(), class_of(r.left.roughness).c_str(),
                  class_of(r.right.roughness).c_str(), class_of(r.vehicle).c_str(), r.reason.empty() ? "" : " — ",
                  r.reason.c_str(), r.timing_ms.total, decode.c_str());
@@ -190,18 +187,13 @@ struct RunSummary {
     }
 };
 
-// A frame file that does not continue the previous one's sequence (another folder, name pattern or a jump in
-// its numbering) starts the fusion map afresh; the output line says why.
-void note_sequence(const rp::Frame& f, rp::Result& r) {
-    if (r.fusion) r.fusion->reset = "new sequence: " + f.sequence_break;
-}
-
-// A run that writes nothing fails, and leaves no empty output file behind.
 // The input named in messages: the first INPUT, else the stereo pair's left images or the disparity.
 std::string input_label(const RunOptions& o) {
     if (!o.inputs.empty()) return o.inputs[0];
     return o.stereo.empty() ? o.disparity : o.stereo[0];
 }
+
+// A run that writes nothing fails, and leaves no empty output file behind.
 
 [[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
     namespace fs = std::filesystem;
@@ -213,74 +205,6 @@ std::string input_label(const RunOptions& o) {
                                   : " in the input";
     throw std::runtime_error(input_label(o) + (o.inputs.size() > 1 ? " ..." : "") + ": no frames" + where +
                              "; nothing was written");
-}
-
-// Speed and yaw rate of one frame, and where the yaw rate came from.
-struct FrameMotion {
-    rp::Motion motion;
-    std::string yaw_rate_source;
-};
-
-// The frame's own timestamp (pcaps), else index / --frame-rate for file inputs, else none.
-std::optional<double> frame_time(const rp::Frame& f, std::int64_t index, double frame_rate_hz) {
-    if (f.timestamp) return f.timestamp;
-    if (frame_rate_hz > 0.0) return static_cast<double>(index) / frame_rate_hz;
-    return std::nullopt;
-}
-
-FrameMotion motion_for(const RunOptions& o, const CLI::App& run, const std::optional<rp::MotionTable>& table,
-                       const rp::Frame& f, std::optional<double> t, const rp::Config& cfg) {
-    if (table) {
-        if (!t) throw std::runtime_error(f.source + ": frame has no timestamp to look up in " + table->source() +
-                                         " (use --frame-rate for file inputs)");
-        return {table->at(*t), "motion"};
-    }
-    if (run.count("--yaw-rate")) return {{o.speed, o.yaw_rate}, "option"};
-    if (const auto imu = rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(cfg))) return {{o.speed, *imu}, "imu"};
-    return {{o.speed, 0.0}, "default"};
-}
-
-// Mounting: with neither --sensor-height nor --extrinsics (nor either in --config), the first frame's ground
-// gives it; a given one is checked against each frame's ground.
-rp::Config with_mounting(rp::Config cfg, const rp::Frame& f, bool quiet) {
-    if (cfg.sensor_height || cfg.extrinsics) return cfg;
-    const rp::PointsView points = rp::points_view(f.points.data(), f.points.rows(), f.points.cols());
-    const auto m = rp::estimate_mounting(points, cfg.ground);
-    if (!m) {
-        std::fprintf(stderr,
-                     "roadpreview: warning: no --sensor-height or --extrinsics, and no ground in %s to estimate "
-                     "the mounting from: the points are taken as base-frame points\n",
-                     frame_label(f).c_str());
-        return cfg;
-    }
-    constexpr double kMaxTiltRad = 15.0 * M_PI / 180.0;
-    if (m->height_m <= 0.0 || std::abs(m->roll_rad) > kMaxTiltRad || std::abs(m->pitch_rad) > kMaxTiltRad) {
-        std::fprintf(stderr,
-                     "roadpreview: warning: no --sensor-height or --extrinsics, and the ground in %s gives no plausible "
-                     "mounting (height %.2f m, roll %.1f°, pitch %.1f°): the points are taken as base-frame points\n",
-                     frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
-        return cfg;
-    }
-    cfg.extrinsics = rp::to_extrinsics(*m);
-    if (!quiet)
-        std::fprintf(stderr,
-                     "roadpreview: no --sensor-height or --extrinsics: mounting estimated from the ground in %s: "
-                     "height %.2f m, roll %.2f°, pitch %.2f° (mounting.source = \"estimated\" in the output)\n",
-                     frame_label(f).c_str(), m->height_m, m->roll_rad * 180.0 / M_PI, m->pitch_rad * 180.0 / M_PI);
-    return cfg;
-}
-
-// Warns at the first frame whose fitted ground disagrees with the given mounting; counts them all.
-void check_mounting(const rp::Result& r, const rp::Frame& f, std::int64_t& disagreeing) {
-    if (!r.plane || r.mounting_source != "given") return;
-    const rp::MountingCheck c = rp::check_mounting(*r.plane);
-    if (!c.disagrees) return;
-    if (disagreeing++ == 0)
-        std::fprintf(stderr,
-                     "roadpreview: warning: %s: the fitted ground is %.2f m %s the base origin and tilted %.1f°: "
-                     "the sensor is about %.2f m up, not %.2f m; check --sensor-height / --extrinsics\n",
-                     frame_label(f).c_str(), std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg,
-                     r.extrinsics.z_m + c.offset_m, r.extrinsics.z_m);
 }
 
 // Options that only a pcap recording reads are an error with frame files, not silently ignored.
@@ -370,109 +294,78 @@ void check_inputs(const RunOptions& o) {
     if (is_stereo(o) && o.calib.empty()) throw std::invalid_argument("--stereo and --disparity need --calib FILE");
 }
 
+// The drive's policy options from the command line (docs/method.md, "Drives").
+rp::DriveOptions drive_options(const RunOptions& o, const CLI::App& app) {
+    rp::DriveOptions d;
+    if (app.count("--speed")) d.speed_mps = o.speed;
+    if (app.count("--yaw-rate")) d.yaw_rate_rps = o.yaw_rate;
+    d.motion_file = o.motion_file;
+    d.poses_file = o.poses_file;
+    d.frame_rate_hz = o.frame_rate;
+    std::tie(d.first_frame, d.last_frame) = parse_frame_range(o.frames);
+    d.on_note = [quiet = o.quiet](bool warning, const std::string& text) {
+        if (warning || !quiet) std::fprintf(stderr, "roadpreview: %s%s\n", warning ? "warning: " : "", text.c_str());
+    };
+    return d;
+}
+
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
     check_inputs(o);
-    rp::Config cfg = with_camera_pose(build_config(o, app), o);
-    const auto [first, last] = parse_frame_range(o.frames);
-    std::optional<rp::MotionTable> table;
-    if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
-    const auto source = open_source(o, cfg);
-    check_source_options(app, source->info());
-    const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
+    const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
-    std::vector<rp::Pose2> poses;
-    if (!o.poses_file.empty()) poses = rp::read_kitti_poses(o.poses_file);
+    auto source = open_source(o, cfg);
+    check_source_options(app, source->info());
+    const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
+    const rp::DriveOptions drive = drive_options(o, app);
+    rp::DriveRunner runner(std::move(source), cfg, drive);
     std::ofstream file;
     if (!o.output.empty()) {
         file.open(o.output);
         if (!file) throw std::runtime_error(o.output + ": cannot open output file for writing");
     }
     std::ostream& out = o.output.empty() ? std::cout : file;
-    std::optional<rp::Estimator> est;  // made at the first frame processed, which may give the mounting
     std::optional<rp::RouteBuilder> route;
-    std::int64_t disagreeing = 0;
-    std::string mounting_source;  // "estimated" when the first frame gave it
-
     RunSummary summary;
-    std::int64_t index = 0;
-    for (; index < last; ++index) {
-        std::optional<rp::Frame> frame = source->next();
-        if (!frame) break;
-        if (index == 0 && !o.quiet) report_source(source->info());
-        if (index < first) continue;
-        if (!est) {
-            const bool estimate = !cfg.sensor_height && !cfg.extrinsics;
-            cfg = with_mounting(cfg, *frame, o.quiet);
-            est.emplace(cfg);
-            if (estimate && cfg.extrinsics) mounting_source = "estimated";
-            if (wants_route(o)) route.emplace(cfg);
+    while (std::optional<rp::DriveStep> step = runner.next()) {
+        const rp::DriveFrame& in = step->input;
+        const rp::Result& r = step->result;
+        if (summary.ms.empty()) {
+            if (!o.quiet) report_source(runner.info());
+            if (wants_route(o)) route.emplace(runner.config());
+            if (route && !in.at.timestamp_s && !in.at.pose && !o.quiet)
+                std::fprintf(stderr,
+                             "roadpreview: route: frames without timestamps are taken %g s apart "
+                             "(fusion.frame_rate_hz); give --frame-rate or --poses\n",
+                             1.0 / cfg.fusion.frame_rate_hz);
         }
-        rp::FrameMotion at{frame_time(*frame, index, o.frame_rate), std::nullopt};
-        const FrameMotion m = motion_for(o, app, table, *frame, at.timestamp_s, cfg);
-        if (!o.poses_file.empty()) {
-            if (index >= static_cast<std::int64_t>(poses.size()))
-                throw std::runtime_error(o.poses_file + ": no pose for frame " + std::to_string(index) + " (it has " +
-                                         std::to_string(poses.size()) + ")");
-            at.pose = poses[static_cast<std::size_t>(index)];
-        }
-        const bool new_sequence = !frame->sequence_break.empty() && index > first;
-        if (new_sequence) est->reset();
-        rp::Result r = est->process(*frame, m.motion.speed_mps, m.motion.yaw_rate_rps, at);
-        r.yaw_rate_source = m.yaw_rate_source;
-        if (new_sequence) note_sequence(*frame, r);
-        if (!mounting_source.empty()) r.mounting_source = mounting_source;
-        check_mounting(r, *frame, disagreeing);
-        if (route && index == first && !at.timestamp_s && !at.pose && !o.quiet)
-            std::fprintf(stderr,
-                         "roadpreview: route: frames without timestamps are taken %g s apart "
-                         "(fusion.frame_rate_hz); give --frame-rate or --poses\n",
-                         1.0 / cfg.fusion.frame_rate_hz);
-        if (route) route->add(r, at.pose);
+        if (route) route->add(r, in.at.pose);
         out << rp::result_to_json(r) << '\n';
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
         summary.add(r);
-        if (!o.quiet) report_frame(static_cast<std::size_t>(index), total, *frame, r);
+        if (!o.quiet) report_frame(static_cast<std::size_t>(in.index), total, in.frame, r);
     }
-    if (summary.ms.empty()) nothing_written(o, first, index);
+    if (summary.ms.empty()) nothing_written(o, drive.first_frame, runner.frames_read());
     summary.print();
-    if (disagreeing)
+    if (runner.mounting_disagreements())
         std::fprintf(stderr,
                      "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
                      "(mounting.disagrees in the output)\n",
-                     static_cast<long long>(disagreeing));
+                     static_cast<long long>(runner.mounting_disagreements()));
     if (route) write_route(o, *route);
     return 0;
 }
 
-// The base frame's pose for frame `index`: from the poses file, else integrated from the motion over the time
-// since the previous frame (timestamps, else 1/frame rate).
-rp::Pose2 pose_for(const RunOptions& o, const std::vector<rp::Pose2>& poses, std::int64_t index, const rp::Motion& m,
-                   const std::optional<rp::Pose2>& previous, double dt_s) {
-    if (!o.poses_file.empty()) {
-        if (index >= static_cast<std::int64_t>(poses.size()))
-            throw std::runtime_error(o.poses_file + ": no pose for frame " + std::to_string(index) + " (it has " +
-                                     std::to_string(poses.size()) + ")");
-        return poses[static_cast<std::size_t>(index)];
-    }
-    return previous ? rp::integrate_motion(*previous, m.speed_mps, m.yaw_rate_rps, dt_s) : rp::Pose2{};
-}
-
 // Frames of the drive into the calibrator: numbered points at once, files (no beam numbers) at the end, by the
-// beam centres their elevations show.
+// beam centres their elevations show. Poses: the poses file's, else the motion integrated over the time since
+// the previous frame (timestamps, else 1/frame rate).
 int calibrate(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty() && o.poses_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE");
     if (o.output.empty()) throw std::invalid_argument("give the beams file to write: -o beams.yaml");
-    const rp::Config cfg = build_config(o, app);
-    const auto [first, last] = parse_frame_range(o.frames);
-    std::optional<rp::MotionTable> table;
-    if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
-    std::vector<rp::Pose2> poses;
-    if (!o.poses_file.empty()) poses = rp::read_kitti_poses(o.poses_file);
-    const auto source = rp::open_frames(o.inputs, o.source);
+    rp::DriveFrames frames(rp::open_frames(o.inputs, o.source), build_config(o, app), drive_options(o, app));
     rp::CalibrationOptions options;
     options.cell_m = o.cell;
     options.max_sigma_deg = o.max_sigma;
@@ -481,34 +374,33 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     std::vector<rp::Pose2> unnumbered_poses;
     std::optional<rp::Pose2> pose;
     std::optional<double> last_time;
-    std::int64_t index = 0;
-    for (; index < last; ++index) {
-        std::optional<rp::Frame> frame = source->next();
-        if (!frame) break;
-        if (index == 0 && !o.quiet) report_source(source->info());
-        if (index < first) continue;
-        const std::optional<double> t = frame_time(*frame, index, o.frame_rate);
-        const double dt = t && last_time ? *t - *last_time : 1.0 / cfg.fusion.frame_rate_hz;
+    while (std::optional<rp::DriveFrame> in = frames.next()) {
+        if (!pose && !o.quiet) report_source(frames.info());
+        const std::optional<double> t = in->at.timestamp_s;
+        const double dt = t && last_time ? *t - *last_time : 1.0 / frames.config().fusion.frame_rate_hz;
         last_time = t;
-        pose = pose_for(o, poses, index, motion_for(o, app, table, *frame, t, cfg).motion, pose, dt);
-        const auto view = rp::points_view(frame->points.data(), frame->points.rows(), 4);
-        if (frame->beams.empty()) {
-            unnumbered.push_back(std::move(*frame));
+        const rp::Motion& m = in->motion;
+        pose = in->at.pose ? *in->at.pose : pose ? rp::integrate_motion(*pose, m.speed_mps, m.yaw_rate_rps, dt)
+                                                 : rp::Pose2{};
+        if (!o.quiet)
+            std::fprintf(stderr, "[%lld] %s: pose x %.2f m, y %.2f m, yaw %.4f rad\n",
+                         static_cast<long long>(in->index + 1), rp::frame_label(in->frame).c_str(), pose->x_m,
+                         pose->y_m, pose->yaw_rad);
+        if (in->frame.beams.empty()) {
+            unnumbered.push_back(std::move(in->frame));
             unnumbered_poses.push_back(*pose);
-        } else {
-            if (!calibrator) calibrator.emplace(cfg, source->info().beams, options);
-            calibrator->add_frame(view, frame->beams, *pose);
+            continue;
         }
-        if (!o.quiet) std::fprintf(stderr, "[%lld] %s: pose x %.2f m, y %.2f m, yaw %.4f rad\n",
-                                   static_cast<long long>(index + 1), frame_label(unnumbered.empty() ? *frame
-                                   : unnumbered.back()).c_str(), pose->x_m, pose->y_m, pose->yaw_rad);
+        if (!calibrator) calibrator.emplace(frames.config(), frames.info().beams, options);
+        calibrator->add_frame(rp::points_view(in->frame.points.data(), in->frame.points.rows(), 4), in->frame.beams,
+                              *pose);
     }
     rp::BeamCalibration indexing;
     if (!unnumbered.empty()) {
         std::vector<rp::PointsView> views;
         for (const rp::Frame& f : unnumbered) views.push_back(rp::points_view(f.points.data(), f.points.rows(), 4));
         rp::find_beam_centres(views, o.beams, indexing);
-        calibrator.emplace(cfg, o.beams, options);
+        calibrator.emplace(frames.config(), o.beams, options);
         for (std::size_t k = 0; k < views.size(); ++k)
             calibrator->add_frame(views[k], rp::beams_by_elevation(views[k], indexing), unnumbered_poses[k]);
     }
@@ -519,7 +411,7 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     } catch (const rp::CalibrationError& e) {
         throw rp::CalibrationError(o.inputs[0] + ": " + e.what());
     }
-    const rp::SourceInfo info = source->info();
+    const rp::SourceInfo info = frames.info();
     c.sensor_model = info.format == "files" ? o.source.sensor_model : info.sensor_model;
     c.serial = info.serial;
     if (!unnumbered.empty()) {

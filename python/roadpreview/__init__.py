@@ -22,6 +22,7 @@ if native_available():
     from . import io, range_sensor
     from ._core import BeamCalibration, CalibrationError
     from .calibration import calibrate_beams
+    from .drive import Drive, run
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
@@ -36,5 +37,5 @@ __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
-    "Repeatability", "repeatability", "world_profile", "range_sensor",
+    "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive",
 ]

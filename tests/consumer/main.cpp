@@ -1,8 +1,14 @@
-// Uses the installed library: a flat road scanned in rings, driven straight at 5 m/s.
+// Uses the installed library: a flat road scanned in rings, driven straight at 5 m/s. Built twice: against the
+// umbrella target (and then it uses the recording I/O too) and against roadpreview::core alone.
 #include <cmath>
 #include <cstdio>
 
+#ifdef ROADPREVIEW_CONSUMER_CORE_ONLY
+#include <roadpreview/pipeline/pipeline.hpp>
+#include <roadpreview/version.hpp>
+#else
 #include <roadpreview/roadpreview.hpp>
+#endif
 
 int main() {
     Eigen::Matrix<float, Eigen::Dynamic, 4, Eigen::RowMajor> points(20000, 4);
@@ -17,5 +23,8 @@ int main() {
     const auto& rough = r.left.roughness;
     std::printf("roadpreview %s: %lld ground points, left class %c, %.3f ms\n", roadpreview::kVersion,
                 static_cast<long long>(r.points.ground), rough.iso_class ? *rough.iso_class : '-', r.timing_ms.total);
+#ifndef ROADPREVIEW_CONSUMER_CORE_ONLY
+    if (!roadpreview::is_pcap_path("drive.pcap")) return 1;  // roadpreview::io is linked
+#endif
     return r.points.ground > 0 && rough.iso_class ? 0 : 1;
 }

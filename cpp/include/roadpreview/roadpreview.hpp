@@ -5,6 +5,7 @@
 #include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/core/config.hpp"
 #include "roadpreview/core/frames.hpp"
+#include "roadpreview/drive/drive.hpp"
 #include "roadpreview/fusion/fusion.hpp"
 #include "roadpreview/ground/ground.hpp"
 #include "roadpreview/ground/mounting.hpp"

@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Drives, not frames: the policy that turns a recording into per-frame results — each frame's time, motion and
+// pose, the sensor's mounting, fusion resets at sequence breaks — in one place, used by the CLI (`roadpreview
+// run`, `roadpreview calibrate`), the Python `rp.run` and batch runs alike (docs/method.md, "Drives").
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "roadpreview/core/config.hpp"
+#include "roadpreview/fusion/fusion.hpp"
+#include "roadpreview/io/frame_source.hpp"
+#include "roadpreview/paths/motion.hpp"
+#include "roadpreview/pipeline/pipeline.hpp"
+
+namespace roadpreview {
+
+/// Where a drive's frames get their motion and time from. The motion table wins over a constant yaw rate, which
+/// wins over the frames' IMU, which wins over 0 (driving straight).
+struct DriveOptions {
+    std::optional<double> speed_mps;     ///< constant speed (m/s, negative reversing); needed without motion_file
+    std::optional<double> yaw_rate_rps;  ///< constant yaw rate (rad/s, positive left)
+    std::string motion_file;             ///< CSV t,speed,yaw_rate looked up at each frame's time
+    std::string poses_file;              ///< KITTI poses, one per frame of the recording: they move the fusion map
+    double frame_rate_hz = 0.0;          ///< frames without a timestamp get index / rate (0: no timestamp)
+    std::int64_t first_frame = 0;        ///< the frames [first_frame, last_frame) of the recording are processed
+    std::int64_t last_frame = std::numeric_limits<std::int64_t>::max();
+    /// Notes for the user (warning = true: the mounting could not be estimated, or disagrees with the ground;
+    /// false: the mounting was estimated); unset: dropped.
+    std::function<void(bool warning, const std::string& text)> on_note;
+};
+
+/// One frame of a drive with what the drive's policy gives it.
+struct DriveFrame {
+    Frame frame;
+    std::int64_t index = 0;       ///< 0-based position in the recording (skipped frames count)
+    FrameMotion at;               ///< timestamp (the frame's own, else index / frame rate) and pose (poses file)
+    Motion motion;                ///< speed and yaw rate
+    std::string yaw_rate_source;  ///< "motion", "option", "imu" or "default"
+    bool new_sequence = false;    ///< a frame file that does not continue the previous one's sequence
+};
+
+/// A recording's frames in order with their time, motion and pose. The first frame processed gives the sensor's
+/// mounting when the config has neither sensor_height nor extrinsics (estimate_mounting). Throws
+/// std::invalid_argument for options that contradict each other, std::runtime_error naming the file for bad input.
+class DriveFrames {
+public:
+    DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options);
+
+    /// The next frame in [first_frame, last_frame), or nullopt at the end.
+    std::optional<DriveFrame> next();
+
+    /// The config with the mounting the first frame gave (before it: the one given).
+    const Config& config() const { return cfg_; }
+    /// "estimated" once the first frame gave the mounting, else empty.
+    const std::string& mounting_source() const { return mounting_source_; }
+    SourceInfo info() const { return source_->info(); }
+    /// Frames read from the recording so far, skipped ones included.
+    std::int64_t frames_read() const { return read_; }
+
+private:
+    void estimate_mounting_from(const Frame& f);
+    void note(bool warning, const std::string& text) const;
+
+    std::unique_ptr<FrameSource> source_;
+    Config cfg_;
+    DriveOptions options_;
+    std::optional<MotionTable> table_;
+    std::vector<Pose2> poses_;
+    std::string mounting_source_;
+    std::int64_t read_ = 0;
+    bool started_ = false;
+};
+
+/// One processed frame of a drive.
+struct DriveStep {
+    DriveFrame input;
+    Result result;
+};
+
+/// DriveFrames through one Estimator: the result of every frame, the fusion map reset at sequence breaks, each
+/// result saying where its yaw rate and mounting came from (docs/output.md).
+class DriveRunner {
+public:
+    DriveRunner(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options);
+
+    /// The next frame's result, or nullopt at the end of the recording.
+    std::optional<DriveStep> next();
+
+    const Config& config() const { return frames_.config(); }
+    SourceInfo info() const { return frames_.info(); }
+    std::int64_t frames_read() const { return frames_.frames_read(); }
+    /// Frames whose fitted ground disagreed with the given mounting (the first one is noted).
+    std::int64_t mounting_disagreements() const { return disagreeing_; }
+
+private:
+    void check_mounting_of(const Result& r, const Frame& f);
+
+    std::function<void(bool, const std::string&)> on_note_;
+    bool has_poses_;
+    DriveFrames frames_;
+    std::optional<Estimator> estimator_;  // made at the first frame, which may give the mounting
+    std::int64_t disagreeing_ = 0;
+};
+
+/// A short name of a frame for messages: its file, and its frame id in a pcap.
+std::string frame_label(const Frame& f);
+
+}  // namespace roadpreview

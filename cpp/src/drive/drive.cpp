@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "roadpreview/drive/drive.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <utility>
+
+#include "roadpreview/ground/mounting.hpp"
+#include "roadpreview/io/readers.hpp"
+
+namespace roadpreview {
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kMaxMountingTiltRad = 15.0 / kRadToDeg;  // beyond it the "ground" is more likely a wall
+
+std::string format(const char* pattern, double a, double b, double c) {
+    char text[160];
+    std::snprintf(text, sizeof text, pattern, a, b, c);
+    return text;
+}
+
+// The frame's own timestamp (pcaps), else index / frame rate for file inputs, else none.
+std::optional<double> frame_time(const Frame& f, std::int64_t index, double frame_rate_hz) {
+    if (f.timestamp) return f.timestamp;
+    if (frame_rate_hz > 0.0) return static_cast<double>(index) / frame_rate_hz;
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::string frame_label(const Frame& f) {
+    return f.source + (f.frame_id >= 0 && is_pcap_path(f.source) ? " #" + std::to_string(f.frame_id) : "");
+}
+
+DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options)
+    : source_(std::move(source)), cfg_(std::move(cfg)), options_(std::move(options)) {
+    if (!source_) throw std::invalid_argument("DriveFrames: no frame source");
+    if (!options_.speed_mps && options_.motion_file.empty() && options_.poses_file.empty())
+        throw std::invalid_argument("give the vehicle's motion: a speed (and yaw rate), a motion file or a poses file");
+    if (options_.speed_mps && !std::isfinite(*options_.speed_mps))
+        throw std::invalid_argument("the speed must be finite");
+    if (options_.yaw_rate_rps && !std::isfinite(*options_.yaw_rate_rps))
+        throw std::invalid_argument("the yaw rate must be finite");
+    if (!(options_.frame_rate_hz >= 0.0) || !std::isfinite(options_.frame_rate_hz))
+        throw std::invalid_argument("the frame rate must be >= 0 Hz");
+    if (options_.first_frame < 0 || options_.first_frame >= options_.last_frame)
+        throw std::invalid_argument("the frame range must have 0 <= first < last");
+    if (!options_.motion_file.empty()) table_ = MotionTable::read_csv(options_.motion_file);
+    if (!options_.poses_file.empty()) poses_ = read_kitti_poses(options_.poses_file);
+}
+
+void DriveFrames::note(bool warning, const std::string& text) const {
+    if (options_.on_note) options_.on_note(warning, text);
+}
+
+// With neither sensor_height nor extrinsics, the first frame's ground gives the mounting; a frame without
+// plausible ground leaves the points as base-frame points, and says so.
+void DriveFrames::estimate_mounting_from(const Frame& f) {
+    if (cfg_.sensor_height || cfg_.extrinsics) return;
+    const auto m = estimate_mounting(points_view(f.points.data(), f.points.rows(), f.points.cols()), cfg_.ground);
+    const std::string missing = "no --sensor-height or --extrinsics, and ";
+    if (!m) {
+        note(true, missing + "no ground in " + frame_label(f) +
+             " to estimate the mounting from: the points are taken as base-frame points");
+        return;
+    }
+    const std::string figures = format("height %.2f m, roll %.2f°, pitch %.2f°", m->height_m,
+                                       m->roll_rad * kRadToDeg, m->pitch_rad * kRadToDeg);
+    if (m->height_m <= 0.0 || std::abs(m->roll_rad) > kMaxMountingTiltRad ||
+        std::abs(m->pitch_rad) > kMaxMountingTiltRad) {
+        note(true, missing + "the ground in " + frame_label(f) + " gives no plausible mounting (" + figures +
+             "): the points are taken as base-frame points");
+        return;
+    }
+    cfg_.extrinsics = to_extrinsics(*m);
+    mounting_source_ = "estimated";
+    note(false, "no --sensor-height or --extrinsics: mounting estimated from the ground in " + frame_label(f) + ": " +
+         figures + " (mounting.source = \"estimated\" in the output)");
+}
+
+std::optional<DriveFrame> DriveFrames::next() {
+    std::optional<Frame> frame;
+    for (;;) {
+        if (read_ >= options_.last_frame) return std::nullopt;
+        frame = source_->next();
+        if (!frame) return std::nullopt;
+        if (read_++ >= options_.first_frame) break;
+    }
+    DriveFrame d;
+    d.index = read_ - 1;
+    if (!started_) estimate_mounting_from(*frame);
+    d.new_sequence = started_ && !frame->sequence_break.empty();
+    started_ = true;
+    d.at.timestamp_s = frame_time(*frame, d.index, options_.frame_rate_hz);
+    if (table_) {
+        if (!d.at.timestamp_s)
+            throw std::runtime_error(frame->source + ": frame has no timestamp to look up in " + table_->source() +
+                                     " (give --frame-rate, or frame_rate in Python, for file inputs)");
+        d.motion = table_->at(*d.at.timestamp_s);
+        d.yaw_rate_source = "motion";
+    } else {
+        d.motion.speed_mps = options_.speed_mps.value_or(0.0);
+        const auto imu = imu_yaw_rate(frame->imu, effective_extrinsics(cfg_));
+        d.motion.yaw_rate_rps = options_.yaw_rate_rps ? *options_.yaw_rate_rps : imu.value_or(0.0);
+        d.yaw_rate_source = options_.yaw_rate_rps ? "option" : imu ? "imu" : "default";
+    }
+    if (!options_.poses_file.empty()) {
+        if (d.index >= static_cast<std::int64_t>(poses_.size()))
+            throw std::runtime_error(options_.poses_file + ": no pose for frame " + std::to_string(d.index) +
+                                     " (it has " + std::to_string(poses_.size()) + ")");
+        d.at.pose = poses_[static_cast<std::size_t>(d.index)];
+    }
+    d.frame = std::move(*frame);
+    return d;
+}
+
+DriveRunner::DriveRunner(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options)
+    : on_note_(options.on_note),
+      has_poses_(!options.poses_file.empty()),
+      frames_(std::move(source), std::move(cfg), std::move(options)) {
+    if (frames_.config().fusion.method == FusionMethod::None && has_poses_)
+        throw std::invalid_argument("poses move the fusion map: set fusion.method to ema or kalman too");
+}
+
+std::optional<DriveStep> DriveRunner::next() {
+    std::optional<DriveFrame> input = frames_.next();
+    if (!input) return std::nullopt;
+    if (!estimator_) estimator_.emplace(frames_.config());
+    if (input->new_sequence) estimator_->reset();
+    DriveStep step{std::move(*input), {}};
+    const DriveFrame& in = step.input;
+    Result& r = step.result;
+    r = estimator_->process(in.frame, in.motion.speed_mps, in.motion.yaw_rate_rps, in.at);
+    r.yaw_rate_source = in.yaw_rate_source;
+    // A frame file that does not continue the previous one's sequence starts the map afresh; the output says why.
+    if (in.new_sequence && r.fusion) r.fusion->reset = "new sequence: " + in.frame.sequence_break;
+    if (!frames_.mounting_source().empty()) r.mounting_source = frames_.mounting_source();
+    check_mounting_of(r, in.frame);
+    return step;
+}
+
+// Notes the first frame whose fitted ground disagrees with the given mounting; counts them all.
+void DriveRunner::check_mounting_of(const Result& r, const Frame& f) {
+    if (!r.plane || r.mounting_source != "given") return;
+    const MountingCheck c = check_mounting(*r.plane);
+    if (!c.disagrees || disagreeing_++ > 0 || !on_note_) return;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  ": the fitted ground is %.2f m %s the base origin and tilted %.1f°: the sensor is about %.2f m up, "
+                  "not %.2f m; check --sensor-height / --extrinsics",
+                  std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg, r.extrinsics.z_m + c.offset_m,
+                  r.extrinsics.z_m);
+    on_note_(true, frame_label(f) + text);
+}
+
+}  // namespace roadpreview

@@ -1,0 +1,203 @@
+// DriveFrames / DriveRunner: each frame's time, motion and pose, the mounting from the first frame, fusion resets
+// at sequence breaks, and the errors of contradicting options (docs/method.md, "Drives").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <roadpreview/drive/drive.hpp>
+
+namespace rp = roadpreview;
+
+namespace {
+
+constexpr double kSensorHeightM = 1.8;
+
+// A flat road seen from a level sensor 1.8 m up: a grid of points 2–30 m ahead, ±5 m to the sides.
+rp::Frame road_frame(const std::string& source, std::string sequence_break = {}) {
+    std::vector<std::array<float, 4>> rows;
+    for (float x = 2.0f; x <= 30.0f; x += 0.2f)
+        for (float y = -5.0f; y <= 5.0f; y += 0.2f) rows.push_back({x, y, static_cast<float>(-kSensorHeightM), 1.0f});
+    rp::Frame f;
+    f.points.resize(static_cast<Eigen::Index>(rows.size()), 4);
+    for (std::size_t i = 0; i < rows.size(); ++i)
+        for (int c = 0; c < 4; ++c) f.points(static_cast<Eigen::Index>(i), c) = rows[i][static_cast<std::size_t>(c)];
+    f.source = source;
+    f.sequence_break = std::move(sequence_break);
+    return f;
+}
+
+class VectorSource : public rp::FrameSource {
+public:
+    explicit VectorSource(std::vector<rp::Frame> frames) : frames_(std::move(frames)) {}
+    std::optional<rp::Frame> next() override {
+        if (next_ == frames_.size()) return std::nullopt;
+        return frames_[next_++];
+    }
+    rp::SourceInfo info() const override {
+        rp::SourceInfo i;
+        i.format = "files";
+        return i;
+    }
+
+private:
+    std::vector<rp::Frame> frames_;
+    std::size_t next_ = 0;
+};
+
+std::unique_ptr<rp::FrameSource> frames(int n) {
+    std::vector<rp::Frame> v;
+    for (int i = 0; i < n; ++i) v.push_back(road_frame("f" + std::to_string(i) + ".bin"));
+    return std::make_unique<VectorSource>(std::move(v));
+}
+
+rp::Config mounted() {
+    rp::Config cfg;
+    cfg.sensor_height = kSensorHeightM;
+    return cfg;
+}
+
+std::string write(const std::string& name, const std::string& text) {
+    const std::string path = testing::TempDir() + name;
+    std::ofstream(path) << text;
+    return path;
+}
+
+}  // namespace
+
+TEST(Drive, TheMotionTableWinsOverAGivenYawRateWhichWinsOverDrivingStraight) {
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    o.frame_rate_hz = 10.0;
+    o.motion_file = write("drive_motion.csv", "t,speed,yaw_rate\n0,2,0.1\n1,4,0.3\n");
+    o.yaw_rate_rps = -0.2;
+    rp::DriveFrames table(frames(3), mounted(), o);
+    std::optional<rp::DriveFrame> f = table.next();
+    f = table.next();  // t = 0.1 s
+    ASSERT_TRUE(f && f->at.timestamp_s);
+    EXPECT_DOUBLE_EQ(*f->at.timestamp_s, 0.1);
+    EXPECT_NEAR(f->motion.speed_mps, 2.2, 1e-12);
+    EXPECT_NEAR(f->motion.yaw_rate_rps, 0.12, 1e-12);
+    EXPECT_EQ(f->yaw_rate_source, "motion");
+
+    o.motion_file.clear();
+    rp::DriveFrames option(frames(1), mounted(), o);
+    f = option.next();
+    EXPECT_EQ(f->yaw_rate_source, "option");
+    EXPECT_DOUBLE_EQ(f->motion.yaw_rate_rps, -0.2);
+    EXPECT_DOUBLE_EQ(f->motion.speed_mps, 5.0);
+
+    o.yaw_rate_rps.reset();
+    rp::DriveFrames straight(frames(1), mounted(), o);
+    f = straight.next();
+    EXPECT_EQ(f->yaw_rate_source, "default");
+    EXPECT_DOUBLE_EQ(f->motion.yaw_rate_rps, 0.0);
+}
+
+TEST(Drive, TheFrameRangeSkipsFramesButKeepsTheirIndicesAndTimes) {
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    o.frame_rate_hz = 10.0;
+    o.first_frame = 2;
+    o.last_frame = 4;
+    rp::DriveFrames drive(frames(6), mounted(), o);
+    std::vector<std::int64_t> indices;
+    while (auto f = drive.next()) {
+        indices.push_back(f->index);
+        EXPECT_DOUBLE_EQ(*f->at.timestamp_s, 0.1 * static_cast<double>(f->index));
+    }
+    EXPECT_EQ(indices, (std::vector<std::int64_t>{2, 3}));
+    EXPECT_EQ(drive.frames_read(), 4);  // stops at the range's end, not the recording's
+}
+
+TEST(Drive, WithoutAMountingTheFirstFrameGivesItAndEveryResultSaysSo) {
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    std::vector<std::pair<bool, std::string>> notes;
+    o.on_note = [&](bool warning, const std::string& text) { notes.emplace_back(warning, text); };
+    rp::DriveRunner runner(frames(2), rp::Config{}, o);
+    int n = 0;
+    while (auto step = runner.next()) {
+        ++n;
+        EXPECT_EQ(step->result.mounting_source, "estimated");
+        EXPECT_NEAR(step->result.extrinsics.z_m, kSensorHeightM, 0.01);
+        EXPECT_EQ(step->result.yaw_rate_source, "default");
+    }
+    EXPECT_EQ(n, 2);
+    ASSERT_TRUE(runner.config().extrinsics);
+    ASSERT_EQ(notes.size(), 1u);
+    EXPECT_FALSE(notes[0].first);
+    EXPECT_NE(notes[0].second.find("mounting estimated from the ground in f0.bin"), std::string::npos);
+}
+
+TEST(Drive, AGivenMountingThatDisagreesWithTheGroundIsNotedOnceAndCounted) {
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    std::vector<std::string> warnings;
+    o.on_note = [&](bool warning, const std::string& text) { if (warning) warnings.push_back(text); };
+    rp::Config cfg;
+    cfg.sensor_height = 1.2;  // the road lies 1.8 m below the sensor
+    rp::DriveRunner runner(frames(3), cfg, o);
+    while (runner.next()) {}
+    EXPECT_EQ(runner.mounting_disagreements(), 3);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("f0.bin: the fitted ground is 0.60 m below"), std::string::npos) << warnings[0];
+}
+
+TEST(Drive, ASequenceBreakStartsTheFusionMapAfreshAndTheResultSaysWhy) {
+    std::vector<rp::Frame> v{road_frame("a/0.bin"), road_frame("a/1.bin"), road_frame("b/0.bin", "another folder")};
+    rp::Config cfg = mounted();
+    cfg.fusion.method = rp::FusionMethod::Kalman;
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    rp::DriveRunner runner(std::make_unique<VectorSource>(std::move(v)), cfg, o);
+    std::vector<rp::Result> results;
+    while (auto step = runner.next()) results.push_back(std::move(step->result));
+    ASSERT_EQ(results.size(), 3u);
+    ASSERT_TRUE(results[1].fusion && results[2].fusion);
+    EXPECT_EQ(results[1].fusion->frames, 2);
+    EXPECT_EQ(results[2].fusion->frames, 1);
+    EXPECT_EQ(results[2].fusion->reset, "new sequence: another folder");
+}
+
+TEST(Drive, ContradictingOrMissingOptionsAreErrorsNamingWhatIsWrong) {
+    rp::DriveOptions none;
+    EXPECT_THROW(rp::DriveFrames(frames(1), mounted(), none), std::invalid_argument);  // no motion at all
+
+    rp::DriveOptions poses;
+    poses.speed_mps = 5.0;
+    poses.poses_file = write("drive_poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
+    try {
+        rp::DriveRunner runner(frames(1), mounted(), poses);  // fusion off: the poses would be ignored
+        FAIL() << "poses without fusion accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("fusion"), std::string::npos);
+    }
+    rp::Config fused = mounted();
+    fused.fusion.method = rp::FusionMethod::Ema;
+    rp::DriveRunner short_poses(frames(2), fused, poses);
+    EXPECT_TRUE(short_poses.next());
+    try {
+        short_poses.next();
+        FAIL() << "a frame without a pose accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("drive_poses.txt: no pose for frame 1 (it has 1)"), std::string::npos);
+    }
+
+    rp::DriveOptions untimed;
+    untimed.motion_file = write("drive_motion2.csv", "t,speed,yaw_rate\n0,2,0\n1,2,0\n");
+    rp::DriveFrames no_time(frames(1), mounted(), untimed);  // file frames without --frame-rate have no time
+    try {
+        no_time.next();
+        FAIL() << "a frame without a timestamp looked up in the motion table";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("f0.bin: frame has no timestamp"), std::string::npos);
+    }
+    rp::DriveOptions range;
+    range.speed_mps = 1.0;
+    range.first_frame = 3;
+    range.last_frame = 3;
+    EXPECT_THROW(rp::DriveFrames(frames(1), mounted(), range), std::invalid_argument);
+}
