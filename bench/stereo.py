@@ -138,15 +138,17 @@ def camera_extrinsics(calib_path: Path, lidar_height_m: float) -> dict:
             "pitch_rad": -math.asin(rotation[2, 0]), "yaw_rad": math.atan2(rotation[1, 0], rotation[0, 0])}
 
 
-def real_pair(pair_dir: Path = PAIR) -> dict:
-    """Both sensors through the same pipeline (5 m/s straight ahead, the motion is unknown for one frame)."""
-    camera_cfg = rp.Config(extrinsics=camera_extrinsics(pair_dir / "calib.txt", LIDAR_HEIGHT_M))
+def real_pair(pair_dir: Path = PAIR, **config) -> dict:
+    """Both sensors through the same pipeline (5 m/s straight ahead, the motion is unknown for one frame);
+    ``config``: further rp.Config fields for both."""
+    camera_cfg = rp.Config(extrinsics=camera_extrinsics(pair_dir / "calib.txt", LIDAR_HEIGHT_M), **config)
     found = rp.io.stereo_points(pair_dir / "left.png", pair_dir / "right.png", pair_dir / "calib.txt",
                                 config=camera_cfg)
     stereo = rp.Estimator(camera_cfg).process(found.points, 5.0, 0.0, source="left.png",
                                               range_variances=found.range_variances)
     lidar_points = rp.io.read(pair_dir / "lidar.bin")
-    lidar = rp.Estimator(rp.Config(sensor_height=LIDAR_HEIGHT_M)).process(lidar_points, 5.0, 0.0, source="lidar.bin")
+    lidar = rp.Estimator(rp.Config(sensor_height=LIDAR_HEIGHT_M, **config)).process(lidar_points, 5.0, 0.0,
+                                                                                  source="lidar.bin")
     return {"stereo": stereo, "lidar": lidar, "found": found, "extrinsics": camera_cfg.extrinsics}
 
 

@@ -141,15 +141,15 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
 }
 
 void report_source(const rp::SourceInfo& s) {
-    if (s.format == "files") return;
-    if (s.lidar_port == 0) {  // stereo: no packets
-        std::fprintf(stderr, "roadpreview: %s, %s, %s, %s\n", s.format.c_str(), s.sensor_model.c_str(), s.profile.c_str(),
-                     s.metadata.c_str());
-        return;
+    const bool packets = s.format != "files" && s.lidar_port != 0;  // pcaps; stereo pairs have no packets
+    if (s.format != "files" && !packets) {
+        std::fprintf(stderr, "roadpreview: %s, %s, %s, %s\n", s.format.c_str(), s.sensor_model.c_str(),
+                     s.profile.c_str(), s.metadata.c_str());
+    } else if (packets) {
+        std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
+                     s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
+                     s.metadata.empty() ? "" : ", ", s.metadata.c_str());
     }
-    std::fprintf(stderr, "roadpreview: %s, %s, %s, lidar UDP port %d (%s)%s%s\n", s.format.c_str(),
-                 s.sensor_model.c_str(), s.profile.c_str(), s.lidar_port, s.lidar_port_origin.c_str(),
-                 s.metadata.empty() ? "" : ", ", s.metadata.c_str());
     for (const auto& note : s.notes) std::fprintf(stderr, "roadpreview: %s\n", note.c_str());
 }
 

@@ -1,17 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Drives from Python: rp.run(...) iterates a recording's results through the C++ DriveRunner, the policy the
 // CLI follows (docs/method.md, "Drives").
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "roadpreview/roadpreview.hpp"
-
-namespace py = pybind11;
-namespace rp = roadpreview;
+#include "common.hpp"
 
 namespace {
 

@@ -1,21 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Recordings from Python: rp.io.open(...) iterates frames decoded in C++; a frame's arrays are read-only
 // numpy views of its buffers, kept alive by the frame.
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
-#include "roadpreview/roadpreview.hpp"
-
-namespace py = pybind11;
-namespace rp = roadpreview;
+#include "common.hpp"
 
 namespace {
-
-py::array read_only(py::array a) {
-    a.attr("setflags")(false);
-    return a;
-}
 
 py::dict info_dict(const rp::SourceInfo& s) {
     py::dict d;

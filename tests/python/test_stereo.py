@@ -199,7 +199,10 @@ def test_real_kitti_pair_agrees_with_its_lidar_scan():
     sys.path.insert(0, str(REPO / "bench"))
     from stereo import BANDS_M, real_pair
 
-    pair = real_pair(PAIR)
+    # One PCA plane, as measured for the README's stereo table. With the defaults (zone ground, local levelling)
+    # the stereo profiles differ from the LiDAR's by 11 cm RMS on this pair: an open defect of those two stages on
+    # stereo clouds (README, Stereo cameras), not of the stereo source this test checks.
+    pair = real_pair(PAIR, ground={"method": "pca"}, profile={"level_local": False})
     stereo, lidar = pair["stereo"], pair["lidar"]
     assert len(pair["found"].points) > 100000
     assert stereo.plane is not None and lidar.plane is not None

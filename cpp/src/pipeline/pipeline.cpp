@@ -107,6 +107,11 @@ std::size_t Estimator::fuse_samples(const std::vector<MapSample>& samples) {
     return impl_->fusion->fuse_samples(samples);
 }
 
+void rate_profile(Profile& p, const Config& cfg) {
+    p.roughness = analyze_roughness(p, cfg.roughness);
+    p.roughness.iri = wheel_iri(p, p.roughness, cfg.iri);
+}
+
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
     return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
 }
@@ -183,7 +188,8 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
     // Levelling by the local ground model (method.md §3); empty: by the one plane.
     const std::vector<double> local_z = cfg.profile.level && cfg.profile.level_local && r.plane
-                                            ? local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m)
+                                            ? local_ground_heights(roi.view(), ground.mask, *r.plane,
+                                                                   cfg.profile.level_band_m, r.path)
                                             : std::vector<double>{};
     WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
                                   : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
@@ -196,10 +202,7 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
     }
     r.timing_ms.profile = ms_since(mark);
 
-    for (Profile* p : {&r.left, &r.right}) {
-        p->roughness = analyze_roughness(*p, cfg.roughness);
-        p->roughness.iri = wheel_iri(*p, p->roughness, cfg.iri);
-    }
+    for (Profile* p : {&r.left, &r.right}) rate_profile(*p, cfg);
     r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
     reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);
     r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);

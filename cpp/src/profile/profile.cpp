@@ -65,27 +65,44 @@ Levelling levelling_for(const Plane* plane) {
     return L;
 }
 
+double distance_from_path(const WheelPaths& paths, double x, double y) {
+    if (paths.status != PathStatus::Arc) return std::abs(y);
+    return std::abs(std::hypot(x, y - paths.icr_y) - std::abs(paths.icr_y));
+}
+
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
-                                         double band_m) {
+                                         double band_m, const WheelPaths& paths) {
     std::vector<std::int64_t> band(mask.size(), -1);
+    std::vector<double> range(mask.size(), 0.0);
     std::int64_t bands = 0;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        if (!mask[static_cast<std::size_t>(i)]) continue;
-        const double r = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
-        band[static_cast<std::size_t>(i)] = static_cast<std::int64_t>(std::min(r / band_m, 1e6));
-        bands = std::max(bands, band[static_cast<std::size_t>(i)] + 1);
+        const auto at = static_cast<std::size_t>(i);
+        if (!mask[at]) continue;
+        range[at] = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
+        band[at] = static_cast<std::int64_t>(std::min(range[at] / band_m, 1e6));
+        bands = std::max(bands, band[at] + 1);
     }
     std::vector<Moments> moments(static_cast<std::size_t>(bands));
-    for (Eigen::Index i = 0; i < points.rows(); ++i)
-        if (band[static_cast<std::size_t>(i)] >= 0)
-            moments[static_cast<std::size_t>(band[static_cast<std::size_t>(i)])].add(points.row(i).cast<double>().transpose());
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    std::vector<double> nearest(moments.size(), kInf), farthest(moments.size(), -kInf);
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const auto at = static_cast<std::size_t>(i);
+        if (band[at] < 0 || distance_from_path(paths, points(i, 0), points(i, 1)) > kLevelCorridorHalfWidthM) continue;
+        const auto k = static_cast<std::size_t>(band[at]);
+        moments[k].add(points.row(i).cast<double>().transpose());
+        nearest[k] = std::min(nearest[k], range[at]);
+        farthest[k] = std::max(farthest[k], range[at]);
+    }
     std::vector<Plane> plane(moments.size(), frame);
     for (std::size_t k = 0; k < moments.size(); ++k)
-        if (const auto fit = plane_fit(moments[k])) plane[k] = fit->plane;
+        if (farthest[k] - nearest[k] >= kLevelMinSpan * band_m)  // a short patch cannot tell a grade
+            if (const auto fit = plane_fit(moments[k])) plane[k] = fit->plane;
     std::vector<double> z(mask.size(), kNaN);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const auto k = band[static_cast<std::size_t>(i)];
-        if (k >= 0) z[static_cast<std::size_t>(i)] = height_above(plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2)) - frame[3];
+        if (k >= 0)
+            z[static_cast<std::size_t>(i)] =
+                height_above(plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2)) - frame[3];
     }
     return z;
 }

@@ -72,12 +72,12 @@ def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
-    result = _process(points, speed, yaw_rate, cfg)
+    result = _process(points, speed, yaw_rate, cfg, range_variances)
     result.speed, result.yaw_rate, result.config = speed, yaw_rate, cfg
     return result
 
 
-def _process(points, speed: float, yaw_rate: float, cfg: Config) -> Result:
+def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances=None) -> Result:
     path = plan_path(speed, yaw_rate, cfg)
     if path["status"] != "stopped":
         cfg = roi_facing(cfg, speed)  # reversing looks behind

@@ -111,20 +111,38 @@ def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
     return z
 
 
-def local_ground_heights(ground_xyz, plane, cfg: Config) -> np.ndarray:
+LEVEL_CORRIDOR_HALF_WIDTH_M = 3.0  # both wheels and a margin, not the kerbs and pavements beside the road
+LEVEL_MIN_SPAN = 0.5  # of the band: the corridor points must span this much range to tell a grade
+
+
+def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
+    """Distance of base-frame points from the path of the vehicle's centre: |y| straight, from its circle about
+    the ICR on an arc (method.md §3)."""
+    if path["status"] != "arc":
+        return np.abs(xy[:, 1])
+    return np.abs(np.hypot(xy[:, 0], xy[:, 1] - path["icr_y"]) - abs(path["icr_y"]))
+
+
+def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None) -> np.ndarray:
     """Each ground point's height above the plane of the ground points in its band ⌊r / level_band_m⌋ of horizontal
-    distance r (the frame plane where that fit is degenerate), plus the frame plane's level −d (method.md §3)."""
+    distance r that lie within 3 m of the vehicle's path (straight ahead without ``path``; the frame plane where
+    they span less than half the band in range or their fit is degenerate), plus the frame plane's level −d
+    (method.md §3)."""
     from .ground import DegenerateFit, fit_plane, height_above  # the profile builds on the ground stage's fit
 
     xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
     band = np.floor(np.hypot(xyz[:, 0], xyz[:, 1]) / cfg.profile.level_band_m)
+    near = distance_from_path(xyz[:, :2], path or {"status": "straight"}) <= LEVEL_CORRIDOR_HALF_WIDTH_M
     z = np.empty(len(xyz))
     for k in np.unique(band):
         mine = band == k
-        try:
-            local = fit_plane(xyz[mine])
-        except DegenerateFit:
-            local = np.asarray(plane, dtype=np.float64)
+        r = np.hypot(xyz[mine & near, 0], xyz[mine & near, 1])
+        local = np.asarray(plane, dtype=np.float64)
+        if len(r) and r.max() - r.min() >= LEVEL_MIN_SPAN * cfg.profile.level_band_m:  # a short patch: no grade
+            try:
+                local = fit_plane(xyz[mine & near])
+            except DegenerateFit:
+                pass
         z[mine] = height_above(xyz[mine], local) - plane[3]
     return z
 
@@ -147,7 +165,7 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
     if cfg.profile.level and plane is not None:
         xyz = level_points(xyz, plane)
         if cfg.profile.level_local:
-            xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg)
+            xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg, path)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
     variances = None if height_variances is None else np.asarray(height_variances, float)[in_corridor]
     median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg, variances)

@@ -118,4 +118,7 @@ private:
 /// One output line (JSON object, no newline) as documented in docs/output.md.
 std::string result_to_json(const Result& r);
 
+/// A wheel's roughness (§4) and IRI (§6) from its profile, as the pipeline rates each wheel.
+void rate_profile(Profile& p, const Config& cfg);
+
 }  // namespace roadpreview

@@ -41,11 +41,22 @@ struct Levelling {
 };
 Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 
+/// Half-width of the corridor about the vehicle's path whose ground points the local planes are fitted to (m):
+/// both wheels and a margin, not the kerbs and pavements beside the road (docs/method.md §3).
+constexpr double kLevelCorridorHalfWidthM = 3.0;
+/// A band's plane is fitted only when its corridor points span at least this fraction of the band in range.
+constexpr double kLevelMinSpan = 0.5;
+
+/// Distance of a base-frame point (x, y) from the path of the vehicle's centre: |y| on a straight path, the
+/// distance from its circle about the ICR on an arc.
+double distance_from_path(const WheelPaths& paths, double x, double y);
+
 /// Levelling by the local ground model (docs/method.md §3): each ground point's height above the PCA plane of
-/// the ground points in its band k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²) (the frame plane where
-/// a band's fit is degenerate), plus the frame plane's level −d. One entry per point, NaN off the ground.
+/// the ground points in its band k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²) that lie within
+/// kLevelCorridorHalfWidthM of the vehicle's path (the frame plane where they span less than kLevelMinSpan of the
+/// band in range, or their fit is degenerate), plus the frame plane's level −d. One entry per point, NaN off the ground.
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
-                                         double band_m);
+                                         double band_m, const WheelPaths& paths);
 
 /// Bins per profile, K = ceil(preview_length / ds) (docs/method.md §3).
 std::size_t bin_count(const ProfileConfig& cfg);

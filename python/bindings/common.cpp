@@ -1,0 +1,57 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "common.hpp"
+
+#include <cmath>
+
+py::array read_only(py::array a) {
+    a.attr("setflags")(false);
+    return a;
+}
+
+rp::PointsView points_from(const py::handle& obj, py::object& holder, const char* name) {
+    if (!py::isinstance<py::array>(obj))
+        throw py::type_error(std::string(name) + " must be a numpy array, got " + std::string(py::str(obj.get_type().attr("__name__"))));
+    auto a = py::reinterpret_borrow<py::array>(obj);
+    const std::string shape = py::str(a.attr("shape"));
+    if (a.ndim() != 2) throw py::value_error(std::string(name) + " must be a 2-D array (N, 3) or (N, 4), got shape " + shape);
+    if (a.shape(1) < 3) throw py::value_error(std::string(name) + " needs at least 3 columns (x, y, z), got shape " + shape);
+    const char kind = a.dtype().kind();
+    if (kind != 'f' || (a.itemsize() != 4 && a.itemsize() != 8))
+        throw py::type_error(std::string(name) + " must be float32 or float64, got " + std::string(py::str(a.dtype())));
+    // Non-native byte order (a big-endian '>f4' array on this machine) is converted by the copy below.
+    const bool native = a.dtype().attr("isnative").cast<bool>();
+    const bool in_place = native && a.itemsize() == 4 && a.strides(1) == 4 && a.strides(0) > 0 && a.strides(0) % 4 == 0;
+    if (in_place) {
+        holder = a;
+        return rp::points_view(static_cast<const float*>(a.data()), a.shape(0), a.strides(0) / 4);
+    }
+    auto copy = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+    holder = copy;
+    return rp::points_view(copy.data(), copy.shape(0), copy.shape(1));
+}
+
+py::object optional_number(bool present, double v) {
+    return present && std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none());
+}
+
+py::object plane_array(const std::optional<rp::Plane>& p) {
+    if (!p) return py::none();
+    return py::array_t<double>(4, p->data());
+}
+
+py::dict path_dict(const rp::WheelPaths& p) {
+    const bool arc = p.status == rp::PathStatus::Arc;
+    py::dict d;
+    d["status"] = rp::to_string(p.status);
+    d["icr_y"] = optional_number(arc, p.icr_y);
+    d["left_radius"] = optional_number(arc, p.left_radius);
+    d["right_radius"] = optional_number(arc, p.right_radius);
+    return d;
+}
+
+rp::Config config_from(const std::string& json) { return rp::config_from_json(json, "config"); }
+
+std::vector<double> as_vector(const DoubleArray& a) {
+    if (a.ndim() != 1) throw py::value_error("expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
+    return std::vector<double>(a.data(), a.data() + a.size());
+}

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// rp.Estimator: the pipeline, one frame per process() call; the GIL is released while it runs.
+#include "common.hpp"
+
+void bind_estimator(py::module_& m) {
+    py::class_<rp::Estimator>(m, "Estimator")
+        .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
+        .def("process", [](rp::Estimator& est, py::handle points, double speed, double yaw_rate, const std::string& source,
+                           std::optional<double> timestamp, const std::string& yaw_rate_source,
+                           std::optional<std::array<double, 3>> pose,
+                           std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> range_variances) {
+            py::object holder;
+            const rp::PointsView view = points_from(points, holder);
+            rp::FrameMotion motion{timestamp, std::nullopt};
+            if (pose) motion.pose = rp::Pose2{(*pose)[0], (*pose)[1], (*pose)[2]};
+            const float* variances = nullptr;
+            if (range_variances) {
+                if (range_variances->ndim() != 1 || range_variances->shape(0) != view.rows())
+                    throw py::value_error("range_variances must be a 1-D array with one entry per point (" +
+                                          std::to_string(view.rows()) + "), got shape " +
+                                          py::str(range_variances->attr("shape")).cast<std::string>());
+                variances = range_variances->data();
+            }
+            rp::Result r;
+            {
+                py::gil_scoped_release release;
+                r = est.process(view, speed, yaw_rate, source, motion, variances);
+            }
+            r.yaw_rate_source = yaw_rate_source;
+            return r;
+        }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
+           py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none())
+        .def("reset", &rp::Estimator::reset, "Forgets the fused map, the pose and the clock");
+}
