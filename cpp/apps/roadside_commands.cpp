@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
 #include "roadpreview/roadside/sick.hpp"
 
@@ -20,7 +21,7 @@ namespace {
 struct RoadsideOptions {
     std::string site, detections, output, geojson;
     std::vector<std::string> inputs;
-    double carmen_rate_hz = 37.5;
+    double carmen_rate_hz = 37.5, max_distance_m = 1.0;
     int sensor_port = 2112;
     bool skip_bad = false, quiet = false;
 };
@@ -181,6 +182,33 @@ int info(const RoadsideOptions& o) {
     return 0;
 }
 
+// Scanner 2 (or the second input's scanner) registered onto the first from a static scene: prints the pose.
+int extrinsics(const RoadsideOptions& o) {
+    const rs::Site site = rs::read_site(o.site);
+    const auto inputs = resolve_inputs(o.inputs, &site);
+    if (inputs.size() != 2) throw std::runtime_error("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
+    std::vector<std::vector<rs::LaserScan>> scans;
+    for (const auto& in : inputs) scans.push_back(read_all({in}, o, true));
+    for (std::size_t k = 0; k < 2; ++k)
+        if (scans[k].empty()) throw std::runtime_error(inputs[k].path + ": no scans");
+    const int a = scans[0][0].scanner, b = scans[1][0].scanner;
+    for (int s : {a, b})
+        if (s < 0 || s >= static_cast<int>(site.scanners.size()))
+            throw std::runtime_error("scanner " + std::to_string(s) + " is not in " + site.path);
+    if (a == b) throw std::runtime_error("both inputs are scanner '" + site.scanners[static_cast<std::size_t>(a)].name + "'");
+    const auto& fixed = site.scanners[static_cast<std::size_t>(a)];
+    const auto& moving = site.scanners[static_cast<std::size_t>(b)];
+    const rs::ExtrinsicsResult r = rs::register_scanners(scans[0], fixed.pose, scans[1], moving.pose, o.max_distance_m);
+    const double deg = 180.0 / 3.14159265358979323846;
+    std::fprintf(stderr, "%s onto %s: %s, fitness %.4f m² (RMS %.3f m), moved by (%.3f, %.3f) m and %.3f°\n",
+                 moving.name.c_str(), fixed.name.c_str(), r.converged ? "converged" : "NOT converged", r.fitness_m2,
+                 std::sqrt(r.fitness_m2), r.pose.x_m - moving.pose.x_m, r.pose.y_m - moving.pose.y_m,
+                 (r.pose.yaw_rad - moving.pose.yaw_rad) * deg);
+    std::printf("- {name: %s, x_m: %.4f, y_m: %.4f, yaw_deg: %.4f, time_offset_s: %g}\n", moving.name.c_str(),
+                r.pose.x_m, r.pose.y_m, r.pose.yaw_rad * deg, moving.time_offset_s);
+    return r.converged ? 0 : 1;
+}
+
 }  // namespace
 
 std::function<int()> add_roadside_commands(CLI::App& app) {
@@ -200,11 +228,17 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
     CLI::App* info_cmd = roadside->add_subcommand("info", "What scan files hold: scans, beams, angles, times, ranges");
     info_cmd->add_option("SCANS", o->inputs, "Scan files")->required();
     info_cmd->add_flag("--skip-bad", o->skip_bad, "Skip and count telegrams that do not decode");
-    for (CLI::App* cmd : {run_cmd, info_cmd}) {
+    CLI::App* ext_cmd = roadside->add_subcommand("extrinsics", "Register a scanner onto another from a static scene "
+                                                                "(PCL ICP); prints its site entry");
+    ext_cmd->add_option("--site", o->site, "Site file with both scanners' approximate poses")->required();
+    ext_cmd->add_option("SCANS", o->inputs, "FIXED MOVING scan files (NAME=FILE to name their scanners)")->required();
+    ext_cmd->add_option("--max-distance", o->max_distance_m, "ICP correspondence distance, m (default 1)")
+        ->check(CLI::PositiveNumber);
+    for (CLI::App* cmd : {run_cmd, info_cmd, ext_cmd}) {
         cmd->add_option("--scan-rate", o->carmen_rate_hz, "Scan rate for logs without timestamps (CARMEN), Hz "
                                                           "(default 37.5)")->check(CLI::PositiveNumber);
         cmd->add_option("--sensor-port", o->sensor_port, "TCP port of the scanner in captures (default 2112)")
             ->check(CLI::Range(1, 65535));
     }
-    return [o, run_cmd]() { return run_cmd->parsed() ? run(*o) : info(*o); };
+    return [o, run_cmd, ext_cmd]() { return run_cmd->parsed() ? run(*o) : ext_cmd->parsed() ? extrinsics(*o) : info(*o); };
 }

@@ -8,6 +8,7 @@
 #include <random>
 #include <string>
 
+#include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
 
 namespace rs = roadpreview::roadside;
@@ -245,4 +246,53 @@ TEST(RoadsideProcessor, NanAndOutOfRangeReturnsAreNoReturn) {
     const auto cycles = p.finish();
     ASSERT_FALSE(cycles.empty());
     EXPECT_EQ(cycles.back().scanners[0].invalid_ranges, 80);  // −1 and 1e6, every scan
+}
+
+namespace {
+
+// Range from (x, y) along direction a to the walls of the room [−10, 10] × [−6, 6] and a 1 × 1 m pillar at (3, 2).
+double room_range(double x, double y, double a) {
+    const double dx = std::cos(a), dy = std::sin(a);
+    double r = 1e9;
+    for (double wall : {-10.0, 10.0})
+        if (std::abs(dx) > 1e-12 && (wall - x) / dx > 0) r = std::min(r, (wall - x) / dx);
+    for (double wall : {-6.0, 6.0})
+        if (std::abs(dy) > 1e-12 && (wall - y) / dy > 0) r = std::min(r, (wall - y) / dy);
+    double t0 = 0.0, t1 = 1e9;
+    const double lo[2] = {2.5 - x, 1.5 - y}, hi[2] = {3.5 - x, 2.5 - y}, d[2] = {dx, dy};
+    for (int k = 0; k < 2; ++k) {
+        if (std::abs(d[k]) < 1e-12) continue;
+        t0 = std::max(t0, std::min(lo[k] / d[k], hi[k] / d[k]));
+        t1 = std::min(t1, std::max(lo[k] / d[k], hi[k] / d[k]));
+    }
+    if (t0 <= t1 && t0 > 0) r = std::min(r, t0);
+    return r;
+}
+
+std::vector<rs::LaserScan> room_scans(const rs::Pose2& pose, int n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, 0.01);
+    std::vector<rs::LaserScan> out;
+    for (int k = 0; k < n; ++k) {
+        rs::LaserScan s;
+        s.start_angle_rad = -90 * kDeg, s.step_rad = 0.5 * kDeg;
+        for (int i = 0; i < 361; ++i) s.ranges_m.push_back(static_cast<float>(room_range(pose.x_m, pose.y_m, pose.yaw_rad + s.angle_rad(i)) + noise(rng)));
+        out.push_back(s);
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST(RoadsideExtrinsics, IcpRecoversTheSecondScannersPose) {
+    const rs::Pose2 fixed{-8.0, -4.0, 30 * kDeg}, truth{7.0, 3.0, -150 * kDeg};
+    const auto a = room_scans(fixed, 10, 1), b = room_scans(truth, 10, 2);
+    const rs::Pose2 guess{truth.x_m + 0.4, truth.y_m - 0.3, truth.yaw_rad + 3 * kDeg};
+    const rs::ExtrinsicsResult r = rs::register_scanners(a, fixed, b, guess, 1.5);
+    EXPECT_TRUE(r.converged);
+    EXPECT_NEAR(r.pose.x_m, truth.x_m, 0.03);
+    EXPECT_NEAR(r.pose.y_m, truth.y_m, 0.03);
+    EXPECT_NEAR(r.pose.yaw_rad, truth.yaw_rad, 0.3 * kDeg);
+    EXPECT_LT(r.fitness_m2, 0.01);
+    EXPECT_THROW(rs::register_scanners({}, fixed, b, guess), std::invalid_argument);
 }

@@ -181,7 +181,8 @@ std::vector<ScanObject> grid_objects(const std::vector<Point2>& points, const Gr
         }
         o.mbr = min_area_box(m);
         o.l_shape = fit_l_shape(m);
-        out.push_back(o);
+        o.members = m;
+        out.push_back(std::move(o));
     }
     return out;
 }

@@ -16,7 +16,13 @@ constexpr double kDeg = kPi / 180.0;
 constexpr double kCameraMemoryS = 1.0;  // a camera class stays with a track this long after its last detection
 
 TrackerSettings tracker_settings(const RoadsideSettings& s) {
-    return {s.accel_sigma_mps2, s.position_sigma_m, s.gate_chi2, s.max_coast_s, s.confirm_hits};
+    TrackerSettings t;
+    t.accel_sigma_mps2 = s.accel_sigma_mps2;
+    t.position_sigma_m = s.position_sigma_m;
+    t.gate_chi2 = s.gate_chi2;
+    t.max_coast_s = s.max_coast_s;
+    t.confirm_hits = s.confirm_hits;
+    return t;
 }
 
 Pose2 compose(const Pose2& a, const Pose2& b) {  // b expressed in a
@@ -35,13 +41,6 @@ void check_layout(const LaserScan& scan, const ScannerSite& site) {
     if (site.start_angle_deg && std::abs(scan.start_angle_rad / kDeg - *site.start_angle_deg) > 1e-2)
         bad("first beam at " + std::to_string(scan.start_angle_rad / kDeg) + "°, the site says " +
             std::to_string(*site.start_angle_deg) + "°");
-}
-
-// By the learned extent, for objects no camera has classified.
-std::string class_by_size(double length_m, double width_m) {
-    if (length_m >= 2.6 || width_m >= 1.4) return "car";
-    if (length_m >= 1.2) return "cyclist";
-    return "pedestrian";
 }
 
 }  // namespace
@@ -171,10 +170,14 @@ void Processor::associate_camera(double t0_s, double t1_s, Cycle& cycle) {
     for (const auto& [i, j] : assign(cost, s.camera_weight_position + s.camera_weight_heading)) {
         Track& t = tracks[static_cast<std::size_t>(j)];
         const CameraDetection& d = *ground[static_cast<std::size_t>(i)].d;
-        if (t.camera_class == d.cls || t.camera_class.empty() || d.score >= t.camera_score) {
-            t.camera_score = t.camera_class == d.cls ? std::max(t.camera_score, d.score) : d.score;
-            t.camera_class = d.cls;
+        // The class most voted for over the track's life (scores summed): one wrong detection does not flip it.
+        t.class_votes[d.cls] += d.score;
+        double total = 0.0, best = 0.0;
+        for (const auto& [cls, votes] : t.class_votes) {
+            total += votes;
+            if (votes > best) best = votes, t.camera_class = cls;
         }
+        t.camera_score = best / total;
         t.last_camera_s = d.t_s;
         used[static_cast<std::size_t>(i)] = true;
     }
@@ -204,11 +207,8 @@ OutputObject Processor::output(const Track& t, double t_s) const {
     o.length_m = t.length_m, o.width_m = t.width_m;
     const bool camera = !t.camera_class.empty() && t_s - t.last_camera_s <= kCameraMemoryS;
     o.source = camera ? (t_s - t.last_update_s <= site_.settings.max_coast_s ? "both" : "camera") : "laser";
-    if (!t.camera_class.empty()) {
-        o.cls = t.camera_class, o.score = t.camera_score;
-    } else {
-        o.cls = class_by_size(t.length_m, t.width_m), o.score = 0.5;
-    }
+    o.cls = track_class(t);
+    o.score = t.camera_class.empty() ? 0.5 : t.camera_score;
     o.position = geo_.to_wgs84(o.x_m, o.y_m);
     o.mbr_site = Box{o.x_m, o.y_m, t.length_m, t.width_m, o.heading_rad}.corners();
     for (int k = 0; k < 4; ++k) o.mbr_wgs84[k] = geo_.to_wgs84(o.mbr_site[k][0], o.mbr_site[k][1]);

@@ -31,6 +31,7 @@ struct ScanObject {
     int points = 0;
     int cells = 0;                                    ///< grid cells of the component (after dilation)
     std::uint32_t scanners = 0;                       ///< bit i: scanner i saw it
+    std::vector<Point2> members;                      ///< its points
 };
 
 /// Per-beam background of one scanner: the median range of each beam over the learning scans (no return when

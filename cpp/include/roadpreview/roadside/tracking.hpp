@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,16 +33,29 @@ struct Track {
     int hits = 0;
     double length_m = 0.0, width_m = 0.0, box_heading_rad = 0.0;  ///< learned extent and last box orientation
     Box last_box;
+    Eigen::Vector2d visible_offset = Eigen::Vector2d::Zero();      ///< centre − visible box centre, last update
+    bool corrected = false;                                        ///< the visible-corner correction is on
     ScanObject last_object;
     std::string camera_class;                                     ///< from the camera, "" when none
-    double camera_score = 0.0;
+    double camera_score = 0.0;                                    ///< its share of the camera's votes
+    std::map<std::string, double> class_votes;                    ///< summed detection scores per class
     double last_camera_s = -1e300;
 };
 
 struct TrackerSettings {
     double accel_sigma_mps2 = 3.0, position_sigma_m = 0.08, gate_chi2 = 13.8, max_coast_s = 0.6;
+    double sigma_per_range = 0.005;  ///< measurement σ grows by this per metre of range (beam spacing, few points)
     int confirm_hits = 3;
+    /// Smallest extent (length, width) of each class, m: the visible-corner correction of a car seen only from
+    /// its front uses the car's, not the 10 cm of it the scanners saw.
+    std::map<std::string, std::pair<double, double>> class_extent_m = {
+        {"car", {4.5, 1.8}}, {"cyclist", {1.75, 0.5}}, {"pedestrian", {0.0, 0.0}}};
 };
+
+/// The class of a track: the camera's when it has one, else by the learned extent and speed (docs/method.md
+/// §12.9): length ≥ 2.6 m or width ≥ 1.4 m is a car; length ≥ 1.2 m or faster than 2.5 m/s a cyclist; else a
+/// pedestrian.
+std::string track_class(const Track& t);
 
 class Tracker {
 public:
@@ -57,6 +71,11 @@ public:
 private:
     void predict(Track& t, double t_s) const;
     Eigen::Vector2d measured_centre(const Track& t, const Measurement& m) const;
+    Box measured_box(const Track& t, const Measurement& m) const;
+    bool correcting(const Track& t) const;
+    std::vector<Measurement> merge_splits(std::vector<Measurement> measurements) const;
+    double cost(const Track& t, const Measurement& m) const;
+    double measurement_variance(const Measurement& m) const;
     void correct(Track& t, const Measurement& m);
     TrackerSettings s_;
     std::vector<Track> tracks_;
