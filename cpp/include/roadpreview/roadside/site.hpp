@@ -40,15 +40,15 @@ struct SiteOrigin {
 struct RoadsideSettings {
     double cell_m = 0.1;               ///< occupancy grid cell
     int dilation_cells = 2;            ///< dilation radius (square kernel 2r+1)
-    int min_points = 3;                ///< smaller components are noise
+    int min_points = 2;                ///< smaller components are noise (a cyclist head-on at 25 m gives 2 returns)
     double background_s = 2.0;         ///< background learned over the first seconds
     double background_margin_m = 0.3;  ///< a return this much in front of the background is foreground
     double cycle_s = 1.0 / 37.5;       ///< output period; scans are grouped into cycles of this length
     double accel_sigma_mps2 = 3.0;     ///< Kalman process noise (white acceleration)
     double position_sigma_m = 0.08;    ///< measurement noise of an object centre
     double gate_chi2 = 13.8;           ///< association gate (χ², 2 dof, 99.9 %)
-    int confirm_hits = 3;              ///< a track is output after this many updates
-    double max_coast_s = 0.6;          ///< a track not updated for longer is dropped
+    int confirm_hits = 6;              ///< a track is output after this many updates (0.16 s at 37.5 Hz)
+    double max_coast_s = 1.2;          ///< a track not updated for longer is dropped (occlusion by a pole)
     double camera_gate_m = 2.5;        ///< camera–track association gate (position distance)
     double camera_weight_position = 1.0, camera_weight_heading = 1.0;  ///< cost: w_p·d/gate + w_h·|Δθ|/π
     double scanner_timeout_s = 0.2;    ///< a scanner silent for longer is reported as dropped out

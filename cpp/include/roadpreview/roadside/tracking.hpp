@@ -43,9 +43,9 @@ struct Track {
 };
 
 struct TrackerSettings {
-    double accel_sigma_mps2 = 3.0, position_sigma_m = 0.08, gate_chi2 = 13.8, max_coast_s = 0.6;
+    double accel_sigma_mps2 = 3.0, position_sigma_m = 0.08, gate_chi2 = 13.8, max_coast_s = 1.2;
     double sigma_per_range = 0.005;  ///< measurement σ grows by this per metre of range (beam spacing, few points)
-    int confirm_hits = 3;
+    int confirm_hits = 6;
     /// Smallest extent (length, width) of each class, m: the visible-corner correction of a car seen only from
     /// its front uses the car's, not the 10 cm of it the scanners saw.
     std::map<std::string, std::pair<double, double>> class_extent_m = {
