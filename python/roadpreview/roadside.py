@@ -172,6 +172,8 @@ def estimate_clock_offsets(scans: Sequence[dict], site: PathLike, reference: int
         single = dict(doc)
         single["scanners"] = [dict(doc["scanners"][i], time_offset_s=0.0)]
         single.pop("camera", None)
+        # Only well-seen objects: one scanner's sparse far returns bias its track more than they help here.
+        single["processing"] = dict(doc.get("processing") or {}, min_points=3, confirm_hits=3, max_coast_s=0.6)
         proc = Processor(yaml.safe_dump(single))
         cycles = proc.run([dict(s, scanner=0) for s in scans if s["scanner"] == i])
         tracks.append(_tracks_of(cycles))
