@@ -205,7 +205,8 @@ TEST(RoadsideProcessor, TracksACarFromTwoScannersAndReportsADropout) {
         if (o.age_s > 0.5) {
             EXPECT_NEAR(o.x_m, truth_x, 0.15) << "t " << c.t_s;  // predicted to the cycle time
             EXPECT_NEAR(o.y_m, 1.0, 0.15);
-            if (o.age_s > 0.7) EXPECT_NEAR(o.speed_mps, speed, 0.3) << "t " << c.t_s;  // after the filter settles
+            // After the filter settles; within 5 %: passing between the scanners, the visible sides change.
+            if (o.age_s > 0.7) EXPECT_NEAR(o.speed_mps, speed, 0.05 * speed) << "t " << c.t_s;
             EXPECT_EQ(o.cls, "car");
         }
     }
