@@ -78,6 +78,30 @@ def pcd_seeds(data_dir):
     yield "real_head", real[:4096]
 
 
+def sick_seeds():
+    """A small LMDscandata telegram in CoLa-B and CoLa-A framing (5 beams, DIST1 and RSSI1), a site and CSVs."""
+    def channel(name, values, fmt):
+        return name + struct.pack(">ffiHH", 1.0, 0.0, -450000, 5000, len(values)) + struct.pack(f">{len(values)}{fmt}", *values)
+    body = (b"sSN LMDscandata " + struct.pack(">HHIBBHHIIBBBBHII", 1, 1, 18090362, 0, 0, 7, 4, 1000, 1200, 0, 0, 0, 0, 0,
+                                              5000, 360)
+            + struct.pack(">H", 0) + struct.pack(">H", 1) + channel(b"DIST1", [93, 80, 0, 1841, 62], "H")
+            + struct.pack(">H", 1) + channel(b"RSSI1", [254, 0, 3, 4, 5], "B") + struct.pack(">HHHH", 0, 0, 0, 1)
+            + struct.pack(">HBBBBBI", 1970, 1, 1, 2, 55, 34, 889000) + struct.pack(">H", 0))
+    checksum = 0
+    for b in body:
+        checksum ^= b
+    cola_b = b"\x02\x02\x02\x02" + struct.pack(">I", len(body)) + body + bytes([checksum])
+    cola_a = (b"\x02sSN LMDscandata 1 1 1140A7A 0 0 7 4 3E8 4B0 0 0 0 0 0 1388 168 0 1 DIST1 3F800000 00000000 "
+              b"FFF92230 1388 5 5D 50 0 731 3E 0 0 0 0 0\x03")
+    site = (b"origin: {lat_deg: 49.0, lon_deg: 8.4, height_m: 110, heading_deg: 90}\n"
+            b"scanners:\n  - {name: a, x_m: 0, y_m: 0, yaw_deg: 90, beams: 361, step_deg: 0.5}\n"
+            b"camera:\n  points: [[0, 480, 0, 5], [720, 480, 5, 5], [720, 200, 5, 30], [0, 200, -5, 30]]\n"
+            b"processing: {cell_m: 0.1, dilation_cells: 2}\n")
+    return {"cola_b": b"\x00" + cola_b, "cola_a": b"\x00" + cola_a, "stream": b"\x01xx" + cola_b + cola_a + cola_b,
+            "site": b"\x02" + site, "scan_csv": b"\x03t,scanner,angle_deg,range_m\n0,0,-90,5\n0,0,-89.5,\n",
+            "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n"}
+
+
 def main():
     data_dir, out_dir = Path(sys.argv[1]), Path(sys.argv[2])
     kitti = (data_dir / "semantickitti/000000.bin").read_bytes()
@@ -98,6 +122,7 @@ def main():
         "csv": {"motion": b"\x00t,speed,yaw_rate\n# comment\n0,5,0.1\n0.5,5.5,0.05\n1,6,0\n",
                 "poses": b"\x01" + b"".join((data_dir / "ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")
                                             .read_bytes().splitlines(keepends=True)[:3])},
+        "sick_telegram": sick_seeds(),
     }
     for target, files in seeds.items():
         folder = out_dir / target

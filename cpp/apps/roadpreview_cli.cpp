@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include "range_commands.hpp"
+#include "roadside_commands.hpp"  // roadside perception (its own library)
 #include "roadpreview/roadpreview.hpp"
 
 namespace rp = roadpreview;
@@ -611,12 +612,14 @@ int main(int argc, char** argv) {
     add_source_options(cal_cmd, c.source);
 
     const auto range_action = add_range_commands(app);
+    const auto roadside_action = add_roadside_commands(app);  // roadside: see roadside_commands.cpp
 
     if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
         if (cal_cmd->parsed()) return calibrate(c, *cal_cmd);
         if (app.got_subcommand("range")) return range_action();
+        if (app.got_subcommand("roadside")) return roadside_action();
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

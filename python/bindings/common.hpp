@@ -26,6 +26,7 @@ void bind_io(py::module_& m);         // io.cpp
 void bind_calibration(py::module_& m);  // calibration.cpp
 void bind_range_sensor(py::module_& m);  // range_sensor.cpp
 void bind_drive(py::module_& m);      // drive.cpp
+void bind_roadside(py::module_& m);   // roadside.cpp
 
 // A 1-D (or any) float64 array, converted once when the caller passes another dtype or layout.
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;

@@ -19,7 +19,7 @@ from .estimator import Estimator
 from .metrics import Repeatability, repeatability, world_profile
 
 if native_available():
-    from . import io, range_sensor
+    from . import io, range_sensor, roadside
     from ._core import BeamCalibration, CalibrationError
     from .calibration import calibrate_beams
     from .drive import Drive, run
@@ -37,5 +37,5 @@ __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
-    "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive",
+    "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive", "roadside",
 ]

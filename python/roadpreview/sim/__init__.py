@@ -17,6 +17,7 @@ from .drive import Frame, Pose, drive, scan, trajectory, truth_profiles, wheel_p
 from .lidar import PRESETS, Lidar, hdl_64e, os1_128, preset, vlp_16
 from .road import ISO_CLASSES, GradeChange, Pothole, Road, RoughField, SpeedBump, class_gd_n0, iso_psd
 from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
+from . import roadside  # roadside scenes: python/roadpreview/sim/roadside.py
 from .range_sensor import (BenchTrack, ProfileTrack, RangeDrive, RangeSensorModel, bench_counts, bench_profile, bench_reference,
                            bench_road, drive_readings, laser, layout_yaml, measured_distance, ultrasonic)
 from .stereo import StereoCamera, StereoFrame, drive_stereo, kitti_stereo, render

@@ -1,0 +1,244 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `roadpreview roadside run|info` (README "Roadside", docs/output.md "Roadside").
+#include "roadside_commands.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "roadpreview/roadside/extrinsics.hpp"
+#include "roadpreview/roadside/processor.hpp"
+#include "roadpreview/roadside/sick.hpp"
+
+namespace rs = roadpreview::roadside;
+
+namespace {
+
+struct RoadsideOptions {
+    std::string site, detections, output, geojson;
+    std::vector<std::string> inputs;
+    double carmen_rate_hz = 37.5, max_distance_m = 1.0;
+    int sensor_port = 2112;
+    bool skip_bad = false, quiet = false;
+};
+
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// "NAME=FILE" names the site scanner of a file; a bare FILE is the next scanner in the site's order.
+struct Input {
+    std::string path;
+    int scanner = -1;
+};
+
+std::vector<Input> resolve_inputs(const std::vector<std::string>& args, const rs::Site* site) {
+    std::vector<Input> out;
+    int next = 0;
+    for (const auto& a : args) {
+        Input in{a, -1};
+        const auto eq = a.find('=');
+        if (site && eq != std::string::npos) {
+            const std::string name = a.substr(0, eq);
+            for (std::size_t i = 0; i < site->scanners.size(); ++i)
+                if (site->scanners[i].name == name) in = {a.substr(eq + 1), static_cast<int>(i)};
+            if (in.scanner < 0) throw std::runtime_error(a + ": no scanner named '" + name + "' in " + site->path);
+        }
+        if (in.scanner < 0 && !ends_with(in.path, ".csv")) in.scanner = next++;
+        out.push_back(in);
+    }
+    return out;
+}
+
+// Every scan of one input file, by its extension; CSV files say their scanner per row.
+std::vector<rs::LaserScan> read_input(const Input& in, const RoadsideOptions& o, rs::SickDecodeCounts* counts,
+                                      std::string* note) {
+    std::vector<rs::LaserScan> scans;
+    const std::string& p = in.path;
+    if (ends_with(p, ".csv")) {
+        scans = rs::read_scan_csv(p);
+    } else if (ends_with(p, ".json")) {
+        scans = rs::scans_from_telegrams(rs::read_sick_json(p), o.skip_bad, counts);
+    } else if (ends_with(p, ".pcap") || ends_with(p, ".pcapng")) {
+        scans = rs::scans_from_telegrams(rs::read_sick_pcap(p, o.sensor_port), o.skip_bad, counts);
+    } else if (ends_with(p, ".log") || ends_with(p, ".log.gz") || ends_with(p, ".clf") || ends_with(p, ".clf.gz")) {
+        bool missing = false;
+        scans = rs::read_carmen_log(p, o.carmen_rate_hz, 0.0, &missing);
+        if (missing && note) *note = p + ": the log's timestamps are all 0; scans timed at --scan-rate " +
+                                     std::to_string(o.carmen_rate_hz) + " Hz";
+    } else if (ends_with(p, ".bag") || ends_with(p, ".mcap") || ends_with(p, ".db3")) {
+        throw std::runtime_error(p + ": ROS bags are read in Python (rp.roadside.read_rosbag_scans, the rosbags "
+                                     "package); write them to the scan CSV for the CLI");
+    } else {
+        throw std::runtime_error(p + ": unknown scan format (expected .csv, SICK .json dump, .pcap/.pcapng, CARMEN "
+                                     ".log[.gz])");
+    }
+    if (in.scanner >= 0)
+        for (auto& s : scans) s.scanner = in.scanner;
+    return scans;
+}
+
+std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const RoadsideOptions& o, bool quiet) {
+    std::vector<rs::LaserScan> all;
+    for (const auto& in : inputs) {
+        rs::SickDecodeCounts counts;
+        std::string note;
+        auto scans = read_input(in, o, &counts, &note);
+        if (!quiet && counts.telegrams)
+            std::fprintf(stderr, "%s: %lld telegrams, %lld scans, %lld other, %lld bad\n", in.path.c_str(),
+                         static_cast<long long>(counts.telegrams), static_cast<long long>(counts.scans),
+                         static_cast<long long>(counts.other), static_cast<long long>(counts.bad));
+        if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
+        all.insert(all.end(), std::make_move_iterator(scans.begin()), std::make_move_iterator(scans.end()));
+    }
+    return all;
+}
+
+int run(const RoadsideOptions& o) {
+    const rs::Site site = rs::read_site(o.site);
+    auto scans = read_all(resolve_inputs(o.inputs, &site), o, o.quiet);
+    if (scans.empty()) throw std::runtime_error("no scans in the inputs");
+    // Site clock: each scanner's offset applied before merging, so the cycles see one time line.
+    std::stable_sort(scans.begin(), scans.end(), [&](const rs::LaserScan& a, const rs::LaserScan& b) {
+        auto offset = [&](const rs::LaserScan& s) {
+            return s.scanner >= 0 && s.scanner < static_cast<int>(site.scanners.size())
+                       ? site.scanners[static_cast<std::size_t>(s.scanner)].time_offset_s : 0.0;
+        };
+        return a.time_s + offset(a) < b.time_s + offset(b);
+    });
+    rs::Processor processor(site);
+    if (!o.detections.empty()) processor.add_detections(rs::read_detections(o.detections));
+    std::ofstream file;
+    if (!o.output.empty()) {
+        file.open(o.output);
+        if (!file) throw std::runtime_error(o.output + ": cannot write");
+    }
+    std::ostream& out = o.output.empty() ? std::cout : file;
+    std::vector<rs::Cycle> kept;  // for GeoJSON only
+    long long cycles = 0, objects = 0, dropouts = 0;
+    double worst_ms = 0.0, total_ms = 0.0;
+    std::vector<bool> was_active(site.scanners.size(), true);
+    auto emit = [&](const std::vector<rs::Cycle>& done) {
+        for (const auto& c : done) {
+            out << rs::cycle_to_json(c) << '\n';
+            ++cycles, objects += static_cast<long long>(c.objects.size());
+            worst_ms = std::max(worst_ms, c.process_ms), total_ms += c.process_ms;
+            for (std::size_t i = 0; i < c.scanners.size(); ++i) {
+                if (was_active[i] && !c.scanners[i].active && c.scanners[i].scans > 0) {
+                    ++dropouts;
+                    std::fprintf(stderr, "warning: scanner '%s' silent since t = %.3f s (cycle t = %.3f s)\n",
+                                 c.scanners[i].name.c_str(), c.scanners[i].last_scan_s, c.t_s);
+                }
+                was_active[i] = c.scanners[i].active;
+            }
+            if (!o.geojson.empty()) kept.push_back(c);
+            if (!o.quiet && cycles % 500 == 0) std::fprintf(stderr, "cycle %lld, t = %.2f s\n", cycles, c.t_s);
+        }
+    };
+    for (const auto& s : scans) emit(processor.push(s));
+    emit(processor.finish());
+    if (!o.geojson.empty()) {
+        std::ofstream g(o.geojson);
+        if (!g) throw std::runtime_error(o.geojson + ": cannot write");
+        g << rs::cycles_to_geojson(kept) << '\n';
+    }
+    if (cycles == 0) throw std::runtime_error("no cycle written: the inputs end within the background learning time");
+    std::fprintf(stderr, "%lld scans, %lld cycles, %lld object reports, %lld scanner dropouts; cycle processing "
+                 "mean %.3f ms, worst %.3f ms\n", static_cast<long long>(scans.size()), cycles, objects, dropouts,
+                 total_ms / static_cast<double>(cycles), worst_ms);
+    return 0;
+}
+
+int info(const RoadsideOptions& o) {
+    for (const auto& in : resolve_inputs(o.inputs, nullptr)) {
+        RoadsideOptions quiet = o;
+        const auto scans = read_all({in}, quiet, false);
+        std::printf("%s: %zu scans\n", in.path.c_str(), scans.size());
+        if (scans.empty()) continue;
+        const auto& f = scans.front();
+        const double deg = 180.0 / 3.14159265358979323846;
+        std::printf("  beams %zu, angles %.4f° to %.4f° in %.4f° steps (scanner frame, 0° ahead), intensities %s\n",
+                    f.ranges_m.size(), f.start_angle_rad * deg, f.angle_rad(f.ranges_m.size() - 1) * deg,
+                    f.step_rad * deg, f.intensities.empty() ? "no" : "yes");
+        std::printf("  time %.3f to %.3f s (%.3f s)", f.time_s, scans.back().time_s, scans.back().time_s - f.time_s);
+        if (scans.size() > 1)
+            std::printf(", %.2f Hz", static_cast<double>(scans.size() - 1) / (scans.back().time_s - f.time_s));
+        std::printf("\n");
+        if (f.counter >= 0) std::printf("  scan counter %lld to %lld\n", static_cast<long long>(f.counter),
+                                        static_cast<long long>(scans.back().counter));
+        float lo = INFINITY, hi = 0.0f;
+        long long valid = 0, total = 0;
+        for (const auto& s : scans)
+            for (float r : s.ranges_m) {
+                ++total;
+                if (std::isfinite(r)) ++valid, lo = std::min(lo, r), hi = std::max(hi, r);
+            }
+        std::printf("  ranges %.3f to %.3f m, %lld of %lld beams with a return\n", valid ? lo : 0.0f, hi, valid, total);
+    }
+    return 0;
+}
+
+// Scanner 2 (or the second input's scanner) registered onto the first from a static scene: prints the pose.
+int extrinsics(const RoadsideOptions& o) {
+    const rs::Site site = rs::read_site(o.site);
+    const auto inputs = resolve_inputs(o.inputs, &site);
+    if (inputs.size() != 2) throw std::runtime_error("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
+    std::vector<std::vector<rs::LaserScan>> scans;
+    for (const auto& in : inputs) scans.push_back(read_all({in}, o, true));
+    for (std::size_t k = 0; k < 2; ++k)
+        if (scans[k].empty()) throw std::runtime_error(inputs[k].path + ": no scans");
+    const int a = scans[0][0].scanner, b = scans[1][0].scanner;
+    for (int s : {a, b})
+        if (s < 0 || s >= static_cast<int>(site.scanners.size()))
+            throw std::runtime_error("scanner " + std::to_string(s) + " is not in " + site.path);
+    if (a == b) throw std::runtime_error("both inputs are scanner '" + site.scanners[static_cast<std::size_t>(a)].name + "'");
+    const auto& fixed = site.scanners[static_cast<std::size_t>(a)];
+    const auto& moving = site.scanners[static_cast<std::size_t>(b)];
+    const rs::ExtrinsicsResult r = rs::register_scanners(scans[0], fixed.pose, scans[1], moving.pose, o.max_distance_m);
+    const double deg = 180.0 / 3.14159265358979323846;
+    std::fprintf(stderr, "%s onto %s: %s, fitness %.4f m² (RMS %.3f m), moved by (%.3f, %.3f) m and %.3f°\n",
+                 moving.name.c_str(), fixed.name.c_str(), r.converged ? "converged" : "NOT converged", r.fitness_m2,
+                 std::sqrt(r.fitness_m2), r.pose.x_m - moving.pose.x_m, r.pose.y_m - moving.pose.y_m,
+                 (r.pose.yaw_rad - moving.pose.yaw_rad) * deg);
+    std::printf("- {name: %s, x_m: %.4f, y_m: %.4f, yaw_deg: %.4f, time_offset_s: %g}\n", moving.name.c_str(),
+                r.pose.x_m, r.pose.y_m, r.pose.yaw_rad * deg, moving.time_offset_s);
+    return r.converged ? 0 : 1;
+}
+
+}  // namespace
+
+std::function<int()> add_roadside_commands(CLI::App& app) {
+    auto o = std::make_shared<RoadsideOptions>();
+    CLI::App* roadside = app.add_subcommand("roadside", "Roadside perception: 2-D laser scanners (+ camera) → tracked "
+                                                        "objects in WGS84");
+    roadside->require_subcommand(1);
+    CLI::App* run_cmd = roadside->add_subcommand("run", "Objects per cycle from scans (JSON lines)");
+    run_cmd->add_option("--site", o->site, "Site file (YAML): scanners, camera, origin, processing")->required();
+    run_cmd->add_option("SCANS", o->inputs, "Scan files: SICK .json dump or .pcap/.pcapng, CARMEN .log[.gz], scan "
+                                            ".csv; NAME=FILE assigns a site scanner")->required();
+    run_cmd->add_option("--detections", o->detections, "Camera detections, CSV t,x,y,w,h,class,score or JSON");
+    run_cmd->add_option("-o,--output", o->output, "JSON lines to write (default stdout)");
+    run_cmd->add_option("--geojson", o->geojson, "Also write the objects as a GeoJSON FeatureCollection");
+    run_cmd->add_flag("--skip-bad", o->skip_bad, "Skip and count telegrams that do not decode instead of stopping");
+    run_cmd->add_flag("-q,--quiet", o->quiet, "No progress on stderr");
+    CLI::App* info_cmd = roadside->add_subcommand("info", "What scan files hold: scans, beams, angles, times, ranges");
+    info_cmd->add_option("SCANS", o->inputs, "Scan files")->required();
+    info_cmd->add_flag("--skip-bad", o->skip_bad, "Skip and count telegrams that do not decode");
+    CLI::App* ext_cmd = roadside->add_subcommand("extrinsics", "Register a scanner onto another from a static scene "
+                                                                "(PCL ICP); prints its site entry");
+    ext_cmd->add_option("--site", o->site, "Site file with both scanners' approximate poses")->required();
+    ext_cmd->add_option("SCANS", o->inputs, "FIXED MOVING scan files (NAME=FILE to name their scanners)")->required();
+    ext_cmd->add_option("--max-distance", o->max_distance_m, "ICP correspondence distance, m (default 1)")
+        ->check(CLI::PositiveNumber);
+    for (CLI::App* cmd : {run_cmd, info_cmd, ext_cmd}) {
+        cmd->add_option("--scan-rate", o->carmen_rate_hz, "Scan rate for logs without timestamps (CARMEN), Hz "
+                                                          "(default 37.5)")->check(CLI::PositiveNumber);
+        cmd->add_option("--sensor-port", o->sensor_port, "TCP port of the scanner in captures (default 2112)")
+            ->check(CLI::Range(1, 65535));
+    }
+    return [o, run_cmd, ext_cmd]() { return run_cmd->parsed() ? run(*o) : ext_cmd->parsed() ? extrinsics(*o) : info(*o); };
+}

@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The roadside pipeline: scans (any order of scanners, increasing time) → cycles of classified, tracked objects
+// in the site frame and in WGS84, every cycle's objects predicted to the cycle's common time.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "roadpreview/roadside/geo.hpp"
+#include "roadpreview/roadside/scan.hpp"
+#include "roadpreview/roadside/site.hpp"
+#include "roadpreview/roadside/tracking.hpp"
+
+namespace roadpreview::roadside {
+
+/// A camera detection: image box (px, top-left x, y, width, height), class and score, at time t.
+struct CameraDetection {
+    double t_s = 0.0;
+    double x_px = 0.0, y_px = 0.0, w_px = 0.0, h_px = 0.0;
+    std::string cls;
+    double score = 0.0;
+};
+
+/// Detections from a CSV `t,x,y,w,h,class,score` or a JSON array / JSON lines of objects with those keys.
+std::vector<CameraDetection> read_detections(const std::string& path);
+
+struct OutputObject {
+    int id = 0;
+    std::string cls;      ///< car, pedestrian, cyclist, unknown
+    double score = 0.0;
+    std::string source;   ///< laser, camera, both
+    double x_m = 0.0, y_m = 0.0, vx_mps = 0.0, vy_mps = 0.0, speed_mps = 0.0, heading_rad = 0.0;
+    double length_m = 0.0, width_m = 0.0;
+    LatLon position;
+    std::array<std::array<double, 2>, 4> mbr_site{};
+    std::array<LatLon, 4> mbr_wgs84{};
+    int points = 0;
+    double age_s = 0.0;
+};
+
+struct ScannerStatus {
+    std::string name;
+    std::int64_t scans = 0;           ///< scans used so far
+    double last_scan_s = -1.0;        ///< site time of its last scan, −1 before the first
+    bool active = false;              ///< delivered a scan within the timeout
+    std::int64_t invalid_ranges = 0;  ///< NaN, ≤ 0 or beyond max range, so far
+};
+
+struct Cycle {
+    double t_s = 0.0;  ///< the common time every object is predicted to
+    bool learning = false;  ///< still learning the background (no objects yet)
+    std::vector<OutputObject> objects;
+    std::vector<ScannerStatus> scanners;
+    int scan_objects = 0;  ///< components found in this cycle
+    double process_ms = 0.0;
+};
+
+class Processor {
+public:
+    explicit Processor(Site site);
+    ~Processor();
+    /// Adds a scan (scanner index into the site); returns the cycles it completed (usually 0 or 1). Scans must
+    /// come in non-decreasing site time; a scan whose layout disagrees with the site throws std::runtime_error.
+    std::vector<Cycle> push(const LaserScan& scan);
+    /// Camera detections (any time order; they are used by the cycle whose interval holds their time).
+    void add_detections(const std::vector<CameraDetection>& detections);
+    /// Completes the last cycle.
+    std::vector<Cycle> finish();
+    const Site& site() const { return site_; }
+
+private:
+    Cycle run_cycle(double t_end_s);
+    void associate_camera(double t0_s, double t1_s, Cycle& cycle);
+    OutputObject output(const Track& t, double t_s) const;
+    Site site_;
+    SiteGeodesy geo_;
+    std::vector<BackgroundModel> background_;
+    std::vector<ScannerStatus> status_;
+    std::vector<double> learn_start_s_;
+    Tracker tracker_;
+    std::vector<LaserScan> pending_;
+    std::vector<CameraDetection> detections_;
+    long long cycle_index_ = -1;
+    double first_time_s_ = 0.0;
+    bool started_ = false;
+};
+
+/// The cycle as one JSON line (docs/output.md, "Roadside").
+std::string cycle_to_json(const Cycle& cycle);
+/// A GeoJSON FeatureCollection of the cycles' objects: a Point and a Polygon (the MBR) per object and cycle.
+std::string cycles_to_geojson(const std::vector<Cycle>& cycles);
+
+}  // namespace roadpreview::roadside

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Tracks: one constant-velocity Kalman filter per object, gated assignment of measurements (dlib's Hungarian
+// solver), stable ids, velocity and heading, and an extent learned over the track so that a partly seen object's
+// centre can be placed from its visible corner.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "roadpreview/roadside/objects.hpp"
+
+namespace roadpreview::roadside {
+
+/// Minimum-cost assignment of rows to columns; pairs with cost > `gate` (or not finite) are never made.
+/// Returns (row, column) pairs. Solved with dlib::max_cost_assignment on a padded square matrix.
+std::vector<std::pair<int, int>> assign(const std::vector<std::vector<double>>& cost, double gate);
+
+struct Measurement {
+    double t_s = 0.0;
+    ScanObject object;
+    std::vector<Pose2> viewpoints;  ///< positions of the scanners that saw it (for the L-shape correction)
+};
+
+struct Track {
+    int id = 0;
+    Eigen::Vector4d x = Eigen::Vector4d::Zero();      ///< x, y, vx, vy (site frame, m and m/s)
+    Eigen::Matrix4d P = Eigen::Matrix4d::Identity();
+    double t_s = 0.0;                                  ///< time of the state
+    double last_update_s = 0.0, first_seen_s = 0.0;
+    int hits = 0;
+    double length_m = 0.0, width_m = 0.0, box_heading_rad = 0.0;  ///< learned extent and last box orientation
+    Box last_box;
+    Eigen::Vector2d visible_offset = Eigen::Vector2d::Zero();      ///< centre − visible box centre, last update
+    bool corrected = false;                                        ///< the visible-corner correction is on
+    ScanObject last_object;
+    std::string camera_class;                                     ///< from the camera, "" when none
+    double camera_score = 0.0;                                    ///< its share of the camera's votes
+    std::map<std::string, double> class_votes;                    ///< summed detection scores per class
+    double last_camera_s = -1e300;
+};
+
+struct TrackerSettings {
+    double accel_sigma_mps2 = 3.0, position_sigma_m = 0.08, gate_chi2 = 13.8, max_coast_s = 1.2;
+    double sigma_per_range = 0.005;  ///< measurement σ grows by this per metre of range (beam spacing, few points)
+    int confirm_hits = 6;
+    /// Smallest extent (length, width) of each class, m: the visible-corner correction of a car seen only from
+    /// its front uses the car's, not the 10 cm of it the scanners saw.
+    std::map<std::string, std::pair<double, double>> class_extent_m = {
+        {"car", {4.5, 1.8}}, {"cyclist", {1.75, 0.5}}, {"pedestrian", {0.0, 0.0}}};
+};
+
+/// The class of a track: the camera's when it has one, else by the learned extent and speed (docs/method.md
+/// §13.9): length ≥ 2.6 m or width ≥ 1.4 m is a car; length ≥ 1.2 m or faster than 2.5 m/s a cyclist; else a
+/// pedestrian.
+std::string track_class(const Track& t);
+
+class Tracker {
+public:
+    explicit Tracker(TrackerSettings settings) : s_(settings) {}
+    /// Predicts every track to the measurements' time, assigns, updates, starts and drops tracks.
+    void update(double t_s, const std::vector<Measurement>& measurements);
+    /// A track's state predicted to `t_s` (not stored).
+    Eigen::Vector4d predicted(const Track& track, double t_s) const;
+    std::vector<Track>& tracks() { return tracks_; }
+    const std::vector<Track>& tracks() const { return tracks_; }
+    bool confirmed(const Track& t) const { return t.hits >= s_.confirm_hits; }
+
+private:
+    void predict(Track& t, double t_s) const;
+    Eigen::Vector2d measured_centre(const Track& t, const Measurement& m) const;
+    Box measured_box(const Track& t, const Measurement& m) const;
+    bool correcting(const Track& t) const;
+    std::vector<Measurement> merge_splits(std::vector<Measurement> measurements) const;
+    double cost(const Track& t, const Measurement& m) const;
+    double measurement_variance(const Measurement& m) const;
+    void correct(Track& t, const Measurement& m);
+    TrackerSettings s_;
+    std::vector<Track> tracks_;
+    int next_id_ = 1;
+};
+
+}  // namespace roadpreview::roadside

@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Foreground, grid, dilation, labelling and per-object geometry of one cycle (docs/method.md, "Roadside").
+#include "roadpreview/roadside/objects.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace roadpreview::roadside {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr long long kMaxGridCells = 16LL << 20;  // 16 Mi cells (1.6 km² at 0.1 m): larger is a units error
+
+// Length along the heading ≥ width: swaps the sides and turns the heading by 90° when needed; heading in (−π/2, π/2].
+Box normalised(Box b) {
+    if (b.width_m > b.length_m) {
+        std::swap(b.width_m, b.length_m);
+        b.heading_rad += kPi / 2.0;
+    }
+    while (b.heading_rad > kPi / 2.0) b.heading_rad -= kPi;
+    while (b.heading_rad <= -kPi / 2.0) b.heading_rad += kPi;
+    return b;
+}
+
+Box min_area_box(const std::vector<Point2>& points) {
+    const double ox = points[0].x_m, oy = points[0].y_m;  // float precision near the points, not the site origin
+    std::vector<cv::Point2f> pts;
+    pts.reserve(points.size());
+    for (const auto& p : points) pts.emplace_back(static_cast<float>(p.x_m - ox), static_cast<float>(p.y_m - oy));
+    const cv::RotatedRect r = cv::minAreaRect(pts);
+    return normalised({r.center.x + ox, r.center.y + oy, r.size.width, r.size.height, r.angle * kPi / 180.0});
+}
+
+}  // namespace
+
+std::array<std::array<double, 2>, 4> Box::corners() const {
+    const double c = std::cos(heading_rad), s = std::sin(heading_rad);
+    const double a = length_m / 2.0, b = width_m / 2.0;
+    std::array<std::array<double, 2>, 4> out{};
+    const double signs[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+    for (int i = 0; i < 4; ++i) {
+        const double u = signs[i][0] * a, v = signs[i][1] * b;
+        out[i] = {x_m + c * u - s * v, y_m + s * u + c * v};
+    }
+    return out;
+}
+
+void BackgroundModel::learn(const LaserScan& scan) {
+    if (frozen_) return;
+    if (samples_.empty()) samples_.resize(scan.ranges_m.size());
+    if (scan.ranges_m.size() != samples_.size())
+        throw std::invalid_argument(scan.source + ": " + std::to_string(scan.ranges_m.size()) +
+                                    " beams while learning a background of " + std::to_string(samples_.size()));
+    for (std::size_t i = 0; i < samples_.size(); ++i) samples_[i].push_back(scan.ranges_m[i]);
+    ++scans_;
+}
+
+void BackgroundModel::freeze() {
+    median_m_.assign(samples_.size(), NAN);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+        auto& v = samples_[i];
+        const auto valid_end = std::partition(v.begin(), v.end(), [](float r) { return std::isfinite(r); });
+        const auto valid = static_cast<std::size_t>(valid_end - v.begin());
+        if (2 * valid <= v.size()) continue;  // mostly no return: nothing behind this beam
+        const auto mid = v.begin() + static_cast<std::ptrdiff_t>(valid / 2);
+        std::nth_element(v.begin(), mid, valid_end);
+        median_m_[i] = *mid;
+    }
+    samples_.clear();
+    samples_.shrink_to_fit();
+    frozen_ = true;
+}
+
+std::vector<bool> BackgroundModel::foreground(const LaserScan& scan, double margin_m) const {
+    if (scan.ranges_m.size() != median_m_.size())
+        throw std::invalid_argument(scan.source + ": " + std::to_string(scan.ranges_m.size()) +
+                                    " beams, the background was learned with " + std::to_string(median_m_.size()));
+    std::vector<bool> fg(median_m_.size());
+    for (std::size_t i = 0; i < fg.size(); ++i) {
+        const float r = scan.ranges_m[i];
+        fg[i] = std::isfinite(r) && (!std::isfinite(median_m_[i]) || r < median_m_[i] - margin_m);
+    }
+    return fg;
+}
+
+void scan_points(const LaserScan& scan, const Pose2& pose, const std::vector<bool>& mask, std::vector<Point2>& out) {
+    const double c = std::cos(pose.yaw_rad), s = std::sin(pose.yaw_rad);
+    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
+        const float r = scan.ranges_m[i];
+        if (!std::isfinite(r) || (!mask.empty() && !mask[i])) continue;
+        const double a = scan.angle_rad(i);
+        const double lx = r * std::cos(a), ly = r * std::sin(a);
+        out.push_back({pose.x_m + c * lx - s * ly, pose.y_m + s * lx + c * ly, scan.scanner});
+    }
+}
+
+GridLabels label_points(const std::vector<Point2>& points, double cell_m, int dilation_cells) {
+    GridLabels g;
+    g.cell_m = cell_m;
+    if (points.empty()) return g;
+    double x_min = points[0].x_m, x_max = x_min, y_min = points[0].y_m, y_max = y_min;
+    for (const auto& p : points) {
+        x_min = std::min(x_min, p.x_m), x_max = std::max(x_max, p.x_m);
+        y_min = std::min(y_min, p.y_m), y_max = std::max(y_max, p.y_m);
+    }
+    const double margin = (dilation_cells + 1) * cell_m;
+    g.x0_m = x_min - margin;
+    g.y0_m = y_min - margin;
+    const double cols = std::floor((x_max + margin - g.x0_m) / cell_m) + 1;
+    const double rows = std::floor((y_max + margin - g.y0_m) / cell_m) + 1;
+    if (!(rows * cols <= static_cast<double>(kMaxGridCells)))
+        throw std::invalid_argument("foreground spans " + std::to_string(x_max - x_min) + " × " +
+                                    std::to_string(y_max - y_min) + " m: too large a grid at cell " +
+                                    std::to_string(cell_m) + " m");
+    g.rows = static_cast<int>(rows), g.cols = static_cast<int>(cols);
+    cv::Mat occupied = cv::Mat::zeros(g.rows, g.cols, CV_8U);
+    std::vector<std::pair<int, int>> cell(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        cell[i] = {static_cast<int>((points[i].y_m - g.y0_m) / cell_m), static_cast<int>((points[i].x_m - g.x0_m) / cell_m)};
+        occupied.at<std::uint8_t>(cell[i].first, cell[i].second) = 255;
+    }
+    cv::Mat dilated = occupied;
+    if (dilation_cells > 0) {
+        const int k = 2 * dilation_cells + 1;
+        cv::dilate(occupied, dilated, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+    }
+    cv::Mat labels, stats, centroids;
+    g.components = cv::connectedComponentsWithStats(dilated, labels, stats, centroids, 8, CV_32S) - 1;
+    g.labels.assign(labels.begin<std::int32_t>(), labels.end<std::int32_t>());
+    g.point_label.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) g.point_label[i] = labels.at<std::int32_t>(cell[i].first, cell[i].second);
+    return g;
+}
+
+Box fit_l_shape(const std::vector<Point2>& points) {
+    if (points.size() < 3) return min_area_box(points);
+    const double d0 = 0.01;  // m: closeness saturates here so that one exact point does not dominate
+    double best_score = -1.0;
+    Box best;
+    std::vector<double> c1(points.size()), c2(points.size());
+    for (int step = 0; step < 90; ++step) {
+        const double th = step * kPi / 180.0, c = std::cos(th), s = std::sin(th);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            c1[i] = c * points[i].x_m + s * points[i].y_m;
+            c2[i] = -s * points[i].x_m + c * points[i].y_m;
+        }
+        const auto [lo1, hi1] = std::minmax_element(c1.begin(), c1.end());
+        const auto [lo2, hi2] = std::minmax_element(c2.begin(), c2.end());
+        double score = 0.0;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const double d1 = std::min(*hi1 - c1[i], c1[i] - *lo1), d2 = std::min(*hi2 - c2[i], c2[i] - *lo2);
+            score += 1.0 / std::max(std::min(d1, d2), d0);
+        }
+        if (score > best_score) {
+            best_score = score;
+            const double m1 = (*lo1 + *hi1) / 2.0, m2 = (*lo2 + *hi2) / 2.0;
+            best = {c * m1 - s * m2, s * m1 + c * m2, *hi1 - *lo1, *hi2 - *lo2, th};
+        }
+    }
+    return normalised(best);
+}
+
+std::vector<ScanObject> grid_objects(const std::vector<Point2>& points, const GridLabels& grid, int min_points) {
+    std::vector<std::vector<Point2>> members(static_cast<std::size_t>(grid.components) + 1);
+    for (std::size_t i = 0; i < points.size(); ++i) members[static_cast<std::size_t>(grid.point_label[i])].push_back(points[i]);
+    std::vector<int> cells(members.size(), 0);
+    for (const auto l : grid.labels) ++cells[static_cast<std::size_t>(l)];
+    std::vector<ScanObject> out;
+    for (std::size_t label = 1; label < members.size(); ++label) {
+        const auto& m = members[label];
+        if (static_cast<int>(m.size()) < min_points) continue;
+        ScanObject o;
+        o.points = static_cast<int>(m.size());
+        o.cells = cells[label];
+        for (const auto& p : m) {
+            o.centroid_x_m += p.x_m / o.points;
+            o.centroid_y_m += p.y_m / o.points;
+            o.scanners |= 1u << (p.scanner & 31);
+        }
+        o.mbr = min_area_box(m);
+        o.l_shape = fit_l_shape(m);
+        o.members = m;
+        out.push_back(std::move(o));
+    }
+    return out;
+}
+
+}  // namespace roadpreview::roadside

@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The roadside cycle: background learning, grouping scans into cycles, objects, tracking, camera association,
+// prediction of every object to the cycle's common time (docs/method.md, "Roadside").
+#include "roadpreview/roadside/processor.hpp"
+
+#include <algorithm>
+#include <ctime>
+#include <cmath>
+#include <stdexcept>
+
+namespace roadpreview::roadside {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+constexpr double kCameraMemoryS = 1.0;  // a camera class stays with a track this long after its last detection
+
+TrackerSettings tracker_settings(const RoadsideSettings& s) {
+    TrackerSettings t;
+    t.accel_sigma_mps2 = s.accel_sigma_mps2;
+    t.position_sigma_m = s.position_sigma_m;
+    t.gate_chi2 = s.gate_chi2;
+    t.max_coast_s = s.max_coast_s;
+    t.confirm_hits = s.confirm_hits;
+    return t;
+}
+
+Pose2 compose(const Pose2& a, const Pose2& b) {  // b expressed in a
+    const double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);
+    return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, a.yaw_rad + b.yaw_rad};
+}
+
+void check_layout(const LaserScan& scan, const ScannerSite& site) {
+    auto bad = [&](const std::string& what) {
+        throw std::runtime_error(scan.source + ": scan layout disagrees with the site's scanner '" + site.name + "': " + what);
+    };
+    if (site.beams && static_cast<int>(scan.ranges_m.size()) != *site.beams)
+        bad(std::to_string(scan.ranges_m.size()) + " beams, the site says " + std::to_string(*site.beams));
+    if (site.step_deg && std::abs(scan.step_rad / kDeg - *site.step_deg) > 1e-3)
+        bad("step " + std::to_string(scan.step_rad / kDeg) + "°, the site says " + std::to_string(*site.step_deg) + "°");
+    if (site.start_angle_deg && std::abs(scan.start_angle_rad / kDeg - *site.start_angle_deg) > 1e-2)
+        bad("first beam at " + std::to_string(scan.start_angle_rad / kDeg) + "°, the site says " +
+            std::to_string(*site.start_angle_deg) + "°");
+}
+
+}  // namespace
+
+Processor::Processor(Site site)
+    : site_(std::move(site)), geo_(site_.origin), background_(site_.scanners.size()), status_(site_.scanners.size()),
+      learn_start_s_(site_.scanners.size(), 0.0),
+      tracker_(tracker_settings(site_.settings)) {
+    for (std::size_t i = 0; i < status_.size(); ++i) status_[i].name = site_.scanners[i].name;
+}
+
+Processor::~Processor() = default;
+
+std::vector<Cycle> Processor::push(const LaserScan& input) {
+    if (input.scanner < 0 || input.scanner >= static_cast<int>(site_.scanners.size()))
+        throw std::runtime_error(input.source + ": scanner " + std::to_string(input.scanner) + " is not in the site file " +
+                                 site_.path + " (" + std::to_string(site_.scanners.size()) + " scanners)");
+    const ScannerSite& where = site_.scanners[static_cast<std::size_t>(input.scanner)];
+    check_layout(input, where);
+    LaserScan scan = input;
+    scan.time_s += where.time_offset_s;
+    for (auto& r : scan.ranges_m)
+        if (!(r > 0.0f) || r >= where.max_range_m) {
+            if (std::isfinite(r)) ++status_[static_cast<std::size_t>(scan.scanner)].invalid_ranges;
+            r = NAN;
+        }
+    if (!started_) first_time_s_ = scan.time_s, started_ = true;
+    auto& st = status_[static_cast<std::size_t>(scan.scanner)];
+    if (st.last_scan_s >= 0.0 && scan.time_s + 1e-9 < st.last_scan_s)
+        throw std::runtime_error(scan.source + ": scan time goes backwards for scanner '" + where.name + "'");
+    st.last_scan_s = scan.time_s;
+    ++st.scans;
+    std::vector<Cycle> done;
+    BackgroundModel& bg = background_[static_cast<std::size_t>(scan.scanner)];
+    if (!bg.frozen()) {
+        // Each scanner learns over its own first seconds, so a scanner that starts late still gets a background.
+        double& start = learn_start_s_[static_cast<std::size_t>(scan.scanner)];
+        if (bg.learned_scans() == 0) start = scan.time_s;
+        if (scan.time_s - start < site_.settings.background_s) {
+            bg.learn(scan);
+            return done;
+        }
+        bg.freeze();
+    }
+    const long long index = static_cast<long long>(std::floor((scan.time_s - first_time_s_) / site_.settings.cycle_s));
+    if (index > cycle_index_ && !pending_.empty())
+        done.push_back(run_cycle(first_time_s_ + static_cast<double>(cycle_index_ + 1) * site_.settings.cycle_s));
+    cycle_index_ = std::max(cycle_index_, index);
+    pending_.push_back(std::move(scan));
+    return done;
+}
+
+// CPU time of the calling thread, ms: the cycle's cost without the time other processes take the core.
+static double thread_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+Cycle Processor::run_cycle(double t_end_s) {
+    const double start_ms = thread_cpu_ms();
+    std::vector<Point2> points;
+    std::vector<Pose2> poses(site_.scanners.size());
+    double t_sum = 0.0;
+    for (const auto& scan : pending_) {
+        const Pose2& mount = site_.scanners[static_cast<std::size_t>(scan.scanner)].pose;
+        const Pose2 pose = scan.pose ? compose(*scan.pose, mount) : mount;
+        poses[static_cast<std::size_t>(scan.scanner)] = pose;
+        const auto fg = background_[static_cast<std::size_t>(scan.scanner)].foreground(scan, site_.settings.background_margin_m);
+        scan_points(scan, pose, fg, points);
+        t_sum += scan.time_s;
+    }
+    const double t_measured = t_sum / static_cast<double>(pending_.size());
+    pending_.clear();
+    const GridLabels grid = label_points(points, site_.settings.cell_m, site_.settings.dilation_cells);
+    std::vector<Measurement> measurements;
+    for (auto& o : grid_objects(points, grid, site_.settings.min_points)) {
+        Measurement m{t_measured, o, {}};
+        for (std::size_t i = 0; i < poses.size(); ++i)
+            if (o.scanners & (1u << i)) m.viewpoints.push_back(poses[i]);
+        measurements.push_back(std::move(m));
+    }
+    tracker_.update(t_measured, measurements);
+    Cycle c;
+    c.t_s = t_end_s;
+    c.scan_objects = static_cast<int>(measurements.size());
+    associate_camera(t_end_s - site_.settings.cycle_s, t_end_s, c);
+    for (const auto& t : tracker_.tracks())
+        if (tracker_.confirmed(t)) c.objects.push_back(output(t, t_end_s));
+    for (auto& s : status_) s.active = s.last_scan_s >= 0.0 && t_end_s - s.last_scan_s <= site_.settings.scanner_timeout_s;
+    c.scanners = status_;
+    c.process_ms = thread_cpu_ms() - start_ms;
+    return c;
+}
+
+void Processor::add_detections(const std::vector<CameraDetection>& detections) {
+    if (!site_.camera) throw std::runtime_error(site_.path + ": camera detections given but the site has no camera");
+    for (auto d : detections) {
+        d.t_s += site_.camera->time_offset_s;
+        detections_.push_back(d);
+    }
+    std::stable_sort(detections_.begin(), detections_.end(),
+                     [](const CameraDetection& a, const CameraDetection& b) { return a.t_s < b.t_s; });
+}
+
+// The paper's cost between a camera object and a track: position distance (and heading difference where the
+// camera gives one), weighted, as an assignment with a gate. Unmatched detections become camera-only objects.
+void Processor::associate_camera(double t0_s, double t1_s, Cycle& cycle) {
+    if (!site_.camera || detections_.empty()) return;
+    const auto first = std::lower_bound(detections_.begin(), detections_.end(), t0_s,
+                                        [](const CameraDetection& d, double t) { return d.t_s < t; });
+    const auto last = std::lower_bound(first, detections_.end(), t1_s,
+                                       [](const CameraDetection& d, double t) { return d.t_s < t; });
+    struct Ground {
+        const CameraDetection* d;
+        double x_m, y_m;
+    };
+    std::vector<Ground> ground;
+    for (auto it = first; it != last; ++it) {
+        Ground g{&*it, 0.0, 0.0};  // the box's bottom centre touches the ground
+        if (image_to_site(site_.camera->homography, it->x_px + it->w_px / 2.0, it->y_px + it->h_px, g.x_m, g.y_m))
+            ground.push_back(g);
+    }
+    auto& tracks = tracker_.tracks();
+    const RoadsideSettings& s = site_.settings;
+    std::vector<std::vector<double>> cost(ground.size(), std::vector<double>(tracks.size()));
+    for (std::size_t i = 0; i < ground.size(); ++i)
+        for (std::size_t j = 0; j < tracks.size(); ++j) {
+            const Eigen::Vector4d x = tracker_.predicted(tracks[j], ground[i].d->t_s);
+            const double d = std::hypot(x(0) - ground[i].x_m, x(1) - ground[i].y_m);
+            cost[i][j] = d > s.camera_gate_m ? INFINITY : s.camera_weight_position * d / s.camera_gate_m;
+        }
+    std::vector<bool> used(ground.size(), false);
+    for (const auto& [i, j] : assign(cost, s.camera_weight_position + s.camera_weight_heading)) {
+        Track& t = tracks[static_cast<std::size_t>(j)];
+        const CameraDetection& d = *ground[static_cast<std::size_t>(i)].d;
+        // The class most voted for over the track's life (scores summed): one wrong detection does not flip it.
+        t.class_votes[d.cls] += d.score;
+        double total = 0.0, best = 0.0;
+        for (const auto& [cls, votes] : t.class_votes) {
+            total += votes;
+            if (votes > best) best = votes, t.camera_class = cls;
+        }
+        t.camera_score = best / total;
+        t.last_camera_s = d.t_s;
+        used[static_cast<std::size_t>(i)] = true;
+    }
+    for (std::size_t i = 0; i < ground.size(); ++i) {
+        if (used[i]) continue;
+        OutputObject o;
+        o.id = -1;
+        o.cls = ground[i].d->cls;
+        o.score = ground[i].d->score;
+        o.source = "camera";
+        o.x_m = ground[i].x_m, o.y_m = ground[i].y_m;
+        o.position = geo_.to_wgs84(o.x_m, o.y_m);
+        Box b{o.x_m, o.y_m, 0.0, 0.0, 0.0};
+        o.mbr_site = b.corners();
+        for (int k = 0; k < 4; ++k) o.mbr_wgs84[k] = o.position;
+        cycle.objects.push_back(o);
+    }
+}
+
+OutputObject Processor::output(const Track& t, double t_s) const {
+    OutputObject o;
+    const Eigen::Vector4d x = tracker_.predicted(t, t_s);
+    o.id = t.id;
+    o.x_m = x(0), o.y_m = x(1), o.vx_mps = x(2), o.vy_mps = x(3);
+    o.speed_mps = std::hypot(x(2), x(3));
+    o.heading_rad = o.speed_mps > 0.5 ? std::atan2(x(3), x(2)) : t.box_heading_rad;
+    o.length_m = t.length_m, o.width_m = t.width_m;
+    const bool camera = !t.camera_class.empty() && t_s - t.last_camera_s <= kCameraMemoryS;
+    o.source = camera ? (t_s - t.last_update_s <= site_.settings.max_coast_s ? "both" : "camera") : "laser";
+    o.cls = track_class(t);
+    o.score = t.camera_class.empty() ? 0.5 : t.camera_score;
+    o.position = geo_.to_wgs84(o.x_m, o.y_m);
+    o.mbr_site = Box{o.x_m, o.y_m, t.length_m, t.width_m, o.heading_rad}.corners();
+    for (int k = 0; k < 4; ++k) o.mbr_wgs84[k] = geo_.to_wgs84(o.mbr_site[k][0], o.mbr_site[k][1]);
+    o.points = t.last_object.points;
+    o.age_s = t_s - t.first_seen_s;
+    return o;
+}
+
+std::vector<Cycle> Processor::finish() {
+    std::vector<Cycle> done;
+    if (!pending_.empty())
+        done.push_back(run_cycle(first_time_s_ + static_cast<double>(cycle_index_ + 1) * site_.settings.cycle_s));
+    return done;
+}
+
+}  // namespace roadpreview::roadside
