@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "live_commands.hpp"
 #include "range_commands.hpp"
 #include "roadpreview/roadpreview.hpp"
 
@@ -49,6 +50,7 @@ struct RunOptions {
     std::vector<double> segment_lengths_m;  // --segments
     std::string segments_file;              // --segments-csv
     std::string profile_dir;                // --export-profile
+    LiveRunOptions live;                    // udp:// input
 };
 
 // True when the subcommand has this option and it was given.
@@ -123,7 +125,8 @@ std::pair<std::int64_t, std::int64_t> parse_frame_range(const std::string& text)
 }
 
 std::string frame_label(const rp::Frame& f) {
-    return f.source + (f.frame_id >= 0 && rp::is_pcap_path(f.source) ? " #" + std::to_string(f.frame_id) : "");
+    const bool packets = rp::is_pcap_path(f.source) || rp::is_udp_url(f.source);
+    return f.source + (f.frame_id >= 0 && packets ? " #" + std::to_string(f.frame_id) : "");
 }
 
 void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp::Result& r) {
@@ -131,6 +134,7 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     std::string decode;
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
+    decode += LiveStats::describe(f.diagnostics);
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
     if (!f.sequence_break.empty() && i > 0) decode += ", new sequence (" + f.sequence_break + ")";
     std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
@@ -328,14 +332,36 @@ void write_route(const RunOptions& o, const rp::RouteBuilder& route) {
     if (!o.profile_dir.empty()) export_profiles(o, route);
 }
 
+bool is_live(const RunOptions& o) { return o.inputs.size() == 1 && rp::is_udp_url(o.inputs[0]); }
+
+// A udp:// input (live sensor), else files or recordings.
+std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const CLI::App& app) {
+    if (!is_live(o)) {
+        for (const char* name : {"--duration", "--timeout"})
+            if (app.count(name)) throw std::invalid_argument(std::string(name) + " applies to a udp:// input only");
+        return rp::open_frames(o.inputs, o.source);
+    }
+    for (const char* name : {"--columns", "--poses", "--frame-rate"})
+        if (app.count(name)) throw std::invalid_argument(std::string(name) + " does not apply to a udp:// input");
+    rp::LiveOptions live;
+    live.source = o.source;
+    live.timeout_s = o.live.timeout_s;
+    live.duration_s = o.live.duration_s;
+    return rp::open_live(o.inputs[0], live);
+}
+
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
     rp::Config cfg = build_config(o, app);
-    const auto [first, last] = parse_frame_range(o.frames);
+    // A live run's --frames N: the first N frames.
+    const bool live = is_live(o);
+    const auto [first, last] =
+        parse_frame_range(live && o.frames.find(':') == std::string::npos && !o.frames.empty() ? ":" + o.frames
+                                                                                                : o.frames);
     std::optional<rp::MotionTable> table;
     if (!o.motion_file.empty()) table = rp::MotionTable::read_csv(o.motion_file);
-    const auto source = rp::open_frames(o.inputs, o.source);
+    const auto source = open_source(o, app);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
@@ -354,6 +380,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     std::string mounting_source;  // "estimated" when the first frame gave it
 
     RunSummary summary;
+    LiveStats live_stats;
     std::int64_t index = 0;
     for (; index < last; ++index) {
         std::optional<rp::Frame> frame = source->next();
@@ -389,12 +416,15 @@ int run(const RunOptions& o, const CLI::App& app) {
                          1.0 / cfg.fusion.frame_rate_hz);
         if (route) route->add(r, at.pose);
         out << rp::result_to_json(r) << '\n';
+        out.flush();  // a live consumer reads each line as it comes
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
+        live_stats.add(*frame);
         summary.add(r);
         if (!o.quiet) report_frame(static_cast<std::size_t>(index), total, *frame, r);
     }
     if (summary.ms.empty()) nothing_written(o, first, index);
     summary.print();
+    if (live) live_stats.print(source->info());
     if (disagreeing)
         std::fprintf(stderr,
                      "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
@@ -590,7 +620,8 @@ int main(int argc, char** argv) {
         app.add_subcommand("run", "Process .bin / .pcd / .ply frames (files or directories) or pcap recordings");
     run_cmd->add_option("INPUT", o.inputs,
                         "Frame files, or directories of them (sorted by name), or Ouster/Velodyne .pcap recordings "
-                        "(several: one drive split into files, in time order)")
+                        "(several: one drive split into files, in time order), or a live sensor: udp://[ADDR][:PORT] "
+                        "(Ouster with --meta, else Velodyne)")
         ->required();
     auto* speed = run_cmd->add_option("--speed", o.speed, "Vehicle speed V in m/s (negative when reversing)");
     auto* yaw = run_cmd->add_option("--yaw-rate", o.yaw_rate,
@@ -598,11 +629,13 @@ int main(int argc, char** argv) {
     auto* motion = run_cmd->add_option("--motion", o.motion_file, "CSV with columns t,speed,yaw_rate, interpolated at each frame's timestamp");
     motion->excludes(speed)->excludes(yaw);
     run_cmd->add_option("--frames", o.frames,
-                        "Frames A:B of the input (0-based, B excluded; A: or :B; A alone: that frame)");
+                        "Frames A:B of the input (0-based, B excluded; A: or :B; A alone: that frame; udp:// input: "
+                        "N alone ends the run after N frames)");
     run_cmd->add_option("--columns", o.source.columns,
                         "Raw float32 .bin files: values per point, x y z first (default 5 for *.pcd.bin, else 4)")
         ->check(CLI::Range(3, 64));
     add_source_options(run_cmd, o.source);
+    add_live_options(run_cmd, o.live);
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
                                        "Sensor height above the ground, m, in (0, 10] (default: estimated from the "
                                        "first frame's ground, see the output's mounting)");
@@ -669,12 +702,14 @@ int main(int argc, char** argv) {
     add_source_options(cal_cmd, c.source);
 
     const auto range_action = add_range_commands(app);
+    const auto replay_action = add_replay_command(app);
 
     if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
         if (info_cmd->parsed()) return info(info_inputs, info_options);
         if (cal_cmd->parsed()) return calibrate(c, *cal_cmd);
         if (app.got_subcommand("range")) return range_action();
+        if (const int status = replay_action(); status >= 0) return status;
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Live UDP input: one receive thread polls the sensor's sockets and fills a queue bounded in bytes (datagrams
+// beyond it are dropped and counted: the sensor never waits); the reader takes datagrams from the queue and feeds
+// them to the Ouster or Velodyne decoder like a pcap's.
+#include "roadpreview/io/live.hpp"
+
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "roadpreview/io/ouster.hpp"
+#include "pcap_source.hpp"
+#include "udp.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr int kVelodyneDataPort = 2368;
+constexpr std::size_t kMaxDatagramBytes = 65536;
+
+double wall_now_s() {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// A socket bound to the endpoint's address and `port`, with a large receive buffer (forced when permitted:
+// a burst of a 128-beam sensor overflows the default 208 kB in milliseconds).
+UdpSocket bind_socket(const std::string& address, int port, int buffer_bytes) {
+    const std::string where = udp_url(address, port);
+    UdpSocket s(where);
+    if (setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUFFORCE, &buffer_bytes, sizeof buffer_bytes) != 0)
+        setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    const sockaddr_in a = resolve_ipv4(address, port, where);
+    if (bind(s.fd(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+        const int e = errno;
+        throw std::runtime_error(where + ": cannot listen: " +
+                                 (e == EADDRINUSE ? "the port is already in use" : std::string(std::strerror(e))));
+    }
+    return s;
+}
+
+class UdpInput : public DatagramInput {
+public:
+    UdpInput(const std::string& address, std::vector<int> ports, const LiveOptions& o)
+        : name_(udp_url(address, ports.front())), options_(o), opened_s_(steady_now_s()) {
+        for (int port : ports) {
+            sockets_.push_back(bind_socket(address, port, o.receive_buffer_bytes));
+            ports_.push_back(port);
+        }
+        thread_ = std::thread([this] { receive(); });
+    }
+
+    ~UdpInput() override {
+        stop_ = true;
+        thread_.join();
+    }
+
+    bool next(UdpDatagram& out) override {
+        std::unique_lock<std::mutex> lock(mutex_);
+        while (queue_.empty()) {
+            if (failure_.size()) throw std::runtime_error(name_ + ": " + failure_);
+            const double now = steady_now_s();
+            if (options_.duration_s > 0.0 && now - opened_s_ >= options_.duration_s) return false;
+            const double silent_s = now - (received_ ? last_arrival_s_ : opened_s_);
+            if (silent_s >= options_.timeout_s) {
+                if (received_) return false;  // the sensor went quiet: the end of the stream
+                throw std::runtime_error(name_ + ": no datagrams within " + std::to_string(options_.timeout_s) +
+                                         " s (is the sensor sending to this address and port?)");
+            }
+            arrived_.wait_for(lock, std::chrono::milliseconds(20));
+        }
+        out = std::move(queue_.front());
+        queue_.pop_front();
+        queued_bytes_ -= out.payload.size();
+        return true;
+    }
+
+    const std::string& name() const override { return name_; }
+    const char* kind() const override { return "udp"; }
+    const char* unit() const override { return "datagram"; }
+    std::int64_t units_read() const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return received_;
+    }
+    void describe(SourceInfo& info) const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        info.datagrams_received = received_;
+        info.datagrams_dropped = dropped_;
+    }
+
+private:
+    // The receive thread: waits on every socket at once, drains what arrived, checks for the end every 50 ms.
+    void receive() {
+        std::vector<pollfd> fds;
+        for (const UdpSocket& s : sockets_) fds.push_back({s.fd(), POLLIN, 0});
+        std::vector<std::uint8_t> buffer(kMaxDatagramBytes);
+        while (!stop_) {
+            const int ready = poll(fds.data(), fds.size(), 50);
+            if (ready < 0 && errno != EINTR) return fail(std::string("poll: ") + std::strerror(errno));
+            for (std::size_t k = 0; ready > 0 && k < fds.size(); ++k)
+                if (fds[k].revents & POLLIN) drain(fds[k].fd, ports_[k], buffer);
+        }
+    }
+
+    void drain(int fd, int port, std::vector<std::uint8_t>& buffer) {
+        for (;;) {
+            const ssize_t n = recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
+            if (n < 0) {
+                if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+                    fail(std::string("receive: ") + std::strerror(errno));
+                return;
+            }
+            push(port, buffer.data(), static_cast<std::size_t>(n));
+        }
+    }
+
+    void push(int port, const std::uint8_t* data, std::size_t size) {
+        UdpDatagram d;
+        d.arrival_s = steady_now_s();
+        d.timestamp = wall_now_s();
+        d.dst_port = static_cast<std::uint16_t>(port);
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            d.record = ++received_;
+            last_arrival_s_ = d.arrival_s;
+            if (queued_bytes_ + size > options_.queue_bytes) {
+                ++dropped_;
+                return;
+            }
+            d.payload.assign(data, data + size);
+            queued_bytes_ += size;
+            queue_.push_back(std::move(d));
+        }
+        arrived_.notify_one();
+    }
+
+    void fail(const std::string& what) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        failure_ = what;
+        stop_ = true;
+    }
+
+    std::string name_;
+    LiveOptions options_;
+    double opened_s_;
+    std::vector<UdpSocket> sockets_;
+    std::vector<int> ports_;
+    std::thread thread_;
+    std::atomic<bool> stop_{false};
+
+    mutable std::mutex mutex_;  // guards what follows
+    std::condition_variable arrived_;
+    std::deque<UdpDatagram> queue_;
+    std::size_t queued_bytes_ = 0;
+    std::int64_t received_ = 0, dropped_ = 0;
+    double last_arrival_s_ = 0.0;
+    std::string failure_;
+};
+
+void check_options(const std::string& url, const LiveOptions& o) {
+    if (!(o.timeout_s > 0.0)) throw std::invalid_argument(url + ": the timeout must be > 0 s");
+    if (!(o.duration_s >= 0.0)) throw std::invalid_argument(url + ": the duration must be >= 0 s");
+    if (o.queue_bytes < kMaxDatagramBytes) throw std::invalid_argument(url + ": the queue must hold >= 64 kB");
+}
+
+}  // namespace
+
+double steady_now_s() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+bool is_udp_url(const std::string& input) { return input.rfind("udp://", 0) == 0; }
+
+std::unique_ptr<FrameSource> open_live(const std::string& url, const LiveOptions& options) {
+    check_options(url, options);
+    const UdpEndpoint at = parse_udp_endpoint(url);
+    SourceOptions source = options.source;
+    if (source.meta.empty()) {  // Velodyne: its data port
+        source.lidar_port = at.port ? at.port : kVelodyneDataPort;
+        auto input = std::make_unique<UdpInput>(at.address, std::vector<int>{source.lidar_port}, options);
+        return open_velodyne_packets(std::move(input), source);
+    }
+    const OusterMetadata meta = read_ouster_metadata(source.meta);
+    source.lidar_port = at.port ? at.port : meta.udp_port_lidar;
+    if (!source.lidar_port)
+        throw std::invalid_argument(url + ": give the lidar port: " + source.meta + " names none");
+    std::vector<int> ports{source.lidar_port};
+    if (meta.udp_port_imu) {
+        source.imu_port = meta.udp_port_imu + (meta.udp_port_lidar ? source.lidar_port - meta.udp_port_lidar : 0);
+        if (source.imu_port > 0 && source.imu_port < 65536 && source.imu_port != source.lidar_port)
+            ports.push_back(source.imu_port);
+    }
+    auto input = std::make_unique<UdpInput>(at.address, ports, options);
+    return open_ouster_packets(std::move(input), source.meta, source);
+}
+
+}  // namespace roadpreview
