@@ -5,15 +5,18 @@
 #include "roadpreview/io/live.hpp"
 
 #include <poll.h>
+#include <sys/uio.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -40,6 +43,8 @@ UdpSocket bind_socket(const std::string& address, int port, int buffer_bytes) {
     UdpSocket s(where);
     if (setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUFFORCE, &buffer_bytes, sizeof buffer_bytes) != 0)
         setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    const int on = 1;
+    setsockopt(s.fd(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
     const sockaddr_in a = resolve_ipv4(address, port, where);
     if (bind(s.fd(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
         const int e = errno;
@@ -100,47 +105,80 @@ public:
 
 private:
     // The receive thread: waits on every socket at once, drains what arrived, checks for the end every 50 ms.
+    // Datagrams of several sockets (lidar, IMU) are queued in the order the kernel received them: each socket is
+    // read until empty, so everything received before the earliest of those moments is known and can go, sorted.
     void receive() {
         std::vector<pollfd> fds;
         for (const UdpSocket& s : sockets_) fds.push_back({s.fd(), POLLIN, 0});
-        std::vector<std::uint8_t> buffer(kMaxDatagramBytes);
+        std::vector<UdpDatagram> pending;
         while (!stop_) {
-            const int ready = poll(fds.data(), fds.size(), 50);
+            const int ready = poll(fds.data(), fds.size(), pending.empty() ? 50 : 0);
             if (ready < 0 && errno != EINTR) return fail(std::string("poll: ") + std::strerror(errno));
-            for (std::size_t k = 0; ready > 0 && k < fds.size(); ++k)
-                if (fds[k].revents & POLLIN) drain(fds[k].fd, ports_[k], buffer);
+            if (ready <= 0 && pending.empty()) continue;
+            double known_until_s = std::numeric_limits<double>::infinity();
+            for (std::size_t k = 0; k < fds.size(); ++k) {
+                drain(fds[k].fd, ports_[k], pending);
+                if (fds.size() > 1) known_until_s = std::min(known_until_s, wall_now_s());
+            }
+            push_until(pending, known_until_s);
         }
     }
 
-    void drain(int fd, int port, std::vector<std::uint8_t>& buffer) {
+    // Reads what the socket holds, with the kernel's receive time of each datagram (SO_TIMESTAMPNS).
+    void drain(int fd, int port, std::vector<UdpDatagram>& batch) {
+        alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
         for (;;) {
-            const ssize_t n = recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
+            buffer_.resize(kMaxDatagramBytes);
+            iovec io{buffer_.data(), buffer_.size()};
+            msghdr m{};
+            m.msg_iov = &io;
+            m.msg_iovlen = 1;
+            m.msg_control = control;
+            m.msg_controllen = sizeof control;
+            const ssize_t n = recvmsg(fd, &m, MSG_DONTWAIT);
             if (n < 0) {
                 if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
                     fail(std::string("receive: ") + std::strerror(errno));
                 return;
             }
-            push(port, buffer.data(), static_cast<std::size_t>(n));
+            UdpDatagram d;
+            const double wall_s = wall_now_s(), steady_s = steady_now_s();
+            d.timestamp = wall_s;
+            for (cmsghdr* c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c)) {
+                if (c->cmsg_level != SOL_SOCKET || c->cmsg_type != SCM_TIMESTAMPNS) continue;
+                timespec ts;
+                std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+                d.timestamp = static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+            }
+            d.arrival_s = steady_s - std::max(0.0, wall_s - d.timestamp);  // the kernel's time, on the steady clock
+            d.dst_port = static_cast<std::uint16_t>(port);
+            d.payload.assign(buffer_.data(), buffer_.data() + n);
+            batch.push_back(std::move(d));
         }
     }
 
-    void push(int port, const std::uint8_t* data, std::size_t size) {
-        UdpDatagram d;
-        d.arrival_s = steady_now_s();
-        d.timestamp = wall_now_s();
-        d.dst_port = static_cast<std::uint16_t>(port);
+    // Queues the pending datagrams received up to `until_s`, in the order of their receive times.
+    void push_until(std::vector<UdpDatagram>& pending, double until_s) {
+        const auto by_time = [](const UdpDatagram& a, const UdpDatagram& b) { return a.timestamp < b.timestamp; };
+        std::stable_sort(pending.begin(), pending.end(), by_time);
+        const auto end = std::find_if(pending.begin(), pending.end(),
+                                      [&](const UdpDatagram& d) { return d.timestamp > until_s; });
+        if (end == pending.begin()) return;
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            d.record = ++received_;
-            last_arrival_s_ = d.arrival_s;
-            if (queued_bytes_ + size > options_.queue_bytes) {
-                ++dropped_;
-                return;
+            for (auto it = pending.begin(); it != end; ++it) {
+                UdpDatagram& d = *it;
+                d.record = ++received_;
+                last_arrival_s_ = std::max(last_arrival_s_, d.arrival_s);
+                if (queued_bytes_ + d.payload.size() > options_.queue_bytes) {
+                    ++dropped_;
+                    continue;
+                }
+                queued_bytes_ += d.payload.size();
+                queue_.push_back(std::move(d));
             }
-            d.payload.assign(data, data + size);
-            queued_bytes_ += size;
-            queue_.push_back(std::move(d));
         }
+        pending.erase(pending.begin(), end);
         arrived_.notify_one();
     }
 
@@ -157,6 +195,7 @@ private:
     std::vector<int> ports_;
     std::thread thread_;
     std::atomic<bool> stop_{false};
+    std::vector<std::uint8_t> buffer_;  // the receive thread's
 
     mutable std::mutex mutex_;  // guards what follows
     std::condition_variable arrived_;
@@ -194,12 +233,15 @@ std::unique_ptr<FrameSource> open_live(const std::string& url, const LiveOptions
     source.lidar_port = at.port ? at.port : meta.udp_port_lidar;
     if (!source.lidar_port)
         throw std::invalid_argument(url + ": give the lidar port: " + source.meta + " names none");
+    // The IMU port keeps its distance from the lidar port; a metadata file without ports: Ouster's default, next.
     std::vector<int> ports{source.lidar_port};
-    if (meta.udp_port_imu) {
-        source.imu_port = meta.udp_port_imu + (meta.udp_port_lidar ? source.lidar_port - meta.udp_port_lidar : 0);
-        if (source.imu_port > 0 && source.imu_port < 65536 && source.imu_port != source.lidar_port)
-            ports.push_back(source.imu_port);
-    }
+    source.imu_port = meta.udp_port_imu && meta.udp_port_lidar
+                          ? meta.udp_port_imu + source.lidar_port - meta.udp_port_lidar
+                          : (meta.udp_port_imu ? meta.udp_port_imu : source.lidar_port + 1);
+    if (source.imu_port > 0 && source.imu_port < 65536 && source.imu_port != source.lidar_port)
+        ports.push_back(source.imu_port);
+    else
+        source.imu_port = 0;
     auto input = std::make_unique<UdpInput>(at.address, ports, options);
     return open_ouster_packets(std::move(input), source.meta, source);
 }

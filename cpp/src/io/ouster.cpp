@@ -292,6 +292,16 @@ void OusterDecoder::check_column_spacing(const std::uint8_t* data) {
     }
 }
 
+void OusterDecoder::check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const {
+    for (int c = 0; c < meta_.columns_per_packet; ++c) {
+        const int mid = read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8);
+        if (mid >= meta_.columns_per_frame)
+            throw std::invalid_argument("measurement id " + std::to_string(mid) + " is beyond the " +
+                                        std::to_string(meta_.columns_per_frame) + " columns per frame of " +
+                                        meta_.source + ": the metadata's column count does not match the recording");
+    }
+}
+
 void OusterDecoder::start_frame(std::int64_t id, double capture_time) {
     open_ = true;
     frame_id_ = id;
@@ -318,6 +328,7 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
         case OusterProfile::FusaRng15Rfl8Nir8Dual: id = read_le<std::uint32_t>(data + 4); break;
         default: id = read_le<std::uint16_t>(data + 2); break;
     }
+    check_measurement_ids(first_col, col_bytes);
     // A packet of the frame just closed came late (reordered on the way): its columns are counted missing there.
     if (!open_ && id == closed_id_) {
         ++late_packets_;
@@ -332,10 +343,6 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     for (int c = 0; c < meta_.columns_per_packet; ++c) {
         const std::uint8_t* col = first_col + static_cast<std::size_t>(c) * col_bytes;
         const int mid = read_le<std::uint16_t>(col + 8);
-        if (mid >= W)
-            throw std::invalid_argument("measurement id " + std::to_string(mid) + " is beyond the " + std::to_string(W) +
-                                        " columns per frame of " + meta_.source +
-                                        ": the metadata's column count does not match the recording");
         const std::uint32_t status = l.column_footer ? read_le<std::uint32_t>(col + col_bytes - 4)
                                                      : read_le<std::uint16_t>(col + 10);
         const auto ts = read_le<std::uint64_t>(col);

@@ -218,11 +218,12 @@ void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, dou
     }
 }
 
-// Sensor time, unwrapped across the hour (the packets count µs past the hour). A packet older than the one before
-// (reordered on the way) or of the same time (a duplicate) is dropped and counted; a jump of more than a second
-// starts afresh (the sensor restarted or its clock was set); a gap of whole packet periods counts lost packets.
+// Sensor time, unwrapped across the hour (the packets count µs past the hour). A packet up to 0.1 s older than
+// the one before (reordered on the way) or of the same time (a duplicate) is dropped and counted; a jump back
+// further, or ahead by more than a second, starts afresh (the sensor restarted or its clock was set); a gap of
+// whole packet periods counts lost packets.
 bool VelodyneDecoder::in_time_order(double t_us, bool dual, std::vector<Frame>& done) {
-    constexpr double kRestartUs = 1e6;
+    constexpr double kLateUs = 1e5, kGapUs = 1e6;
     if (packet_us_ < 0.0) {
         packet_us_ = t_us;
         return true;
@@ -230,8 +231,8 @@ bool VelodyneDecoder::in_time_order(double t_us, bool dual, std::vector<Frame>& 
     double step = std::fmod(t_us - std::fmod(packet_us_, kHourUs) + kHourUs, kHourUs);  // [0, 1 h)
     if (step > kHourUs / 2) step -= kHourUs;
     if (step == 0.0) return ++duplicate_packets_, false;
-    if (step < 0.0 && step > -kRestartUs) return ++late_packets_, false;
-    if (std::abs(step) >= kRestartUs) {
+    if (step < 0.0 && step > -kLateUs) return ++late_packets_, false;
+    if (step < 0.0 || step >= kGapUs) {
         close_sweep(false, done);
         previous_relative_deg_ = -1.0;
         packet_us_ = t_us;

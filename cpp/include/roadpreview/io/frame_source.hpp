@@ -43,7 +43,9 @@ struct Frame {
     std::vector<ImuSample> imu;       ///< IMU readings received with this frame's packets
     FrameDiagnostics diagnostics;
     std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
-    double arrival_s = 0.0;  ///< live: steady-clock time (s) the datagram that completed the frame arrived; 0 otherwise
+    /// live: steady-clock time (s) the datagram that completed the frame arrived; 0 from files, and for a frame
+    /// that the end of the stream completed
+    double arrival_s = 0.0;
 };
 
 /// What a reader knows about its input (`roadpreview info`).

@@ -38,7 +38,8 @@ struct LiveOptions {
 };
 
 /// Opens UDP sockets on the endpoint (Ouster: the URL's port, else the metadata's lidar port, and the metadata's
-/// IMU port moved by as much as the lidar port was; Velodyne: the URL's port, else 2368) and returns frames as
+/// IMU port moved by as much as the lidar port was, or the next port when the metadata names none; Velodyne: the
+/// URL's port, else 2368) and returns frames as
 /// they complete. Each frame's `arrival_s` is the steady-clock time of the datagram that completed it, its
 /// diagnostics count lost, late and duplicate packets and missing columns. Throws std::runtime_error naming the
 /// address when a port is in use or cannot be bound; next() throws when no datagram arrives within the timeout,

@@ -83,6 +83,7 @@ private:
     };
     void check_header(const std::uint8_t* data) const;
     void check_column_spacing(const std::uint8_t* data);
+    void check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const;
     void start_frame(std::int64_t id, double capture_time);
     Frame build_frame();
 

@@ -68,7 +68,8 @@ public:
 
     /// Adds one data packet; sweeps it completes are appended to `done`. Throws std::invalid_argument
     /// for a packet of the wrong size or layout. A packet older than the previous one (reordered) or a duplicate
-    /// is dropped and counted in the sweep's diagnostics; a time jump over a second starts a new sweep (restart).
+    /// is dropped and counted in the sweep's diagnostics; a jump back over 0.1 s or ahead over 1 s starts a new
+    /// sweep (the sensor restarted).
     void add_packet(const std::uint8_t* data, std::size_t size, double capture_time, std::vector<Frame>& done);
     /// The sweep being assembled, if it has points (call at the end of the input).
     std::optional<Frame> finish();
