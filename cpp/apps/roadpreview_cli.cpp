@@ -347,7 +347,13 @@ std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const CLI::App
     live.source = o.source;
     live.timeout_s = o.live.timeout_s;
     live.duration_s = o.live.duration_s;
-    return rp::open_live(o.inputs[0], live);
+    auto source = rp::open_live(o.inputs[0], live);
+    if (!o.quiet) {
+        std::fprintf(stderr, "roadpreview: listening on %s (%s)\n", o.inputs[0].c_str(),
+                     o.source.meta.empty() ? "Velodyne" : ("Ouster, " + o.source.meta).c_str());
+        std::fflush(stderr);
+    }
+    return source;
 }
 
 int run(const RunOptions& o, const CLI::App& app) {

@@ -48,12 +48,12 @@ struct SourceOptions {
     std::string calibration;    ///< Velodyne calibration YAML (ROS velodyne_pointcloud format); HDL-64E needs one
     double cut_angle_deg = 0.0; ///< Velodyne: a sweep ends where the azimuth crosses this angle (0 = straight ahead)
     int lidar_port = 0;         ///< UDP port of the lidar packets; 0: the metadata's, else detected by packet size
-    int imu_port = 0;           ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
     bool skip_bad_packets = false;  ///< skip and count lidar packets that do not decode, instead of an error
     int columns = 0;  ///< raw float32 .bin files: values per point; 0: 5 for *.pcd.bin (nuScenes), else 4 (KITTI)
     /// Beams file (beams.yaml, `roadpreview calibrate`) applied while decoding: Ouster and Velodyne by beam,
     /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
     std::string beam_calibration;
+    int imu_port = 0;  ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
 };
 
 /// A reader for the inputs: .pcap/.pcapng recordings (Ouster when metadata is given or found, Velodyne when its
