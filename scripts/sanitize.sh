@@ -22,7 +22,8 @@ log "building and running the C++ tests with AddressSanitizer and UndefinedBehav
 cmake -S . -B build/sanitize -G Ninja -DROADPREVIEW_BUILD_TESTS=ON -DROADPREVIEW_BUILD_PYTHON=OFF \
       -DROADPREVIEW_BUILD_CLI=OFF -DROADPREVIEW_SANITIZE=address,undefined \
       -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g" -DCMAKE_C_FLAGS_SANITIZE="-O1 -g" >/dev/null
-cmake --build build/sanitize -j "$(nproc)"
+tests=$(cmake --build build/sanitize --target help | sed -n 's/^\.\.\. \([a-z_]*_test\)$/\1/p; s/^\([a-z_]*_test\): .*/\1/p')
+cmake --build build/sanitize -j "$(nproc)" --target $tests
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build/sanitize -j "$(nproc)" --output-on-failure -E "find_package_consumer|cluster_search_bench"
 log "sanitizer build and run: $((SECONDS - started)) s"

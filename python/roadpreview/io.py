@@ -93,7 +93,7 @@ def replay(capture: PathLike, to: str = "127.0.0.1:7502", *, rate: Union[float, 
     reordered. Blocks until done (the GIL is released: run it on a thread beside :func:`open_live`).
     """
     factor = 0.0 if rate == "max" else float(rate)
-    if factor <= 0.0:
+    if rate != "max" and not factor > 0.0:
         raise ValueError(f"rate {rate!r}: expected a factor > 0 or 'max'")
     return core().replay(os.fspath(capture), str(to), factor, int(loops), float(drop), float(reorder), int(seed))
 

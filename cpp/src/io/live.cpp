@@ -18,6 +18,7 @@
 #include <deque>
 #include <limits>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -79,8 +80,10 @@ public:
             const double silent_s = now - (received_ ? last_arrival_s_ : opened_s_);
             if (silent_s >= options_.timeout_s) {
                 if (received_) return false;  // the sensor went quiet: the end of the stream
-                throw std::runtime_error(name_ + ": no datagrams within " + std::to_string(options_.timeout_s) +
-                                         " s (is the sensor sending to this address and port?)");
+                std::ostringstream msg;
+                msg << name_ << ": no datagrams within " << options_.timeout_s
+                    << " s (is the sensor sending to this address and port?)";
+                throw std::runtime_error(msg.str());
             }
             arrived_.wait_for(lock, std::chrono::milliseconds(20));
         }
