@@ -73,10 +73,12 @@ public:
 
     bool next(UdpDatagram& out) override {
         std::unique_lock<std::mutex> lock(mutex_);
-        while (queue_.empty()) {
-            if (failure_.size()) throw std::runtime_error(name_ + ": " + failure_);
+        for (;;) {
             const double now = steady_now_s();
+            // The duration ends the stream even when a backlog waits (a pipeline slower than the sensor).
             if (options_.duration_s > 0.0 && now - opened_s_ >= options_.duration_s) return false;
+            if (!queue_.empty()) break;
+            if (failure_.size()) throw std::runtime_error(name_ + ": " + failure_);
             const double silent_s = now - (received_ ? last_arrival_s_ : opened_s_);
             if (silent_s >= options_.timeout_s) {
                 if (received_) return false;  // the sensor went quiet: the end of the stream
