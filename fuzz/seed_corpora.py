@@ -123,6 +123,16 @@ def main():
                 "poses": b"\x01" + b"".join((data_dir / "ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")
                                             .read_bytes().splitlines(keepends=True)[:3])},
         "sick_telegram": sick_seeds(),
+        "range_sensor": {
+            "layout": b"\x00sensors:\n  - {id: a, kind: ultrasonic, wheel: left, x_m: 0.5, y_m: 0.8, height_m: 0.3, "
+                      b"pitch_deg: 0, beam_half_angle_deg: 12, min_count: 100, max_count: 4000}\n"
+                      b"  - {id: b, kind: laser, wheel: right, x_m: 0.5, y_m: -0.8, height_m: 0.3}\n",
+            "calibration": b"\x01distance: {a1: 0.001, a2: 0.002, temperature_c: 20}\n"
+                           b"sensors:\n  a: {offset: {b1: 0.01, b2: 0.4}}\n",
+            "counts": b"\x02t,sensor,count,temperature_c\n# comment\n"
+                      + b"".join(b"%.3f,%s,%d,20\n" % (0.01 * i, b"lr"[i % 2:i % 2 + 1], 300 + i % 7) for i in range(80)),
+            "distances": b"\x05sensor,t,distance\n" + b"".join(b"r,%.3f,%.4f\n" % (0.01 * i, 0.3 + 0.001 * (i % 5))
+                                                                 for i in range(80))},
     }
     for target, files in seeds.items():
         folder = out_dir / target

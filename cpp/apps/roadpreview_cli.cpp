@@ -16,6 +16,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "live_commands.hpp"
 #include "range_commands.hpp"
 #include "roadside_commands.hpp"  // roadside perception (its own library)
 #include "roadpreview/roadpreview.hpp"
@@ -54,6 +55,7 @@ struct RunOptions {
     std::vector<std::string> stereo;  // LEFT RIGHT: image files or directories of them
     std::string calib;
     std::string disparity;
+    LiveRunOptions live;                    // udp:// input
 };
 
 // True when the subcommand has this option and it was given.
@@ -132,6 +134,7 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     std::string decode;
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
+    decode += LiveStats::describe(f.diagnostics);
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
     if (!f.sequence_break.empty() && i > 0) decode += ", new sequence (" + f.sequence_break + ")";
     std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
@@ -269,8 +272,30 @@ void write_route(const RunOptions& o, const rp::RouteBuilder& route) {
 
 bool is_stereo(const RunOptions& o) { return !o.stereo.empty() || !o.disparity.empty(); }
 
-// The frames of the run: stereo pairs / disparity images, or the INPUT files and recordings.
-std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const rp::Config& cfg) {
+bool is_live(const RunOptions& o) { return o.inputs.size() == 1 && rp::is_udp_url(o.inputs[0]); }
+
+// A live sensor on a udp:// address.
+std::unique_ptr<rp::FrameSource> open_live_source(const RunOptions& o, const CLI::App& app) {
+    for (const char* name : {"--columns", "--poses", "--frame-rate"})
+        if (app.count(name)) throw std::invalid_argument(std::string(name) + " does not apply to a udp:// input");
+    rp::LiveOptions live;
+    live.source = o.source;
+    live.timeout_s = o.live.timeout_s;
+    live.duration_s = o.live.duration_s;
+    auto source = rp::open_live(o.inputs[0], live);
+    if (!o.quiet) {
+        std::fprintf(stderr, "roadpreview: listening on %s (%s)\n", o.inputs[0].c_str(),
+                     o.source.meta.empty() ? "Velodyne" : ("Ouster, " + o.source.meta).c_str());
+        std::fflush(stderr);
+    }
+    return source;
+}
+
+// The frames of the run: a live sensor (udp://), stereo pairs / disparity images, or the INPUT files and recordings.
+std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const CLI::App& app, const rp::Config& cfg) {
+    if (is_live(o)) return open_live_source(o, app);
+    for (const char* name : {"--duration", "--timeout"})
+        if (app.count(name)) throw std::invalid_argument(std::string(name) + " applies to a udp:// input only");
     if (!is_stereo(o)) return rp::open_frames(o.inputs, o.source);
     rp::StereoInputs in;
     if (!o.stereo.empty()) in.left = {o.stereo[0]}, in.right = {o.stereo[1]};
@@ -303,7 +328,9 @@ rp::DriveOptions drive_options(const RunOptions& o, const CLI::App& app) {
     d.motion_file = o.motion_file;
     d.poses_file = o.poses_file;
     d.frame_rate_hz = o.frame_rate;
-    std::tie(d.first_frame, d.last_frame) = parse_frame_range(o.frames);
+    // A live run's --frames N: the first N frames.
+    const bool count_only = is_live(o) && !o.frames.empty() && o.frames.find(':') == std::string::npos;
+    std::tie(d.first_frame, d.last_frame) = parse_frame_range(count_only ? ":" + o.frames : o.frames);
     d.on_note = [quiet = o.quiet](bool warning, const std::string& text) {
         if (warning || !quiet) std::fprintf(stderr, "roadpreview: %s%s\n", warning ? "warning: " : "", text.c_str());
     };
@@ -317,7 +344,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
-    auto source = open_source(o, cfg);
+    auto source = open_source(o, app, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     const rp::DriveOptions drive = drive_options(o, app);
@@ -330,6 +357,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     std::ostream& out = o.output.empty() ? std::cout : file;
     std::optional<rp::RouteBuilder> route;
     RunSummary summary;
+    LiveStats live_stats;
     while (std::optional<rp::DriveStep> step = runner.next()) {
         const rp::DriveFrame& in = step->input;
         const rp::Result& r = step->result;
@@ -344,12 +372,15 @@ int run(const RunOptions& o, const CLI::App& app) {
         }
         if (route) route->add(r, in.at.pose);
         out << rp::result_to_json(r) << '\n';
+        out.flush();  // a live consumer reads each line as it comes
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
+        live_stats.add(in.frame);
         summary.add(r);
         if (!o.quiet) report_frame(static_cast<std::size_t>(in.index), total, in.frame, r);
     }
     if (summary.ms.empty()) nothing_written(o, drive.first_frame, runner.frames_read());
     summary.print();
+    if (is_live(o)) live_stats.print(runner.info());
     if (runner.mounting_disagreements())
         std::fprintf(stderr,
                      "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
@@ -527,7 +558,8 @@ int main(int argc, char** argv) {
                                   "stereo pairs");
     run_cmd->add_option("INPUT", o.inputs,
                         "Frame files, or directories of them (sorted by name), or Ouster/Velodyne .pcap recordings "
-                        "(several: one drive split into files, in time order)");
+                        "(several: one drive split into files, in time order), or a live sensor: udp://[ADDR][:PORT] "
+                        "(Ouster with --meta, else Velodyne)");
     run_cmd->add_option("--stereo", o.stereo, "Rectified stereo pairs: LEFT RIGHT image files, or directories of PNGs "
                                                "(paired in name order); matched with StereoSGBM")
         ->expected(2);
@@ -541,11 +573,13 @@ int main(int argc, char** argv) {
     auto* motion = run_cmd->add_option("--motion", o.motion_file, "CSV with columns t,speed,yaw_rate, interpolated at each frame's timestamp");
     motion->excludes(speed)->excludes(yaw);
     run_cmd->add_option("--frames", o.frames,
-                        "Frames A:B of the input (0-based, B excluded; A: or :B; A alone: that frame)");
+                        "Frames A:B of the input (0-based, B excluded; A: or :B; A alone: that frame; udp:// input: "
+                        "N alone ends the run after N frames)");
     run_cmd->add_option("--columns", o.source.columns,
                         "Raw float32 .bin files: values per point, x y z first (default 5 for *.pcd.bin, else 4)")
         ->check(CLI::Range(3, 64));
     add_source_options(run_cmd, o.source);
+    add_live_options(run_cmd, o.live);
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
                                        "Sensor height above the ground, m, in (0, 10] (default: estimated from the "
                                        "first frame's ground, see the output's mounting)");
@@ -613,6 +647,7 @@ int main(int argc, char** argv) {
 
     const auto range_action = add_range_commands(app);
     const auto roadside_action = add_roadside_commands(app);  // roadside: see roadside_commands.cpp
+    const auto replay_action = add_replay_command(app);
 
     if (const int status = parse_command_line(app, argc, argv); status >= 0) return status;
     try {
@@ -620,6 +655,7 @@ int main(int argc, char** argv) {
         if (cal_cmd->parsed()) return calibrate(c, *cal_cmd);
         if (app.got_subcommand("range")) return range_action();
         if (app.got_subcommand("roadside")) return roadside_action();
+        if (const int status = replay_action(); status >= 0) return status;
         return run(o, *run_cmd);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());

@@ -17,6 +17,8 @@ py::dict info_dict(const rp::SourceInfo& s) {
     d["notes"] = s.notes;
     d["beams"] = s.beams;
     d["serial"] = s.serial;
+    d["datagrams_received"] = s.datagrams_received;
+    d["datagrams_dropped"] = s.datagrams_dropped;
     return d;
 }
 
@@ -163,9 +165,14 @@ void bind_io(py::module_& m) {
             d["missing_columns"] = f.diagnostics.missing_columns;
             d["invalid_columns"] = f.diagnostics.invalid_columns;
             d["skipped_packets"] = f.diagnostics.skipped_packets;
+            d["lost_packets"] = f.diagnostics.lost_packets;
+            d["late_packets"] = f.diagnostics.late_packets;
+            d["duplicate_packets"] = f.diagnostics.duplicate_packets;
             d["complete"] = f.diagnostics.complete;
             return d;
         })
+        .def_readonly("arrival_s", &rp::Frame::arrival_s,
+                      "live: steady-clock time (s, rp.io.steady_now_s) its last datagram arrived; 0 otherwise")
         .def("__repr__", [](const rp::Frame& f) {
             return "<roadpreview.Frame " + std::to_string(f.frame_id) + " of " + f.source + ": " +
                    std::to_string(f.points.rows()) + " points>";
@@ -199,6 +206,43 @@ void bind_io(py::module_& m) {
         return rp::open_frames(inputs, o);
     });
     bind_stereo(m);
+    m.def("open_live", [](const std::string& url, const std::string& meta, const std::string& sensor_model,
+                          const std::string& calibration, double cut_angle_deg, bool skip_bad_packets,
+                          double timeout_s, double duration_s) {
+        rp::LiveOptions o;
+        o.source.meta = meta;
+        o.source.sensor_model = sensor_model;
+        o.source.calibration = calibration;
+        o.source.cut_angle_deg = cut_angle_deg;
+        o.source.skip_bad_packets = skip_bad_packets;
+        o.timeout_s = timeout_s;
+        o.duration_s = duration_s;
+        return rp::open_live(url, o);
+    });
+    m.def("replay", [](const std::string& capture, const std::string& to, double rate, int loops, double drop,
+                       double reorder, std::uint32_t seed) {
+        rp::ReplayOptions o;
+        o.rate = rate;
+        o.loops = loops;
+        o.drop_fraction = drop;
+        o.reorder_fraction = reorder;
+        o.seed = seed;
+        rp::ReplayStats s;
+        {
+            py::gil_scoped_release release;
+            s = rp::replay_pcap(capture, rp::parse_udp_endpoint(to, false), o);
+        }
+        py::dict d;
+        d["sent"] = s.sent;
+        d["dropped"] = s.dropped;
+        d["reordered"] = s.reordered;
+        d["bytes"] = s.bytes;
+        d["lidar_port"] = s.lidar_port;
+        d["seconds"] = s.seconds;
+        d["capture_seconds"] = s.capture_seconds;
+        return d;
+    });
+    m.def("steady_now_s", &rp::steady_now_s);
     m.def("imu_yaw_rate", [](const rp::Frame& f, const std::string& config_json) {
         return rp::imu_yaw_rate(f.imu, rp::effective_extrinsics(rp::config_from_json(config_json, "config")));
     });

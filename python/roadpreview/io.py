@@ -65,6 +65,46 @@ def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = N
                               os.fspath(beam_calibration) if beam_calibration else "")
 
 
+def open_live(url: str, meta: Optional[PathLike] = None, *, sensor_model: Optional[str] = None,
+              calibration: Optional[PathLike] = None, cut_angle_deg: float = 0.0, skip_bad_packets: bool = False,
+              timeout_s: float = 5.0, duration_s: float = 0.0):
+    """Frames of a live sensor as they complete, from UDP datagrams received on a thread (``roadpreview run
+    udp://...``). The same iterable of frames as :func:`open`.
+
+    url: ``udp://[ADDR][:PORT]``. With ``meta`` (Ouster metadata JSON) an Ouster: the lidar packets on PORT (else
+    the metadata's), the IMU packets on the metadata's IMU port moved by as much (else PORT + 1). Without, a
+    Velodyne on PORT (default 2368), the model from the packets or ``sensor_model``.
+    No datagram within ``timeout_s`` raises RuntimeError naming the address; a silence that long after datagrams
+    ends the iteration (the frame being assembled comes last), and so does ``duration_s`` > 0 (s from opening).
+    A port in use, a datagram of the wrong size or from another sensor raise RuntimeError naming the address.
+    Each frame's ``.arrival_s`` is the :func:`steady_now_s` time of the datagram that completed it, and
+    ``.diagnostics`` counts lost, late and duplicate packets and missing columns; ``.info`` counts the datagrams
+    received and dropped by the full receive queue.
+    """
+    return core().open_live(str(url), os.fspath(meta) if meta else "", sensor_model or "",
+                            os.fspath(calibration) if calibration else "", float(cut_angle_deg),
+                            bool(skip_bad_packets), float(timeout_s), float(duration_s))
+
+
+def replay(capture: PathLike, to: str = "127.0.0.1:7502", *, rate: Union[float, str] = 1.0, loops: int = 1,
+           drop: float = 0.0, reorder: float = 0.0, seed: int = 1) -> dict:
+    """Sends the UDP payloads of a pcap/pcapng capture to ``to`` ("ADDR:PORT") with their recorded timing
+    (``roadpreview replay``): ``rate`` times the recorded speed or "max"; ``loops`` times through the capture.
+    The capture's busiest port goes to PORT, other ports keep their distance from it. ``drop`` and ``reorder``
+    (test hooks): fractions of the datagrams left out and sent one place late. Returns the counts sent, dropped,
+    reordered. Blocks until done (the GIL is released: run it on a thread beside :func:`open_live`).
+    """
+    factor = 0.0 if rate == "max" else float(rate)
+    if rate != "max" and not factor > 0.0:
+        raise ValueError(f"rate {rate!r}: expected a factor > 0 or 'max'")
+    return core().replay(os.fspath(capture), str(to), factor, int(loops), float(drop), float(reorder), int(seed))
+
+
+def steady_now_s() -> float:
+    """Seconds on the steady clock of a live frame's ``.arrival_s``."""
+    return core().steady_now_s()
+
+
 def imu_yaw_rate(frame, cfg=None) -> Optional[float]:
     """Yaw rate (rad/s, base frame) of the mean IMU angular velocity of ``frame``, rotated by the config's
     extrinsics; None when the frame has no IMU samples."""

@@ -13,6 +13,7 @@
 #include "roadpreview/io/ouster.hpp"
 #include "roadpreview/io/pcap.hpp"
 #include "roadpreview/io/velodyne.hpp"
+#include "roadpreview/io/live.hpp"
 #include "roadpreview/io/stereo.hpp"
 #include "roadpreview/paths/motion.hpp"
 #include "roadpreview/obstacles/obstacles.hpp"

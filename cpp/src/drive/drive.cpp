@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "roadpreview/ground/mounting.hpp"
+#include "roadpreview/io/live.hpp"
 #include "roadpreview/io/readers.hpp"
 
 namespace roadpreview {
@@ -32,7 +33,8 @@ std::optional<double> frame_time(const Frame& f, std::int64_t index, double fram
 }  // namespace
 
 std::string frame_label(const Frame& f) {
-    return f.source + (f.frame_id >= 0 && is_pcap_path(f.source) ? " #" + std::to_string(f.frame_id) : "");
+    const bool packets = is_pcap_path(f.source) || is_udp_url(f.source);
+    return f.source + (f.frame_id >= 0 && packets ? " #" + std::to_string(f.frame_id) : "");
 }
 
 DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options)

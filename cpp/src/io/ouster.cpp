@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -291,6 +292,16 @@ void OusterDecoder::check_column_spacing(const std::uint8_t* data) {
     }
 }
 
+void OusterDecoder::check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const {
+    for (int c = 0; c < meta_.columns_per_packet; ++c) {
+        const int mid = read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8);
+        if (mid >= meta_.columns_per_frame)
+            throw std::invalid_argument("measurement id " + std::to_string(mid) + " is beyond the " +
+                                        std::to_string(meta_.columns_per_frame) + " columns per frame of " +
+                                        meta_.source + ": the metadata's column count does not match the recording");
+    }
+}
+
 void OusterDecoder::start_frame(std::int64_t id, double capture_time) {
     open_ = true;
     frame_id_ = id;
@@ -317,23 +328,28 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
         case OusterProfile::FusaRng15Rfl8Nir8Dual: id = read_le<std::uint32_t>(data + 4); break;
         default: id = read_le<std::uint16_t>(data + 2); break;
     }
+    check_measurement_ids(first_col, col_bytes);
+    // A packet of the frame just closed came late (reordered on the way): its columns are counted missing there.
+    if (!open_ && id == closed_id_) {
+        ++late_packets_;
+        return std::nullopt;
+    }
     std::optional<Frame> done;
-    if (open_ && id != frame_id_) done = build_frame();
+    if (open_ && id != frame_id_) done = build_frame();  // a new frame id, or an older one: the sensor restarted
     if (!open_) start_frame(id, capture_time);
 
     const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    bool news = false, last_of_window = false;
     for (int c = 0; c < meta_.columns_per_packet; ++c) {
         const std::uint8_t* col = first_col + static_cast<std::size_t>(c) * col_bytes;
         const int mid = read_le<std::uint16_t>(col + 8);
-        if (mid >= W)
-            throw std::invalid_argument("measurement id " + std::to_string(mid) + " is beyond the " + std::to_string(W) +
-                                        " columns per frame of " + meta_.source +
-                                        ": the metadata's column count does not match the recording");
         const std::uint32_t status = l.column_footer ? read_le<std::uint32_t>(col + col_bytes - 4)
                                                      : read_le<std::uint16_t>(col + 10);
         const auto ts = read_le<std::uint64_t>(col);
         if (first_column_ns_ == 0) first_column_ns_ = ts;
         column_ns_[static_cast<std::size_t>(mid)] = ts;
+        news = news || column_state_[static_cast<std::size_t>(mid)] == 0;
+        last_of_window = last_of_window || mid == meta_.column_window[1];
         if (!(status & 1u)) {
             column_state_[static_cast<std::size_t>(mid)] = 2;
             continue;
@@ -347,6 +363,9 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
                                                     : px[l.reflectivity_offset];
         }
     }
+    if (!news) ++duplicate_packets_;
+    // The window's last column closes the frame at once (no wait for the next frame's first packet: live latency).
+    if (last_of_window && !done) done = build_frame();
     return done;
 }
 
@@ -362,6 +381,10 @@ Frame OusterDecoder::build_frame() {
     for (std::uint8_t s : column_state_)
         if (s == 2) ++f.diagnostics.invalid_columns;
     f.diagnostics.complete = f.diagnostics.missing_columns == 0;
+    f.diagnostics.lost_packets =
+        (f.diagnostics.missing_columns + meta_.columns_per_packet - 1) / meta_.columns_per_packet;
+    f.diagnostics.late_packets = std::exchange(late_packets_, 0);
+    f.diagnostics.duplicate_packets = std::exchange(duplicate_packets_, 0);
 
     // Destaggered order: pixel (u, v_d) of the image holds staggered column v = v_d − shift[u] (mod W).
     const auto first_column = [&](int u) {
@@ -392,6 +415,7 @@ Frame OusterDecoder::build_frame() {
         }
     }
     open_ = false;
+    closed_id_ = frame_id_;
     return f;
 }
 

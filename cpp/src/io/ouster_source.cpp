@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// An Ouster pcap: lidar packets to OusterDecoder, IMU packets attached to the frame being assembled.
+// Ouster packets (a pcap or live UDP): lidar packets to OusterDecoder, IMU packets attached to the frame being
+// assembled.
 #include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/io/ouster.hpp"
 #include "pcap_source.hpp"
@@ -9,13 +10,13 @@ namespace {
 
 class OusterPcapSource : public PcapSource {
 public:
-    OusterPcapSource(const std::string& path, OusterMetadata meta, const SourceOptions& o)
-        : PcapSource(path, meta.lidar_packet_bytes(), o.lidar_port ? o.lidar_port : meta.udp_port_lidar,
+    OusterPcapSource(std::unique_ptr<DatagramInput> input, OusterMetadata meta, const SourceOptions& o)
+        : PcapSource(std::move(input), meta.lidar_packet_bytes(), o.lidar_port ? o.lidar_port : meta.udp_port_lidar,
                      o.lidar_port ? "option" : "metadata", o.skip_bad_packets),
-          imu_port_(meta.udp_port_imu),
+          imu_port_(o.imu_port ? o.imu_port : meta.udp_port_imu),
           decoder_(std::move(meta)) {
         const OusterMetadata& m = decoder_.metadata();
-        info_.format = "ouster pcap";
+        info_.format = std::string("ouster ") + kind();
         info_.sensor_model = m.prod_line.empty() ? "Ouster (model not in the metadata)" : m.prod_line;
         info_.profile = to_string(m.profile);
         info_.metadata = m.source;
@@ -61,10 +62,10 @@ OusterMetadata calibrated(OusterMetadata meta, const std::string& beams_file) {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> open_ouster_pcap(const std::string& path, const std::string& meta_path,
-                                              const SourceOptions& options) {
-    return std::make_unique<OusterPcapSource>(path, calibrated(read_ouster_metadata(meta_path), options.beam_calibration),
-                                              options);
+std::unique_ptr<FrameSource> open_ouster_packets(std::unique_ptr<DatagramInput> input, const std::string& meta_path,
+                                                 const SourceOptions& options) {
+    return std::make_unique<OusterPcapSource>(
+        std::move(input), calibrated(read_ouster_metadata(meta_path), options.beam_calibration), options);
 }
 
 }  // namespace roadpreview

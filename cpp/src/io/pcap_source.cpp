@@ -7,11 +7,36 @@
 
 namespace roadpreview {
 
-PcapSource::PcapSource(const std::string& path, std::size_t packet_bytes, int port, const std::string& port_origin,
-                       bool skip_bad_packets)
-    : reader_(path), packet_bytes_(packet_bytes), skip_bad_packets_(skip_bad_packets) {
+namespace {
+
+class PcapInput : public DatagramInput {
+public:
+    explicit PcapInput(const std::string& path) : reader_(path) {}
+    bool next(UdpDatagram& out) override { return reader_.next(out); }
+    const std::string& name() const override { return reader_.path(); }
+    const char* kind() const override { return "pcap"; }
+    const char* unit() const override { return "record"; }
+    std::int64_t units_read() const override { return reader_.counts().records; }
+
+private:
+    PcapReader reader_;
+};
+
+}  // namespace
+
+std::unique_ptr<DatagramInput> pcap_input(const std::string& path) { return std::make_unique<PcapInput>(path); }
+
+PcapSource::PcapSource(std::unique_ptr<DatagramInput> input, std::size_t packet_bytes, int port,
+                       const std::string& port_origin, bool skip_bad_packets)
+    : input_(std::move(input)), packet_bytes_(packet_bytes), skip_bad_packets_(skip_bad_packets) {
     info_.lidar_port = port;
     info_.lidar_port_origin = port ? port_origin : "detected";
+}
+
+SourceInfo PcapSource::info() const {
+    SourceInfo i = info_;
+    input_->describe(i);
+    return i;
 }
 
 void PcapSource::fail(const std::string& what) const { throw std::runtime_error(path() + ": " + what); }
@@ -25,7 +50,7 @@ bool PcapSource::is_lidar(const UdpDatagram& d) {
 
 void PcapSource::read_until_frame() {
     while (ready_.empty() && !ended_) {
-        if (!reader_.next(datagram_)) {
+        if (!input_->next(datagram_)) {
             ended_ = true;
             if (decoded_ == 0) {
                 if (!first_problem_.empty()) fail("no lidar packet could be decoded; the first problem: " + first_problem_);
@@ -33,7 +58,7 @@ void PcapSource::read_until_frame() {
                      (info_.lidar_port ? " on port " + std::to_string(info_.lidar_port) + ", from the " +
                                              info_.lidar_port_origin
                                        : std::string()) +
-                     ") in " + std::to_string(reader_.counts().records) + " records; the largest datagram is " +
+                     ") in " + std::to_string(input_->units_read()) + " " + input_->unit() + "s; the largest datagram is " +
                      std::to_string(largest_) + " bytes on port " + std::to_string(largest_port_) +
                      " (--lidar-port chooses the port)");
             }
@@ -53,10 +78,13 @@ void PcapSource::read_until_frame() {
             continue;
         }
         try {
+            const std::size_t before = ready_.size();
             on_lidar(datagram_, ready_);
             ++decoded_;
+            // The frames this datagram completed: their latency counts from its arrival.
+            for (std::size_t k = before; k < ready_.size(); ++k) ready_[k].arrival_s = datagram_.arrival_s;
         } catch (const std::invalid_argument& e) {
-            const std::string problem = "record " + std::to_string(datagram_.record) + " (UDP port " +
+            const std::string problem = input_->unit() + (" " + std::to_string(datagram_.record)) + " (UDP port " +
                                         std::to_string(datagram_.dst_port) + "): " + e.what();
             if (!skip_bad_packets_) fail(problem);
             if (first_problem_.empty()) first_problem_ = problem;

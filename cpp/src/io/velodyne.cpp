@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <yaml-cpp/yaml.h>
 
@@ -177,13 +178,7 @@ void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, dou
         throw std::invalid_argument("Velodyne data packet of " + std::to_string(size) + " bytes, expected 1206");
     const bool dual = data[1204] == 0x39;
     if (dual && model_ == VelodyneModel::Hdl64e) throw std::invalid_argument("dual-return HDL-64E packets are not supported");
-    // Sensor time, unwrapped across the hour (the packets count µs past the hour).
-    const double t = velodyne_packet_time_us(data);
-    if (packet_us_ < 0.0) {
-        packet_us_ = t;
-    } else {
-        packet_us_ += std::fmod(t - std::fmod(packet_us_, kHourUs) + kHourUs, kHourUs);
-    }
+    if (!in_time_order(velodyne_packet_time_us(data), dual, done)) return;
     packet_capture_time_ = capture_time;
 
     const FiringPattern spec = pattern_of(model_);
@@ -221,6 +216,32 @@ void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, dou
                        done);
         }
     }
+}
+
+// Sensor time, unwrapped across the hour (the packets count µs past the hour). A packet up to 0.1 s older than
+// the one before (reordered on the way) or of the same time (a duplicate) is dropped and counted; a jump back
+// further, or ahead by more than a second, starts afresh (the sensor restarted or its clock was set); a gap of
+// whole packet periods counts lost packets.
+bool VelodyneDecoder::in_time_order(double t_us, bool dual, std::vector<Frame>& done) {
+    constexpr double kLateUs = 1e5, kGapUs = 1e6;
+    if (packet_us_ < 0.0) {
+        packet_us_ = t_us;
+        return true;
+    }
+    double step = std::fmod(t_us - std::fmod(packet_us_, kHourUs) + kHourUs, kHourUs);  // [0, 1 h)
+    if (step > kHourUs / 2) step -= kHourUs;
+    if (step == 0.0) return ++duplicate_packets_, false;
+    if (step < 0.0 && step > -kLateUs) return ++late_packets_, false;
+    if (step < 0.0 || step >= kGapUs) {
+        close_sweep(false, done);
+        previous_relative_deg_ = -1.0;
+        packet_us_ = t_us;
+        return true;
+    }
+    const double period = velodyne_packet_period_us(model_, dual);
+    if (step > 1.5 * period) lost_packets_ += std::llround(step / period) - 1;
+    packet_us_ += step;
+    return true;
 }
 
 void VelodyneDecoder::add_firing(const Firing& f, std::vector<Frame>& done) {
@@ -265,6 +286,9 @@ void VelodyneDecoder::close_sweep(bool at_cut, std::vector<Frame>& done) {
         f.point_times = std::move(times_);
         f.beams = std::move(beams_);
         f.diagnostics.complete = started_at_cut_ && at_cut;
+        f.diagnostics.lost_packets = std::exchange(lost_packets_, 0);
+        f.diagnostics.late_packets = std::exchange(late_packets_, 0);
+        f.diagnostics.duplicate_packets = std::exchange(duplicate_packets_, 0);
         done.push_back(std::move(f));
     }
     xyzi_.clear();

@@ -24,9 +24,9 @@ std::optional<VelodyneModel> model_by_timing(double period_us, bool dual) {
 
 class VelodynePcapSource : public PcapSource {
 public:
-    VelodynePcapSource(const std::string& path, const SourceOptions& o)
-        : PcapSource(path, kVelodynePacketBytes, o.lidar_port, "option", o.skip_bad_packets), options_(o) {
-        info_.format = "velodyne pcap";
+    VelodynePcapSource(std::unique_ptr<DatagramInput> input, const SourceOptions& o)
+        : PcapSource(std::move(input), kVelodynePacketBytes, o.lidar_port, "option", o.skip_bad_packets), options_(o) {
+        info_.format = std::string("velodyne ") + kind();
         if (!o.sensor_model.empty()) forced_ = velodyne_model_from_name(o.sensor_model);
         if (forced_ == VelodyneModel::Hdl64e && o.calibration.empty())
             fail("an HDL-64E needs its calibration file (--calibration)");
@@ -134,8 +134,8 @@ private:
 
 }  // namespace
 
-std::unique_ptr<FrameSource> open_velodyne_pcap(const std::string& path, const SourceOptions& options) {
-    return std::make_unique<VelodynePcapSource>(path, options);
+std::unique_ptr<FrameSource> open_velodyne_packets(std::unique_ptr<DatagramInput> input, const SourceOptions& options) {
+    return std::make_unique<VelodynePcapSource>(std::move(input), options);
 }
 
 }  // namespace roadpreview

@@ -18,6 +18,11 @@ struct FrameDiagnostics {
     std::int64_t missing_columns = 0;  ///< Ouster: columns of the column window never received
     std::int64_t invalid_columns = 0;  ///< Ouster: columns received with the status bit clear (skipped)
     std::int64_t skipped_packets = 0;  ///< lidar packets of the wrong size skipped (only with skip_bad_packets)
+    std::int64_t lost_packets = 0;      ///< lidar packets of the frame that never arrived (Ouster: from its missing
+                                        ///< columns; Velodyne: from gaps in the packets' sensor time)
+    std::int64_t late_packets = 0;      ///< packets that arrived after their frame was closed, or out of time order
+                                        ///< (Velodyne): dropped
+    std::int64_t duplicate_packets = 0; ///< packets received twice (the copy adds nothing)
     bool complete = true;  ///< false: columns are missing, or a Velodyne sweep was cut short by the file's ends
 };
 
@@ -41,11 +46,14 @@ struct Frame {
     std::vector<float> range_variances;
     FrameDiagnostics diagnostics;
     std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
+    /// live: steady-clock time (s) the datagram that completed the frame arrived; 0 from files, and for a frame
+    /// that the end of the stream completed
+    double arrival_s = 0.0;
 };
 
 /// What a reader knows about its input (`roadpreview info`).
 struct SourceInfo {
-    std::string format;        ///< "ouster pcap", "velodyne pcap" or "files"
+    std::string format;        ///< "ouster pcap", "velodyne pcap", "ouster udp", "velodyne udp" or "files"
     std::string sensor_model;  ///< e.g. "OS-1-128", "VLP-16"; empty when unknown
     std::string profile;       ///< Ouster UDP lidar profile or Velodyne return mode
     std::string metadata;      ///< metadata or calibration file used, if any
@@ -55,6 +63,8 @@ struct SourceInfo {
     int beams = 0;                  ///< beams (Ouster rows, Velodyne lasers); 0 when unknown
     std::string serial;             ///< sensor serial number; empty when unknown
     std::vector<std::string> notes; ///< anything worth a user's attention (model choice, ID mismatches)
+    std::int64_t datagrams_received = 0;  ///< live: UDP datagrams received so far
+    std::int64_t datagrams_dropped = 0;   ///< live: datagrams dropped because the receive queue was full
 };
 
 /// Streams frames one at a time; memory does not grow with the input's size.

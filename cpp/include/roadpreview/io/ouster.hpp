@@ -63,7 +63,9 @@ class OusterDecoder {
 public:
     explicit OusterDecoder(OusterMetadata meta);
 
-    /// Adds one lidar packet. Returns the previous frame when this packet starts a new frame id.
+    /// Adds one lidar packet. Returns the frame it completes: the previous one when this packet starts a new
+    /// frame id (or an older one: the sensor restarted), this one when it holds the column window's last column.
+    /// A packet of the frame just returned (it came late) is dropped and counted in the next frame's diagnostics.
     /// Throws std::invalid_argument describing the problem when the packet does not fit the metadata
     /// (size, measurement id, serial number, column spacing).
     std::optional<Frame> add_packet(const std::uint8_t* data, std::size_t size, double capture_time);
@@ -81,6 +83,7 @@ private:
     };
     void check_header(const std::uint8_t* data) const;
     void check_column_spacing(const std::uint8_t* data);
+    void check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const;
     void start_frame(std::int64_t id, double capture_time);
     Frame build_frame();
 
@@ -89,6 +92,8 @@ private:
     bool open_ = false;
     bool spacing_checked_ = false;
     std::int64_t frame_id_ = -1;
+    std::int64_t closed_id_ = -1;  // the frame last returned
+    std::int64_t late_packets_ = 0, duplicate_packets_ = 0;  // since the last frame returned
     double frame_time_ = 0.0;
     std::uint64_t first_column_ns_ = 0;
     std::vector<std::uint32_t> range_mm_;     // beam × column, staggered

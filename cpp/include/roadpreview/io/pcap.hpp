@@ -14,7 +14,8 @@ struct UdpDatagram {
     double timestamp = 0.0;  ///< s, capture time (UNIX epoch) of the record that completed the datagram
     std::uint16_t src_port = 0;
     std::uint16_t dst_port = 0;
-    std::int64_t record = 0;            ///< 1-based index of that record in the file, for messages
+    std::int64_t record = 0;            ///< 1-based index of that record in the file (live: of the datagram)
+    double arrival_s = 0.0;             ///< live: steady-clock time of arrival, s; 0 from files
     std::vector<std::uint8_t> payload;  ///< UDP payload, reassembled when the datagram was fragmented
 };
 

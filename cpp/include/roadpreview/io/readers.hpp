@@ -53,6 +53,7 @@ struct SourceOptions {
     /// Beams file (beams.yaml, `roadpreview calibrate`) applied while decoding: Ouster and Velodyne by beam,
     /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
     std::string beam_calibration;
+    int imu_port = 0;  ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
 };
 
 /// A reader for the inputs: .pcap/.pcapng recordings (Ouster when metadata is given or found, Velodyne when its

@@ -67,7 +67,9 @@ public:
     VelodyneDecoder(VelodyneModel model, VelodyneCalibration calibration, double cut_angle_deg = 0.0);
 
     /// Adds one data packet; sweeps it completes are appended to `done`. Throws std::invalid_argument
-    /// for a packet of the wrong size or layout.
+    /// for a packet of the wrong size or layout. A packet older than the previous one (reordered) or a duplicate
+    /// is dropped and counted in the sweep's diagnostics; a jump back over 0.1 s or ahead over 1 s starts a new
+    /// sweep (the sensor restarted).
     void add_packet(const std::uint8_t* data, std::size_t size, double capture_time, std::vector<Frame>& done);
     /// The sweep being assembled, if it has points (call at the end of the input).
     std::optional<Frame> finish();
@@ -78,6 +80,7 @@ private:
     struct Firing;
     void add_firing(const Firing& f, std::vector<Frame>& done);
     void close_sweep(bool at_cut, std::vector<Frame>& done);
+    bool in_time_order(double t_us, bool dual, std::vector<Frame>& done);
 
     VelodyneModel model_;
     VelodyneCalibration calibration_;
@@ -93,6 +96,7 @@ private:
     double sweep_first_us_ = 0.0;   // sensor time of its first firing
     double packet_capture_time_ = 0.0;
     double packet_us_ = -1.0;  // sensor time of the current packet, unwrapped across hours
+    std::int64_t lost_packets_ = 0, late_packets_ = 0, duplicate_packets_ = 0;  // of the sweep being assembled
 };
 
 }  // namespace roadpreview

@@ -1,0 +1,108 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Latency of the live path: the bundled OS1-128 recording replayed over loopback into ``roadpreview run
+udp://...`` with the default pipeline (``rp.Config`` defaults but the sensor height: zone ground, obstacles on).
+
+For each replay rate it starts the live run, replays the capture ``--loops`` times (3 frames a loop; the frame ids
+jump back at each loop, as after a sensor restart) and reads the run's summary line: the latency of every frame
+from the kernel's receive time of the datagram that completed it to its output line written (p50, p99, max), the
+pipeline's median time per frame (``timing_ms.total``), datagrams received and dropped by the full receive queue,
+frames affected by lost packets. Beside it the 1-min load average before and after (the machine is shared).
+Prints a Markdown table on stdout, progress on stderr. The issue's target: p99 ≤ 5 ms at 1×.
+
+Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--quick]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PCAP = REPO / "tests/data/ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap"
+META = REPO / "tests/data/ouster/OS-1-128_v2.3.0_1024x10.json"
+HEIGHT_M, SPEED_MPS = "1.97", "2.5"
+TARGET_P99_MS = 5.0
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def cli() -> str:
+    beside = Path(sys.executable).parent / "roadpreview"
+    return str(beside) if beside.exists() else "roadpreview"
+
+
+def free_port_pair() -> int:
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as a, \
+                socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as b:
+            a.bind(("127.0.0.1", 0))
+            port = a.getsockname()[1]
+            try:
+                b.bind(("127.0.0.1", port + 1))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free pair of loopback ports")
+
+
+def measure(rate: str, loops: int) -> dict:
+    port = free_port_pair()
+    load_before = os.getloadavg()[0]
+    run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(META), "--speed", SPEED_MPS,
+                            "--sensor-height", HEIGHT_M, "--timeout", "3", "-o", os.devnull],
+                           stderr=subprocess.PIPE, text=True)
+    try:
+        first = run.stderr.readline()
+        if "listening on" not in first:
+            raise RuntimeError(first + run.stderr.read())
+        sender = subprocess.run([cli(), "replay", str(PCAP), "--to", f"127.0.0.1:{port}", "--rate", rate,
+                                 "--loop", str(loops)], capture_output=True, text=True, timeout=3600)
+        if sender.returncode:
+            raise RuntimeError(sender.stderr)
+        _, err = run.communicate(timeout=600)
+    finally:
+        run.kill()
+    if run.returncode:
+        raise RuntimeError(err)
+    summary = re.search(r"(\d+) frame\(s\), pipeline median ([\d.]+) ms", err)
+    live = re.search(r"live: (\d+) datagrams received, (\d+) dropped by a full queue; (\d+) of (\d+) frames affected"
+                     r".*p50 ([\d.]+) ms, p99 ([\d.]+) ms, max ([\d.]+) ms", err)
+    if not summary or not live:
+        raise RuntimeError("no summary in the run's stderr:\n" + err[-2000:])
+    return {"rate": rate, "frames": int(summary[1]), "expected": 3 * loops, "pipeline_ms": float(summary[2]),
+            "received": int(live[1]), "dropped": int(live[2]), "affected": int(live[3]), "p50": float(live[5]),
+            "p99": float(live[6]), "max": float(live[7]), "load": (load_before, os.getloadavg()[0])}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--loops", type=int, default=100, help="times through the 3-frame capture (default 100)")
+    parser.add_argument("--rates", default="1,10", help="replay rates, comma-separated ('max' allowed)")
+    parser.add_argument("--quick", action="store_true", help="5 loops at 1x (smoke test)")
+    args = parser.parse_args()
+    loops, rates = (5, ["1"]) if args.quick else (args.loops, args.rates.split(","))
+    rows = []
+    for rate in rates:
+        log(f"replaying {PCAP.name} {loops} times at {rate}x")
+        rows.append(measure(rate, loops))
+    print(f"Live latency, {PCAP.name} ({META.name}), default pipeline, sensor height {HEIGHT_M} m, "
+          f"{os.cpu_count()} cores\n")
+    print("| rate | frames (of) | latency p50 ms | p99 ms | max ms | pipeline median ms | datagrams | dropped "
+          "by the queue | frames affected | 1-min load before / after | p99 ≤ 5 ms |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
+        print(f"| {r['rate']}× | {r['frames']} ({r['expected']}) | {r['p50']:.2f} | {r['p99']:.2f} | {r['max']:.2f} "
+              f"| {r['pipeline_ms']:.2f} | {r['received']} | {r['dropped']} | {r['affected']} "
+              f"| {r['load'][0]:.1f} / {r['load'][1]:.1f} | {met if r['rate'] == '1' else '–'} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,254 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Live UDP input: one receive thread polls the sensor's sockets and fills a queue bounded in bytes (datagrams
+// beyond it are dropped and counted: the sensor never waits); the reader takes datagrams from the queue and feeds
+// them to the Ouster or Velodyne decoder like a pcap's.
+#include "roadpreview/io/live.hpp"
+
+#include <poll.h>
+#include <sys/uio.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <limits>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "roadpreview/io/ouster.hpp"
+#include "pcap_source.hpp"
+#include "udp.hpp"
+
+namespace roadpreview {
+namespace {
+
+constexpr int kVelodyneDataPort = 2368;
+constexpr std::size_t kMaxDatagramBytes = 65536;
+
+double wall_now_s() {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// A socket bound to the endpoint's address and `port`, with a large receive buffer (forced when permitted:
+// a burst of a 128-beam sensor overflows the default 208 kB in milliseconds).
+UdpSocket bind_socket(const std::string& address, int port, int buffer_bytes) {
+    const std::string where = udp_url(address, port);
+    UdpSocket s(where);
+    if (setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUFFORCE, &buffer_bytes, sizeof buffer_bytes) != 0)
+        setsockopt(s.fd(), SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    const int on = 1;
+    setsockopt(s.fd(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+    const sockaddr_in a = resolve_ipv4(address, port, where);
+    if (bind(s.fd(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+        const int e = errno;
+        throw std::runtime_error(where + ": cannot listen: " +
+                                 (e == EADDRINUSE ? "the port is already in use" : std::string(std::strerror(e))));
+    }
+    return s;
+}
+
+class UdpInput : public DatagramInput {
+public:
+    UdpInput(const std::string& address, std::vector<int> ports, const LiveOptions& o)
+        : name_(udp_url(address, ports.front())), options_(o), opened_s_(steady_now_s()) {
+        for (int port : ports) {
+            sockets_.push_back(bind_socket(address, port, o.receive_buffer_bytes));
+            ports_.push_back(port);
+        }
+        thread_ = std::thread([this] { receive(); });
+    }
+
+    ~UdpInput() override {
+        stop_ = true;
+        thread_.join();
+    }
+
+    bool next(UdpDatagram& out) override {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            const double now = steady_now_s();
+            // The duration ends the stream even when a backlog waits (a pipeline slower than the sensor).
+            if (options_.duration_s > 0.0 && now - opened_s_ >= options_.duration_s) return false;
+            if (!queue_.empty()) break;
+            if (failure_.size()) throw std::runtime_error(name_ + ": " + failure_);
+            const double silent_s = now - (received_ ? last_arrival_s_ : opened_s_);
+            if (silent_s >= options_.timeout_s) {
+                if (received_) return false;  // the sensor went quiet: the end of the stream
+                std::ostringstream msg;
+                msg << name_ << ": no datagrams within " << options_.timeout_s
+                    << " s (is the sensor sending to this address and port?)";
+                throw std::runtime_error(msg.str());
+            }
+            arrived_.wait_for(lock, std::chrono::milliseconds(20));
+        }
+        out = std::move(queue_.front());
+        queue_.pop_front();
+        queued_bytes_ -= out.payload.size();
+        return true;
+    }
+
+    const std::string& name() const override { return name_; }
+    const char* kind() const override { return "udp"; }
+    const char* unit() const override { return "datagram"; }
+    std::int64_t units_read() const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return received_;
+    }
+    void describe(SourceInfo& info) const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        info.datagrams_received = received_;
+        info.datagrams_dropped = dropped_;
+    }
+
+private:
+    // The receive thread: waits on every socket at once, drains what arrived, checks for the end every 50 ms.
+    // Datagrams of several sockets (lidar, IMU) are queued in the order the kernel received them: each socket is
+    // read until empty, so everything received before the earliest of those moments is known and can go, sorted.
+    void receive() {
+        std::vector<pollfd> fds;
+        for (const UdpSocket& s : sockets_) fds.push_back({s.fd(), POLLIN, 0});
+        std::vector<UdpDatagram> pending;
+        while (!stop_) {
+            const int ready = poll(fds.data(), fds.size(), pending.empty() ? 50 : 0);
+            if (ready < 0 && errno != EINTR) return fail(std::string("poll: ") + std::strerror(errno));
+            if (ready <= 0 && pending.empty()) continue;
+            double known_until_s = std::numeric_limits<double>::infinity();
+            for (std::size_t k = 0; k < fds.size(); ++k) {
+                drain(fds[k].fd, ports_[k], pending);
+                if (fds.size() > 1) known_until_s = std::min(known_until_s, wall_now_s());
+            }
+            push_until(pending, known_until_s);
+        }
+    }
+
+    // Reads what the socket holds, with the kernel's receive time of each datagram (SO_TIMESTAMPNS).
+    void drain(int fd, int port, std::vector<UdpDatagram>& batch) {
+        alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+        for (;;) {
+            buffer_.resize(kMaxDatagramBytes);
+            iovec io{buffer_.data(), buffer_.size()};
+            msghdr m{};
+            m.msg_iov = &io;
+            m.msg_iovlen = 1;
+            m.msg_control = control;
+            m.msg_controllen = sizeof control;
+            const ssize_t n = recvmsg(fd, &m, MSG_DONTWAIT);
+            if (n < 0) {
+                if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+                    fail(std::string("receive: ") + std::strerror(errno));
+                return;
+            }
+            UdpDatagram d;
+            const double wall_s = wall_now_s(), steady_s = steady_now_s();
+            d.timestamp = wall_s;
+            for (cmsghdr* c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c)) {
+                if (c->cmsg_level != SOL_SOCKET || c->cmsg_type != SCM_TIMESTAMPNS) continue;
+                timespec ts;
+                std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+                d.timestamp = static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+            }
+            d.arrival_s = steady_s - std::max(0.0, wall_s - d.timestamp);  // the kernel's time, on the steady clock
+            d.dst_port = static_cast<std::uint16_t>(port);
+            d.payload.assign(buffer_.data(), buffer_.data() + n);
+            batch.push_back(std::move(d));
+        }
+    }
+
+    // Queues the pending datagrams received up to `until_s`, in the order of their receive times.
+    void push_until(std::vector<UdpDatagram>& pending, double until_s) {
+        const auto by_time = [](const UdpDatagram& a, const UdpDatagram& b) { return a.timestamp < b.timestamp; };
+        std::stable_sort(pending.begin(), pending.end(), by_time);
+        const auto end = std::find_if(pending.begin(), pending.end(),
+                                      [&](const UdpDatagram& d) { return d.timestamp > until_s; });
+        if (end == pending.begin()) return;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            for (auto it = pending.begin(); it != end; ++it) {
+                UdpDatagram& d = *it;
+                d.record = ++received_;
+                last_arrival_s_ = std::max(last_arrival_s_, d.arrival_s);
+                if (queued_bytes_ + d.payload.size() > options_.queue_bytes) {
+                    ++dropped_;
+                    continue;
+                }
+                queued_bytes_ += d.payload.size();
+                queue_.push_back(std::move(d));
+            }
+        }
+        pending.erase(pending.begin(), end);
+        arrived_.notify_one();
+    }
+
+    void fail(const std::string& what) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        failure_ = what;
+        stop_ = true;
+    }
+
+    std::string name_;
+    LiveOptions options_;
+    double opened_s_;
+    std::vector<UdpSocket> sockets_;
+    std::vector<int> ports_;
+    std::thread thread_;
+    std::atomic<bool> stop_{false};
+    std::vector<std::uint8_t> buffer_;  // the receive thread's
+
+    mutable std::mutex mutex_;  // guards what follows
+    std::condition_variable arrived_;
+    std::deque<UdpDatagram> queue_;
+    std::size_t queued_bytes_ = 0;
+    std::int64_t received_ = 0, dropped_ = 0;
+    double last_arrival_s_ = 0.0;
+    std::string failure_;
+};
+
+void check_options(const std::string& url, const LiveOptions& o) {
+    if (!(o.timeout_s > 0.0)) throw std::invalid_argument(url + ": the timeout must be > 0 s");
+    if (!(o.duration_s >= 0.0)) throw std::invalid_argument(url + ": the duration must be >= 0 s");
+    if (o.queue_bytes < kMaxDatagramBytes) throw std::invalid_argument(url + ": the queue must hold >= 64 kB");
+}
+
+}  // namespace
+
+double steady_now_s() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+bool is_udp_url(const std::string& input) { return input.rfind("udp://", 0) == 0; }
+
+std::unique_ptr<FrameSource> open_live(const std::string& url, const LiveOptions& options) {
+    check_options(url, options);
+    const UdpEndpoint at = parse_udp_endpoint(url);
+    SourceOptions source = options.source;
+    if (source.meta.empty()) {  // Velodyne: its data port
+        source.lidar_port = at.port ? at.port : kVelodyneDataPort;
+        auto input = std::make_unique<UdpInput>(at.address, std::vector<int>{source.lidar_port}, options);
+        return open_velodyne_packets(std::move(input), source);
+    }
+    const OusterMetadata meta = read_ouster_metadata(source.meta);
+    source.lidar_port = at.port ? at.port : meta.udp_port_lidar;
+    if (!source.lidar_port)
+        throw std::invalid_argument(url + ": give the lidar port: " + source.meta + " names none");
+    // The IMU port keeps its distance from the lidar port; a metadata file without ports: Ouster's default, next.
+    std::vector<int> ports{source.lidar_port};
+    source.imu_port = meta.udp_port_imu && meta.udp_port_lidar
+                          ? meta.udp_port_imu + source.lidar_port - meta.udp_port_lidar
+                          : (meta.udp_port_imu ? meta.udp_port_imu : source.lidar_port + 1);
+    if (source.imu_port > 0 && source.imu_port < 65536 && source.imu_port != source.lidar_port)
+        ports.push_back(source.imu_port);
+    else
+        source.imu_port = 0;
+    auto input = std::make_unique<UdpInput>(at.address, ports, options);
+    return open_ouster_packets(std::move(input), source.meta, source);
+}
+
+}  // namespace roadpreview

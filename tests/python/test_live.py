@@ -1,0 +1,158 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Live UDP input from Python and the CLI, fed by the replay over loopback only; every run is bounded in time."""
+
+from __future__ import annotations
+
+import re
+import socket
+import subprocess
+import tempfile
+import threading
+
+import dpkt
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, VELODYNE, cli, run_cli
+
+
+def free_port_pair() -> int:
+    """A loopback port that is free, and its successor too (Ouster lidar and IMU)."""
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as a, \
+                socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as b:
+            a.bind(("127.0.0.1", 0))
+            port = a.getsockname()[1]
+            try:
+                b.bind(("127.0.0.1", port + 1))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free pair of loopback ports")
+
+
+def live_frames(pcap, meta=None, **replay):
+    """Frames of the live source while the capture is replayed to it from a thread."""
+    port = free_port_pair()
+    source = rp.io.open_live(f"udp://127.0.0.1:{port}", meta, timeout_s=0.5, duration_s=30.0)
+    sent, failed = {}, []
+
+    def send():
+        try:
+            sent.update(rp.io.replay(pcap, f"127.0.0.1:{port}", **replay))
+        except Exception as e:  # noqa: BLE001 - re-raised in the test's thread
+            failed.append(e)
+
+    sender = threading.Thread(target=send)
+    sender.start()
+    frames = list(source)
+    sender.join(timeout=30)
+    if failed:
+        raise failed[0]
+    return frames, source.info, sent
+
+
+def test_open_live_yields_the_offline_frames_of_a_velodyne_capture():
+    pcap = VELODYNE / "velodyne_vlp16.pcap"
+    frames, info, sent = live_frames(pcap, rate="max")
+    offline = list(rp.io.open(pcap))
+    assert info["format"] == "velodyne udp" and info["datagrams_dropped"] == 0
+    assert 0 < info["datagrams_received"] <= sent["sent"]  # the position packets go to a port not listened on
+    assert [f.frame_id for f in frames] == [f.frame_id for f in offline]
+    for got, want in zip(frames, offline):
+        np.testing.assert_array_equal(got.points, want.points)
+    assert frames[0].arrival_s > 0 and frames[0].arrival_s <= rp.io.steady_now_s()
+
+
+def test_open_live_flags_the_frames_that_lost_packets():
+    frames, _, sent = live_frames(OS1_128_PCAP, OS1_128_META, rate="max", drop=0.05, reorder=0.05, loops=2, seed=3)
+    assert sent["dropped"] > 0 and sent["reordered"] > 0
+    assert len(frames) >= 5  # 2 loops of 3 frames; a frame may lose its first packets, never its place
+    flagged = [f for f in frames if f.diagnostics["lost_packets"] or f.diagnostics["late_packets"]]
+    assert flagged and all(not f.diagnostics["complete"] for f in flagged if f.diagnostics["lost_packets"])
+
+
+def test_replay_refuses_a_bad_rate():
+    with pytest.raises(ValueError, match="rate"):
+        rp.io.replay(OS1_128_PCAP, "127.0.0.1:9", rate=0)
+
+
+def run_live_cli(port: int, *args, replay_args=()):
+    """`roadpreview run udp://127.0.0.1:PORT ...` while `roadpreview replay` sends the OS1-128 capture to it: its
+    exit status, output lines, stderr and the replay's stderr. The run ends by itself (--frames, --timeout)."""
+    with tempfile.TemporaryFile("w+") as out:
+        run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(OS1_128_META), "--speed",
+                                "2.5", "--sensor-height", str(OS1_128_HEIGHT), *map(str, args)],
+                               stdout=out, stderr=subprocess.PIPE, text=True)
+        try:
+            first = run.stderr.readline()  # "listening on ...": the sockets are bound
+            assert "listening on" in first, first
+            sender = run_cli("replay", OS1_128_PCAP, "--to", f"127.0.0.1:{port}", *replay_args)
+            err = first + run.stderr.read()
+            run.wait(timeout=60)
+        finally:
+            run.kill()
+        out.seek(0)
+        return run.returncode, out.read(), err, sender.stderr
+
+
+def test_cli_live_run_writes_every_frame_and_the_latency_summary():
+    status, out, err, sent = run_live_cli(free_port_pair(), "--frames", "3", "--timeout", "10")
+    assert status == 0, err
+    lines = out.strip().splitlines()
+    assert len(lines) == 3
+    assert "sent 222 datagrams" in sent
+    assert "ouster udp, OS-1-128" in err
+    assert "222 datagrams received, 0 dropped by a full queue; 0 of 3 frames affected" in err
+    assert "latency last packet → result p50" in err and "p99" in err
+
+
+def test_cli_live_run_reports_the_packets_lost():
+    status, out, err, _ = run_live_cli(free_port_pair(), "--timeout", "5",
+                                       replay_args=("--rate", "max", "--drop", "0.05", "--seed", "5"))
+    assert status == 0, err
+    assert "packets lost" in err  # on the affected frames' progress lines and in the summary
+    assert re.search(r"; [1-9][0-9]* of [0-9]+ frames affected", err), err
+
+
+def test_cli_live_run_without_datagrams_is_an_error_naming_the_address():
+    port = free_port_pair()
+    proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--timeout", "0.3", check=False)
+    assert proc.returncode == 1
+    assert f"udp://127.0.0.1:{port}: no datagrams within 0.3 s" in proc.stderr
+
+
+def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--timeout", "1", check=False)
+    assert proc.returncode == 1
+    assert f"udp://127.0.0.1:{port}: cannot listen: the port is already in use" in proc.stderr
+
+
+def test_cli_live_options_are_refused_with_files():
+    proc = run_cli("run", OS1_128_PCAP, "--speed", "1", "--duration", "1", check=False)
+    assert proc.returncode == 1 and "--duration applies to a udp:// input only" in proc.stderr
+
+
+def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):
+    path = tmp_path / "arp.pcap"
+    with open(path, "wb") as f:
+        writer = dpkt.pcap.Writer(f)
+        arp = dpkt.ethernet.Ethernet(type=dpkt.ethernet.ETH_TYPE_ARP, data=dpkt.arp.ARP())
+        writer.writepkt(bytes(arp), ts=1.0)
+    proc = run_cli("replay", path, "--to", "127.0.0.1:9", check=False)
+    assert proc.returncode == 1
+    assert f"{path}: no UDP datagrams to replay (1 records, 1 of them not IPv4 UDP)" in proc.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--to", "127.0.0.1"), "127.0.0.1: no port"),
+    (("--to", "127.0.0.1:99999"), "port '99999' is not 1..65535"),
+    (("--rate", "fast"), "--rate fast: expected a factor > 0"),
+])
+def test_cli_replay_refuses_bad_options(args, message):
+    proc = run_cli("replay", OS1_128_PCAP, *args, check=False)
+    assert proc.returncode == 1 and message in proc.stderr
