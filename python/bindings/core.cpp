@@ -19,6 +19,7 @@ namespace rp = roadpreview;
 void bind_io(py::module_& m);  // io.cpp
 void bind_calibration(py::module_& m);  // calibration.cpp
 void bind_range_sensor(py::module_& m);  // range_sensor.cpp
+void bind_ouster_packets(py::module_& m);  // ouster_packets.cpp
 
 namespace {
 
@@ -560,6 +561,7 @@ PYBIND11_MODULE(_core, m) {
     bind_io(m);
     bind_calibration(m);
     bind_range_sensor(m);
+    bind_ouster_packets(m);
     m.def("read_frame", [](const std::string& path, int columns) {
         rp::Frame f = rp::read_frame(path, columns);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));
