@@ -14,6 +14,7 @@ Ouster decoder, as a pcap would be. ``nav_msgs/Odometry`` and ``sensor_msgs/Imu`
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator, Optional, Sequence
@@ -44,7 +45,10 @@ class BagFrame:
     diagnostics: dict = field(default_factory=lambda: {"missing_columns": 0, "skipped_packets": 0, "complete": True})
 
 
+@contextmanager
 def _reader(paths: Sequence[str]):
+    """An open rosbags AnyReader (ROS 1 bag, ROS 2 bag with SQLite or MCAP storage); unreadable files raise
+    RuntimeError naming the file."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
@@ -52,9 +56,14 @@ def _reader(paths: Sequence[str]):
         if not os.path.exists(p):
             raise RuntimeError(f"{p}: no such bag")
     try:
-        return AnyReader([Path(p) for p in paths], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        reader = AnyReader([Path(p) for p in paths], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        reader.open()
     except Exception as err:  # rosbags raises its own error classes per format
         raise RuntimeError(f"{paths[0]}: not a readable ROS bag or MCAP file ({err})") from None
+    try:
+        yield reader
+    finally:
+        reader.close()
 
 
 def topics(path) -> list[dict]:
