@@ -135,12 +135,18 @@ def summary_path(out_dir: Path, rid: str) -> Path:
     return recording_dir(out_dir, rid) / "summary.json"
 
 
-def _write_atomically(path: Path, write) -> None:
-    """``write(tmp_path)`` then rename, so readers and --resume never see a half-written file."""
+def _write_atomically(path: Path, write):
+    """``write(tmp_path)`` then rename, so readers and --resume never see a half-written file; returns what
+    ``write`` returns. A failed write leaves nothing behind."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    write(tmp)
+    try:
+        result = write(tmp)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
     os.replace(tmp, path)
+    return result
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -190,9 +196,6 @@ def _motion_from(kind: str, rid: str, inputs: list[str], cfg, opts: dict, out_di
 
 def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, out_dir: str) -> dict:
     """Runs frames [first, last) of one recording and writes the kept frames to their Parquet part."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
     from .config import Config
 
     opts = dict(run_options)
@@ -204,17 +207,31 @@ def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, 
     if isinstance(opts.get("poses"), (str, os.PathLike)):
         opts["poses"] = drive.read_kitti_poses(opts["poses"])
     poses = opts.get("poses")
-    rows = []
-    for k, result in enumerate(drive.run(inputs, cfg, frames=(chunk.first, chunk.last), **opts)):
-        index = chunk.first + k
-        if index >= chunk.keep_from:
-            rows.append(frame_row(rid, index, result.to_dict(), poses[index] if poses else None))
-    if not rows and chunk.index == 0:
-        raise RuntimeError(f"{inputs[0]}: no frames in this recording")
-    table = pa.Table.from_pylist(rows, schema=FRAME_SCHEMA())
     path = part_path(Path(out_dir), rid, chunk)
-    _write_atomically(path, lambda tmp: pq.write_table(table, tmp))
-    return {"recording": rid, "chunk": chunk.index, "frames": len(rows), "path": str(path)}
+    written = _write_atomically(path, lambda tmp: _write_frames(tmp, rid, inputs, cfg, chunk, opts, poses))
+    if not written and chunk.index == 0:
+        path.unlink()
+        raise RuntimeError(f"{inputs[0]}: no frames in this recording")
+    return {"recording": rid, "chunk": chunk.index, "frames": written, "path": str(path)}
+
+
+def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses, rows_per_group: int = 128) -> int:
+    """Streams the chunk's kept frames into a Parquet file, a row group at a time (memory stays constant
+    however long the recording)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema, rows, written = FRAME_SCHEMA(), [], 0
+    with pq.ParquetWriter(tmp, schema) as writer:
+        for k, result in enumerate(drive.run(inputs, cfg, frames=(chunk.first, chunk.last), **opts)):
+            index = chunk.first + k
+            if index >= chunk.keep_from:
+                rows.append(frame_row(rid, index, result.to_dict(), poses[index] if poses else None))
+            if len(rows) == rows_per_group:
+                writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+                written, rows = written + len(rows), []
+        writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+    return written + len(rows)
 
 
 def FRAME_SCHEMA():  # noqa: N802 (a constant built lazily: pyarrow is imported only where it is used)
@@ -230,8 +247,8 @@ def FRAME_SCHEMA():  # noqa: N802 (a constant built lazily: pyarrow is imported 
     return pa.schema(cols)
 
 
-def read_frames(out_dir, rid: Optional[str] = None):
-    """The per-frame table of a batch (one recording, or all), sorted by recording and frame."""
+def read_frames(out_dir, rid: Optional[str] = None, columns: Optional[Sequence[str]] = None):
+    """The per-frame table of a batch (one recording, or all; some columns, or all), in frame order."""
     import pyarrow.parquet as pq
 
     root = Path(out_dir) / "frames"
@@ -240,36 +257,63 @@ def read_frames(out_dir, rid: Optional[str] = None):
         raise FileNotFoundError(f"{root}: no per-frame results{' for ' + rid if rid else ''}")
     import pyarrow as pa
 
-    table = pa.concat_tables([pq.read_table(p, schema=FRAME_SCHEMA()) for p in paths])
-    return table.sort_by([("recording", "ascending"), ("frame", "ascending")])
+    keys = ["recording", "frame"]
+    wanted = None if columns is None else list(dict.fromkeys(keys + list(columns)))
+    table = pa.concat_tables([pq.read_table(p, schema=FRAME_SCHEMA(), columns=wanted) for p in paths])
+    table = table.sort_by([(k, "ascending") for k in keys])
+    return table if columns is None else table.select(list(columns))
 
 
-def summarize(rid: str, frames) -> dict:
+def frame_rows(out_dir, rid: str, columns: Sequence[str], batch_rows: int = 256):
+    """The rows of one recording's per-frame parts in frame order, a batch at a time (constant memory)."""
+    import pyarrow.parquet as pq
+
+    for path in sorted((Path(out_dir) / "frames" / f"recording={rid}").glob("part-*.parquet")):
+        for b in pq.ParquetFile(path).iter_batches(batch_size=batch_rows, columns=list(columns)):
+            yield from b.to_pylist()
+
+
+class Summary:
     """Frames, vehicle classes, median vehicle IRI and the reasons of every declined class of one recording."""
-    classes = Counter(c or "-" for c in frames.column("vehicle_class").to_pylist())
-    iri = [v for v in frames.column("vehicle_iri_m_per_km").to_pylist() if v is not None]
-    declined = Counter()
-    for line in frames.column("line").to_pylist():
-        rough = json.loads(line).get("roughness") or {}
+
+    def __init__(self, rid: str):
+        self.rid, self.frames, self.classes, self.declined, self.iri = rid, 0, Counter(), Counter(), []
+
+    def add(self, line: dict) -> None:
+        self.frames += 1
+        rough = line.get("roughness") or {}
+        self.classes[(rough.get("vehicle") or {}).get("class") or "-"] += 1
+        value = ((rough.get("vehicle") or {}).get("iri") or {}).get("value")
+        if value is not None:
+            self.iri.append(value)
         for side in ("left", "right", "vehicle"):
             r = rough.get(side) or {}
             if not r.get("class"):
-                declined[r.get("reason") or "no reason given"] += 1
-    return {"recording": rid, "frames": frames.num_rows, "vehicle_classes": dict(sorted(classes.items())),
-            "vehicle_iri_median_m_per_km": float(np.median(iri)) if iri else None,
-            "vehicle_iri_frames": len(iri), "declined": dict(sorted(declined.items()))}
+                self.declined[r.get("reason") or "no reason given"] += 1
+
+    def to_dict(self) -> dict:
+        return {"recording": self.rid, "frames": self.frames, "vehicle_classes": dict(sorted(self.classes.items())),
+                "vehicle_iri_median_m_per_km": float(np.median(self.iri)) if self.iri else None,
+                "vehicle_iri_frames": len(self.iri), "declined": dict(sorted(self.declined.items()))}
 
 
-def segment_rows(rid: str, frames, config: Optional[dict], lengths_m: Sequence[float]) -> list[dict]:
-    """The stitched route's segments (class, G_d(n0), IRI per wheel and for the vehicle) per segment length;
+def stitch(out_dir, rid: str, config: Optional[dict]):
+    """(route, summary) of one recording read from its parts: the frames' profiles stitched along the drive,
     placed by the frames' poses when they have them, else by speed × time."""
     from .config import Config
     from .reference.route import Route
 
-    route = Route(Config.from_dict(config) if config else Config())
-    xs, ys, yaws = (frames.column(c).to_pylist() for c in ("pose_x_m", "pose_y_m", "pose_yaw_rad"))
-    for line, x, y, yaw in zip(frames.column("line").to_pylist(), xs, ys, yaws):
-        route.add(json.loads(line), None if x is None else (x, y, yaw))
+    route, summary = Route(Config.from_dict(config) if config else Config()), Summary(rid)
+    for row in frame_rows(out_dir, rid, ("line", "pose_x_m", "pose_y_m", "pose_yaw_rad")):
+        line = json.loads(row["line"])
+        route.add(line, None if row["pose_x_m"] is None else (row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"]))
+        summary.add(line)
+    return route, summary
+
+
+def segment_rows(rid: str, route, lengths_m: Sequence[float]) -> list[dict]:
+    """The stitched route's segments (class, G_d(n0), IRI per wheel and for the vehicle) per segment length,
+    with the columns of ``roadpreview run --segments``."""
     rows = []
     for length in lengths_m:
         for seg in route.segments(length):
@@ -296,13 +340,15 @@ def finish_recording(rid: str, out_dir: str, config: Optional[dict], lengths_m: 
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    frames = read_frames(out_dir, rid)
-    rows = segment_rows(rid, frames, config, lengths_m)
+    route, summary = stitch(out_dir, rid, config)
+    if summary.frames == 0:
+        raise RuntimeError(f"{rid}: no per-frame results to summarise")
+    rows = segment_rows(rid, route, lengths_m)
     if geo_options.get("origin") or geo_options.get("gnss"):
         from . import geo
 
-        rows = geo.locate_segments(rows, frames, **geo_options)
-    summary = summarize(rid, frames)
+        rows = geo.locate_segments(rows, read_frames(out_dir, rid, ("timestamp", "speed_mps")), **geo_options)
+    summary = summary.to_dict()
     summary["segments"] = len(rows)
     folder = recording_dir(Path(out_dir), rid)
     _write_atomically(folder / "segments.parquet", lambda tmp: pq.write_table(pa.Table.from_pylist(rows), tmp))
