@@ -80,6 +80,7 @@ def kiss_icp(max_range_m: float = 100.0, min_range_m: float = 2.0, voxel_m: floa
     config = KISSConfig()
     config.data.deskew, config.data.max_range, config.data.min_range = deskew, max_range_m, min_range_m
     config.mapping.voxel_size = voxel_m
+    config.registration.max_num_threads = 1  # one core per worker, and the same poses on every run
     return KissICP(config=config)
 
 
