@@ -100,9 +100,11 @@ def drive_files(path: str) -> list[str]:
     return rp_io.expand([path])
 
 
-def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_options: dict) -> list[Recording]:
+def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_options: dict,
+         unreadable: Optional[list] = None) -> list[Recording]:
     """One Recording per input, each with its chunks. Raises ValueError for a missing input, an input without
-    frames, or recordings from different sensors."""
+    frames, or recordings from different sensors. A recording that cannot even be opened (a corrupt pcap or
+    bag) is appended to ``unreadable`` as (Recording, error) when that list is given, else raises."""
     recordings, seen, sensors = [], Counter(), {}
     for path in map(os.fspath, inputs):
         if not os.path.exists(path):
@@ -114,7 +116,14 @@ def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_o
         frames = frame_count(path)
         if frames == 0:
             raise ValueError(f"{path}: no frame files in this recording")
-        sensors.setdefault(sensor_of(path, source_options), path)
+        try:
+            sensor = sensor_of(path, source_options)
+        except (RuntimeError, OSError) as err:
+            if unreadable is None:
+                raise
+            unreadable.append((Recording(rid, [path]), err))
+            continue
+        sensors.setdefault(sensor, path)
         if len(sensors) > 1:
             (a, pa), (b, pb) = list(sensors.items())[:2]
             raise ValueError(f"mixed sensors in one batch: {pa} is {'/'.join(map(str, a))}, {pb} is "
@@ -383,9 +392,13 @@ def _progress(total: int, quiet: bool):
     return tqdm(total=total, unit="task", desc="roadpreview batch", file=sys.stderr)
 
 
-def _error_line(rid: str, inputs: list[str], err: BaseException) -> dict:
-    return {"recording": rid, "inputs": inputs, "error": f"{type(err).__name__}: {err}",
+def _record_failure(out: Path, rec: Recording, err: BaseException, report: dict) -> None:
+    """One line of errors.jsonl for a recording that failed; the batch goes on with the others."""
+    report["failed"].append(rec.id)
+    line = {"recording": rec.id, "inputs": rec.inputs, "error": f"{type(err).__name__}: {err}",
             "time": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    with open(out / "errors.jsonl", "a", encoding="utf-8") as f:
+        f.write(json.dumps(line) + "\n")
 
 
 def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
@@ -405,15 +418,18 @@ def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, 
                       if k not in ("config", "motion", "poses", "frame_rate", "motion_from")}
     if run_options.get("motion_from"):
         chunk_frames = 0  # odometry and a bag's motion topics read the whole recording: one task each
-    recordings = plan(inputs, chunk_frames, overlap_frames, source_options)
+    unreadable = []
+    recordings = plan(inputs, chunk_frames, overlap_frames, source_options, unreadable)
     out.mkdir(parents=True, exist_ok=True)
     errors_file = out / "errors.jsonl"
     if errors_file.exists():
         errors_file.unlink()  # a batch's errors are those of its last run
+    report = {"done": [], "skipped": [], "failed": [], "tasks_run": 0}
+    for rec, err in unreadable:
+        _record_failure(out, rec, err, report)
     own_client = client is None
     if own_client:
         client = connect(workers, scheduler)
-    report = {"done": [], "skipped": [], "failed": [], "tasks_run": 0}
     try:
         _run_graph(client, recordings, out, resume, segment_lengths_m, geo_options or {}, run_options, report, quiet)
     finally:
@@ -459,9 +475,7 @@ def _run_graph(client, recordings, out, resume, lengths, geo_options, run_option
             if err is None:
                 report["done"].append(rec.id)
             else:
-                report["failed"].append(rec.id)
-                with open(out / "errors.jsonl", "a", encoding="utf-8") as f:
-                    f.write(json.dumps(_error_line(rec.id, rec.inputs, err)) + "\n")
+                _record_failure(out, rec, err, report)
                 if bar is not None:
                     bar.write(f"roadpreview batch: {rec.id}: {err}", file=sys.stderr)
     finally:

@@ -138,6 +138,17 @@ def test_segments_of_a_recording_match_the_cli(client, recordings, tmp_path):
                 assert mine[key] == (pytest.approx(expected, rel=1e-3) if expected is not None else None), key
 
 
+def test_a_recording_that_cannot_be_opened_is_an_error_line_not_the_end_of_the_batch(client, recordings, tmp_path):
+    good, _ = recordings
+    garbage = tmp_path / "in" / "garbage.pcap"
+    garbage.write_bytes(b"not a capture file at all")
+    report = batch.run_batch([good[0], str(garbage)], tmp_path / "out", client=client, quiet=True, **RUN)
+    assert report["done"] == ["a"] and report["failed"] == ["garbage"]
+    (error,) = [json.loads(x) for x in (tmp_path / "out" / "errors.jsonl").read_text().splitlines()]
+    assert "garbage.pcap" in error["error"]
+    assert frames_of(tmp_path / "out", "a") == serial_rows(good[0], "a")
+
+
 def test_bad_batches_are_refused_naming_the_input(recordings, tmp_path):
     good, _ = recordings
     pcap = str(Path(__file__).resolve().parents[1] / "data" / "ouster" / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap")
