@@ -170,6 +170,9 @@ def frame_row(rid: str, index: int, line: dict, pose=None) -> dict:
     ``frame`` is the frame's index in its recording, also where a task started the estimator later."""
     line = dict(line, frame=index)
     timing = line.pop("timing_ms", None) or {}
+    if line.get("fusion"):  # its time, like the stages', differs from run to run: kept beside the line
+        line["fusion"] = dict(line["fusion"])
+        timing = dict(timing, fusion=line["fusion"].pop("time_ms", None))
     rough = line.get("roughness") or {}
     row = {"recording": rid, "frame": index, "source": line.get("source"), "timestamp": line.get("timestamp"),
            "speed_mps": (line.get("motion") or {}).get("speed"),
@@ -182,6 +185,7 @@ def frame_row(rid: str, index: int, line: dict, pose=None) -> dict:
     row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"] = pose if pose is not None else (None, None, None)
     row["line"] = json.dumps(line, sort_keys=True)
     row["timing_total_ms"] = timing.get("total")
+    row["timing_fusion_ms"] = timing.get("fusion")
     return row
 
 
@@ -252,7 +256,7 @@ def FRAME_SCHEMA():  # noqa: N802 (a constant built lazily: pyarrow is imported 
         cols += [(f"{side}_class", pa.string()), (f"{side}_gd_n0_m3", pa.float64()),
                  (f"{side}_iri_m_per_km", pa.float64())]
     cols += [("pose_x_m", pa.float64()), ("pose_y_m", pa.float64()), ("pose_yaw_rad", pa.float64()),
-             ("line", pa.string()), ("timing_total_ms", pa.float64())]
+             ("line", pa.string()), ("timing_total_ms", pa.float64()), ("timing_fusion_ms", pa.float64())]
     return pa.schema(cols)
 
 

@@ -63,13 +63,13 @@ def recordings(tmp_path):
 
 
 def frames_of(out, rid):
-    return batch.read_frames(out, rid).drop(["timing_total_ms"]).to_pylist()
+    return batch.read_frames(out, rid).drop(["timing_total_ms", "timing_fusion_ms"]).to_pylist()
 
 
 def serial_rows(path, rid):
     """The per-frame rows of one recording run serially in this process, unsplit."""
     results = drive.run([path], rp.Config.from_dict(CONFIG), motion=RUN["motion"], frame_rate=RUN["frame_rate"])
-    return [{k: v for k, v in batch.frame_row(rid, i, r.to_dict()).items() if k != "timing_total_ms"}
+    return [{k: v for k, v in batch.frame_row(rid, i, r.to_dict()).items() if not k.startswith("timing_")}
             for i, r in enumerate(results)]
 
 
