@@ -260,6 +260,21 @@ def FRAME_SCHEMA():  # noqa: N802 (a constant built lazily: pyarrow is imported 
     return pa.schema(cols)
 
 
+def SEGMENT_SCHEMA():  # noqa: N802 (as FRAME_SCHEMA)
+    """The columns of ``roadpreview run --segments`` after ``recording``, then lat/lon (null without a map)."""
+    import pyarrow as pa
+
+    cols = [("recording", pa.string()), ("segment_length_m", pa.float64()), ("start_m", pa.float64()),
+            ("end_m", pa.float64())]
+    cols += [(f"{axis}_{end}_m", pa.float64()) for end in ("start", "end") for axis in ("x", "y")]
+    for side in ("left", "right", "vehicle"):
+        cols += [(f"class_{side}", pa.string()), (f"gd_n0_m3_{side}", pa.float64()),
+                 (f"iri_m_per_km_{side}", pa.float64()), (f"backed_fraction_{side}", pa.float64()),
+                 (f"class_reason_{side}", pa.string()), (f"iri_reason_{side}", pa.string())]
+    cols += [(f"{q}_{end}", pa.float64()) for end in ("start", "end") for q in ("lat", "lon")]
+    return pa.schema(cols)
+
+
 def read_frames(out_dir, rid: Optional[str] = None, columns: Optional[Sequence[str]] = None):
     """The per-frame table of a batch (one recording, or all; some columns, or all), in frame order."""
     import pyarrow.parquet as pq
@@ -364,7 +379,8 @@ def finish_recording(rid: str, out_dir: str, config: Optional[dict], lengths_m: 
     summary = summary.to_dict()
     summary["segments"] = len(rows)
     folder = recording_dir(Path(out_dir), rid)
-    _write_atomically(folder / "segments.parquet", lambda tmp: pq.write_table(pa.Table.from_pylist(rows), tmp))
+    table = pa.Table.from_pylist(rows, schema=SEGMENT_SCHEMA())
+    _write_atomically(folder / "segments.parquet", lambda tmp: pq.write_table(table, tmp))
     _write_atomically(summary_path(Path(out_dir), rid),
                       lambda tmp: tmp.write_text(json.dumps(summary, indent=1, sort_keys=True) + "\n"))
     return summary
@@ -499,15 +515,26 @@ def _write_tables(out: Path) -> None:
         iri = "" if s["vehicle_iri_median_m_per_km"] is None else f"{s['vehicle_iri_median_m_per_km']:.3f}"
         lines.append(f"{s['recording']},{s['frames']},{classes},{iri},{s['segments']}")
     _write_atomically(out / "summary.csv", lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
-    parts = [pq.read_table(out / "recordings" / s["recording"] / "segments.parquet") for s in summaries]
-    parts = [t for t in parts if t.num_rows]
-    if parts:
-        table = pa.concat_tables(parts, promote_options="default")
-        _write_atomically(out / "segments.parquet", lambda tmp: pq.write_table(table, tmp))
-        if "lat_start" in table.column_names:
-            from . import geo
+    # one recording's segments at a time: memory stays flat with 10⁴ recordings
+    paths = [out / "recordings" / s["recording"] / "segments.parquet" for s in summaries]
+    with_map = False
 
-            geo.write_geo(table, str(out))
+    def combine(tmp):
+        nonlocal with_map
+        with pq.ParquetWriter(tmp, SEGMENT_SCHEMA()) as writer:
+            for path in paths:
+                table = pq.read_table(path, schema=SEGMENT_SCHEMA())
+                with_map = with_map or table.column("lat_start").null_count < table.num_rows
+                writer.write_table(table)
+
+    _write_atomically(out / "segments.parquet", combine)
+    if with_map:
+        import pyarrow.compute as pc
+
+        from . import geo
+
+        table = pq.read_table(out / "segments.parquet")
+        geo.write_geo(table.filter(pc.is_valid(table.column("lat_start"))), str(out))
 
 
 # ---------------------------------------------------------------------------------------------------------
