@@ -20,6 +20,7 @@ from .metrics import Repeatability, repeatability, world_profile
 
 if native_available():
     from . import io, range_sensor
+    from . import batch, drive, geo, io_bags, odometry  # drives: bags, odometry, batches, maps (their deps lazily)
     from ._core import BeamCalibration, CalibrationError
     from .calibration import calibrate_beams
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
@@ -37,4 +38,5 @@ __all__ = [
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
     "Repeatability", "repeatability", "world_profile", "range_sensor",
+    "drive", "io_bags", "odometry", "batch", "geo",
 ]
