@@ -108,3 +108,17 @@ def test_poses_and_an_origin_put_the_segments_on_the_map(tmp_path):
     with pytest.raises(ValueError, match="--origin places poses on the map: the segments have no poses"):
         run_one(tmp_path / "out2", [str(OS1_128_PCAP)], "os1", config={"sensor_height": OS1_128_HEIGHT},
                 motion=(2.5, None), geo_options={"origin": ORIGIN})
+
+
+def test_lidar_odometry_places_a_pcap_without_poses_on_the_map(tmp_path):
+    pytest.importorskip("kiss_icp")
+    out = tmp_path / "out"
+    run_one(out, [str(OS1_128_PCAP)], "os1", config={"sensor_height": OS1_128_HEIGHT}, motion_from="lidar",
+            geo_options={"origin": ORIGIN})
+    frames = batch.read_frames(out, "os1").to_pylist()
+    assert [round(f["pose_x_m"], 1) for f in frames] == [0.0, 0.2, 0.5]  # KISS-ICP: ≈ 0.25 m per frame
+    assert all(2.3 < f["speed_mps"] < 2.7 for f in frames)
+    assert len(np.loadtxt(out / "recordings" / "os1" / "odometry.poses.txt", ndmin=2)) == 3
+    import geopandas as gpd
+
+    assert gpd.read_parquet(out / "segments.geoparquet")["lat_start"].notna().all()
