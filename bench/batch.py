@@ -120,6 +120,8 @@ def memory_table(args, tmp: Path) -> str:
         proc = psutil.Process(pid)
         while not done.is_set():
             samples.append((time.perf_counter(), proc.memory_info().rss / 2**20))
+            if len(samples) % 60 == 0:  # every 30 s, to stderr: the trace of a long run
+                print(f"  {samples[-1][0] - t0:.0f} s: worker RSS {samples[-1][1]:.0f} MB", file=sys.stderr, flush=True)
             done.wait(0.5)
 
     try:

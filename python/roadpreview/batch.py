@@ -292,13 +292,14 @@ def read_frames(out_dir, rid: Optional[str] = None, columns: Optional[Sequence[s
     return table if columns is None else table.select(list(columns))
 
 
-def frame_rows(out_dir, rid: str, columns: Sequence[str], batch_rows: int = 256):
-    """The rows of one recording's per-frame parts in frame order, a batch at a time (constant memory)."""
+def frame_rows(out_dir, rid: str, columns: Sequence[str]):
+    """The rows of one recording's per-frame parts in frame order, a row group (128 frames) at a time."""
     import pyarrow.parquet as pq
 
     for path in sorted((Path(out_dir) / "frames" / f"recording={rid}").glob("part-*.parquet")):
-        for b in pq.ParquetFile(path).iter_batches(batch_size=batch_rows, columns=list(columns)):
-            yield from b.to_pylist()
+        parts = pq.ParquetFile(path)
+        for group in range(parts.num_row_groups):  # iter_batches buffers far ahead: 0.3 GB for 5,000 frames
+            yield from parts.read_row_group(group, columns=list(columns)).to_pylist()
 
 
 class Summary:
