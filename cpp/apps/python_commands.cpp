@@ -16,8 +16,8 @@ constexpr const char* kPythonCli = "roadpreview-drives";
 
 bool is_bag(const std::string& arg) {
     namespace fs = std::filesystem;
-    for (const char* suffix : {".bag", ".mcap", ".db3"})
-        if (arg.size() > std::strlen(suffix) && arg.compare(arg.size() - std::strlen(suffix), std::string::npos, suffix) == 0)
+    for (const std::string suffix : {".bag", ".mcap", ".db3"})
+        if (arg.size() > suffix.size() && arg.compare(arg.size() - suffix.size(), std::string::npos, suffix) == 0)
             return true;
     std::error_code ec;
     return fs::is_directory(arg, ec) && fs::is_regular_file(fs::path(arg) / "metadata.yaml", ec);

@@ -4,6 +4,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <utility>
+
 #include "roadpreview/roadpreview.hpp"
 
 namespace py = pybind11;
@@ -30,19 +32,23 @@ void bind_ouster_packets(py::module_& m) {
     py::class_<OusterPacketDecoder>(m, "OusterPacketDecoder",
                                     "Ouster lidar and IMU packets (bytes) → frames, with the sensor's metadata JSON")
         .def(py::init([](const std::string& metadata_json, const std::string& source) {
-                 return OusterPacketDecoder{rp::OusterDecoder(rp::parse_ouster_metadata(metadata_json, source)), source};
+                 rp::OusterMetadata meta = rp::parse_ouster_metadata(metadata_json, source);
+                 return OusterPacketDecoder{rp::OusterDecoder(std::move(meta)), source};
              }),
              py::arg("metadata_json"), py::arg("source"))
         .def("add_packet", [](OusterPacketDecoder& d, const py::bytes& packet, double capture_time) {
             const std::string_view b = bytes_of(packet);
-            return d.named(d.decoder.add_packet(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), capture_time));
-        }, py::arg("packet"), py::arg("capture_time"), "Adds a lidar packet; returns the previous frame when this one starts a new frame")
+            const auto* data = reinterpret_cast<const std::uint8_t*>(b.data());
+            return d.named(d.decoder.add_packet(data, b.size(), capture_time));
+        }, py::arg("packet"), py::arg("capture_time"),
+           "Adds a lidar packet; returns the previous frame when this one starts a new frame")
         .def("add_imu", [](OusterPacketDecoder& d, const py::bytes& packet, double capture_time) {
             const std::string_view b = bytes_of(packet);
-            d.decoder.add_imu(rp::decode_ouster_imu(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), capture_time,
-                                                    d.decoder.metadata().imu_to_sensor));
+            const auto* data = reinterpret_cast<const std::uint8_t*>(b.data());
+            d.decoder.add_imu(rp::decode_ouster_imu(data, b.size(), capture_time, d.decoder.metadata().imu_to_sensor));
         }, py::arg("packet"), py::arg("capture_time"))
-        .def("finish", [](OusterPacketDecoder& d) { return d.named(d.decoder.finish()); }, "The frame being assembled, if any")
+        .def("finish", [](OusterPacketDecoder& d) { return d.named(d.decoder.finish()); },
+             "The frame being assembled, if any")
         .def_property_readonly("info", [](const OusterPacketDecoder& d) {
             const rp::OusterMetadata& meta = d.decoder.metadata();
             py::dict info;

@@ -50,7 +50,8 @@ def odometry_msg(t_s, speed, yaw_rate):
                                        orientation=M["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0))
     twist = M["geometry_msgs/msg/Twist"](linear=vec(x=speed), angular=vec(z=yaw_rate))
     return M["nav_msgs/msg/Odometry"](header=header(t_s), child_frame_id="base_link",
-                                      pose=M["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                                      pose=M["geometry_msgs/msg/PoseWithCovariance"](pose=pose,
+                                                                                      covariance=np.zeros(36)),
                                       twist=M["geometry_msgs/msg/TwistWithCovariance"](twist=twist,
                                                                                         covariance=np.zeros(36)))
 
@@ -97,7 +98,8 @@ def write_bag(path, messages, ros2=False):
 
 def some_points(n=60, seed=0):
     rng = np.random.default_rng(seed)
-    pts = np.column_stack((rng.uniform(2, 30, n), rng.uniform(-5, 5, n), rng.uniform(-2, 0, n), rng.integers(0, 256, n)))
+    pts = np.column_stack((rng.uniform(2, 30, n), rng.uniform(-5, 5, n), rng.uniform(-2, 0, n),
+                           rng.integers(0, 256, n)))
     return np.round(pts, 3).astype(np.float32)
 
 
@@ -134,7 +136,8 @@ def test_a_bag_streams_frames_with_header_stamps_and_runs_the_pipeline(tmp_path,
     assert [f.timestamp for f in got] == pytest.approx([100.0, 100.1, 100.2])  # header stamps, not record times
     assert [f.points.shape for f in got] == [(500, 4)] * 3
     if ros2:  # the bag's .mcap file alone (no metadata.yaml) reads the same
-        assert [f.timestamp for f in drive.open_source(next(path.glob("*.mcap")))] == pytest.approx([100.0, 100.1, 100.2])
+        mcap = next(path.glob("*.mcap"))
+        assert [f.timestamp for f in drive.open_source(mcap)] == pytest.approx([100.0, 100.1, 100.2])
     results = list(drive.run(path, rp.Config(sensor_height=1.8), motion=(5.0, 0.0)))
     assert [r.timestamp for r in results] == pytest.approx([100.0, 100.1, 100.2])
 
