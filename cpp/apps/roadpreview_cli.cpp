@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include "live_commands.hpp"
+#include "python_commands.hpp"
 #include "range_commands.hpp"
 #include "roadside_commands.hpp"  // roadside perception (its own library)
 #include "roadpreview/roadpreview.hpp"
@@ -548,6 +549,7 @@ void add_source_options(CLI::App* cmd, rp::SourceOptions& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    if (const auto status = delegate_to_python(argc, argv)) return *status;
     CLI::App app{"roadpreview: road height profiles and ISO 8608 roughness ahead of the wheels, from LiDAR"};
     app.set_version_flag("--version", std::string("roadpreview ") + rp::kVersion);
     app.require_subcommand(1);

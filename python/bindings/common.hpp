@@ -27,6 +27,7 @@ void bind_calibration(py::module_& m);  // calibration.cpp
 void bind_range_sensor(py::module_& m);  // range_sensor.cpp
 void bind_drive(py::module_& m);      // drive.cpp
 void bind_roadside(py::module_& m);   // roadside.cpp
+void bind_ouster_packets(py::module_& m);  // ouster_packets.cpp
 
 // A 1-D (or any) float64 array, converted once when the caller passes another dtype or layout.
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;

@@ -23,6 +23,7 @@ PYBIND11_MODULE(_core, m) {
     bind_range_sensor(m);
     bind_drive(m);
     bind_roadside(m);
+    bind_ouster_packets(m);
     m.def("read_frame", [](const std::string& path, int columns) {
         rp::Frame f = rp::read_frame(path, columns);
         auto owner = std::make_unique<rp::PointMatrix>(std::move(f.points));

@@ -20,9 +20,10 @@ from .metrics import Repeatability, repeatability, world_profile
 
 if native_available():
     from . import io, range_sensor, roadside
+    from . import batch, drive, geo, io_bags, odometry  # drives: bags, odometry, batches, maps (their deps lazily)
     from ._core import BeamCalibration, CalibrationError
     from .calibration import calibrate_beams
-    from .drive import Drive, run
+    from .drive_runner import Drive, run
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
@@ -38,4 +39,5 @@ __all__ = [
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
     "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive", "roadside",
+    "drive", "io_bags", "odometry", "batch", "geo",
 ]

@@ -1,89 +1,69 @@
-"""rp.run: a recording through the C++ DriveRunner gives the CLI's output lines, frame for frame (docs/method.md,
-"Drives"): motion from a table, the IMU or the options, the mounting from the first frame, frame ranges, poses."""
+# SPDX-License-Identifier: BSD-3-Clause
+"""rp.drive.run: a recording frame by frame as `roadpreview run` processes it (same output lines), and its
+motion table and poses inputs."""
 
 import json
-import warnings
 
 import pytest
 
 import roadpreview as rp
-
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_PCAP
-from paths import run_cli as run
-
-
-def cli_lines(*args):
-    return [json.loads(line) for line in run("run", *args, "-q").stdout.splitlines()]
+from roadpreview import drive
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, run_cli
 
 
-def same_lines(results, lines):
-    got = [r.to_dict() for r in results]
-    assert len(got) == len(lines) > 0
-    for d in got + lines:  # times differ from run to run
-        d.pop("timing_ms")
-        if d.get("fusion"):
-            d["fusion"].pop("time_ms")
-    assert got == lines
+def lines_without_timing(lines):
+    """The lines without what differs from run to run: the stage timings and the fusion's time."""
+    out = []
+    for line in lines:
+        line = {k: v for k, v in line.items() if k != "timing_ms"}
+        if line.get("fusion"):
+            line["fusion"] = {k: v for k, v in line["fusion"].items() if k != "time_ms"}
+        out.append(line)
+    return out
 
 
-def test_a_pcap_with_an_estimated_mounting_and_its_imu_gives_the_cli_lines():
-    drive = rp.run(OS1_128_PCAP, speed=2.5)
-    same_lines(drive, cli_lines(OS1_128_PCAP, "--speed", 2.5))
-    assert any("mounting estimated" in note for note in drive.notes)
-    assert drive.config.extrinsics is not None and drive.frames_read == 3
+def cli_lines(tmp_path, *args):
+    run_cli("run", *args, "-q", "-o", tmp_path / "cli.jsonl")
+    return lines_without_timing(json.loads(x) for x in (tmp_path / "cli.jsonl").read_text().splitlines())
 
 
-def test_files_with_a_motion_table_a_frame_rate_and_a_range_give_the_cli_lines(tmp_path):
+def test_a_pcap_with_imu_yaw_rate_gives_the_cli_lines(tmp_path):
+    cli = cli_lines(tmp_path, OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5)
+    mine = [r.to_dict() for r in drive.run(OS1_128_PCAP, rp.Config(sensor_height=OS1_128_HEIGHT), motion=(2.5, None))]
+    assert lines_without_timing(mine) == cli
+
+
+def test_frame_files_with_a_frame_rate_motion_table_poses_and_fusion_give_the_cli_lines(tmp_path):
+    frames = [p for p in KITTI_FRAMES if p.name.startswith("0000")]
     motion = tmp_path / "motion.csv"
-    motion.write_text("t,speed,yaw_rate\n0.0,4.0,0.0\n1.0,6.0,0.2\n")
-    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
-    results = list(rp.run(KITTI_FRAMES[:4], cfg, motion=motion, frame_rate=10, frames=(1, 3)))
-    same_lines(results, cli_lines(*KITTI_FRAMES[:4], "--motion", motion, "--frame-rate", 10, "--frames", "1:3",
-                                  "--sensor-height", KITTI_SENSOR_HEIGHT))
-    assert [r.timestamp for r in results] == pytest.approx([0.1, 0.2])
-
-
-def test_fused_with_poses_gives_the_cli_lines(tmp_path):
+    motion.write_text("t,speed,yaw_rate\n0,8.0,0.01\n1,9.0,0.03\n")
     poses = tmp_path / "poses.txt"
-    poses.write_text("".join(f"1 0 0 {0.8 * i} 0 1 0 0 0 0 1 0\n" for i in range(3)))
-    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
-    cfg.fusion.method = "kalman"
-    results = list(rp.run(KITTI_FRAMES[:3], cfg, speed=8.0, yaw_rate=0.0, poses=poses))
-    same_lines(results, cli_lines(*KITTI_FRAMES[:3], "--speed", 8, "--yaw-rate", 0, "--poses", poses,
-                                  "--fusion", "kalman", "--sensor-height", KITTI_SENSOR_HEIGHT))
-    assert [r.to_dict()["fusion"]["frames"] for r in results] == [1, 2, 3]
+    poses.write_text("".join(f"1 0 0 {0.86 * k} 0 1 0 0 0 0 1 0\n" for k in range(3)))
+    cli = cli_lines(tmp_path, *frames, "--sensor-height", KITTI_SENSOR_HEIGHT, "--motion", motion, "--frame-rate", 10,
+                    "--fusion", "ema", "--poses", poses, "--frames", "1:")
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, fusion={"method": "ema", "frame_rate_hz": 10.0})
+    mine = [r.to_dict() for r in drive.run([str(f) for f in frames], cfg, motion=str(motion), poses=str(poses),
+                                           frames=(1, None), frame_rate=10.0)]
+    assert lines_without_timing(mine) == cli
+    assert [x["motion"]["speed"] for x in cli] == pytest.approx([8.1, 8.2])
 
 
-def test_a_source_from_rp_io_open_is_run_as_it_is():
-    frames = rp.io.open(OS1_128_PCAP)
-    drive = rp.run(frames, rp.Config(sensor_height=1.97), speed=2.5, frames=(0, 1))
-    assert len(list(drive)) == 1 and drive.frame.source == str(OS1_128_PCAP)
-
-
-def test_a_given_mounting_far_from_the_ground_warns_once():
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        drive = rp.run(OS1_128_PCAP, rp.Config(sensor_height=1.0), speed=2.5)
-        list(drive)
-    messages = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
-    assert len(messages) == 1 and "the fitted ground is" in messages[0]
-    assert drive.mounting_disagreements == 3
-
-
-@pytest.mark.parametrize("kwargs, message", [
-    ({}, "give the vehicle's motion"),
-    ({"speed": 2.0, "poses": "poses.txt"}, "fusion"),
-    ({"speed": float("nan")}, "speed must be finite"),
-    ({"speed": 2.0, "frames": (2, 1)}, "frame range"),
-])
-def test_missing_or_contradicting_options_are_value_errors(kwargs, message, tmp_path):
-    if "poses" in kwargs:
-        kwargs["poses"] = tmp_path / "poses.txt"
-        kwargs["poses"].write_text("1 0 0 0 0 1 0 0 0 0 1 0\n")
-    with pytest.raises(ValueError, match=message):
-        rp.run(KITTI_FRAMES[:1], **kwargs)
-
-
-def test_a_missing_file_names_it():
-    with pytest.raises(RuntimeError, match="no_such.pcap"):
-        list(rp.run("no_such.pcap", speed=1.0))
+def test_bad_motion_and_poses_are_refused_naming_the_file(tmp_path):
+    bad = tmp_path / "m.csv"
+    bad.write_text("time,v\n0,1\n")
+    with pytest.raises(RuntimeError, match="m.csv: the motion table needs the header t,speed,yaw_rate"):
+        drive.MotionTable.read_csv(bad)
+    bad.write_text("t,speed,yaw_rate\n1,5,0\n0,5,0\n")
+    with pytest.raises(RuntimeError, match="m.csv: the motion table's times must increase"):
+        drive.MotionTable.read_csv(bad)
+    poses = tmp_path / "p.txt"
+    poses.write_text("1 0 0 0 0 1 0 0 0 0 1\n")
+    with pytest.raises(RuntimeError, match="p.txt:1: a pose needs 12 finite numbers"):
+        drive.read_kitti_poses(poses)
+    with pytest.raises(ValueError, match="give the vehicle's motion"):
+        next(drive.run(OS1_128_PCAP))
+    with pytest.raises(RuntimeError, match="no pose for frame 1"):
+        list(drive.run(OS1_128_PCAP, rp.Config(sensor_height=1.97), motion=(2.5, 0.0),
+                       poses=[(0.0, 0.0, 0.0)]))
+    with pytest.raises(ValueError, match="--topic applies to ROS bags and MCAP files only"):
+        drive.open_source(OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap", topic="/points")

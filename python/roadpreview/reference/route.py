@@ -170,8 +170,8 @@ class Route:
 
 
 def _part(p: Stitched, j0: int, j1: int):
-    """(z, count, spread) of bins [j0, j1), missing beyond the profile's end."""
-    pad = max(0, j1 - len(p.z))
+    """(z, count, spread) of bins [j0, j1), missing beyond the profile's end (which may lie before j0)."""
+    pad = (j1 - j0) - len(p.z[j0:j1])
     return (np.concatenate((p.z[j0:j1], np.full(pad, np.nan))),
             np.concatenate((p.count[j0:j1], np.zeros(pad, np.int64))),
             np.concatenate((p.spread[j0:j1], np.full(pad, np.nan))))

@@ -1,0 +1,182 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""roadpreview batch on Dask: speedup of 2 workers over 1, and a worker's memory over a long drive.
+
+Speedup: ``--recordings`` recordings (default 20) of ``--frames`` frames each (default 20; KITTI seq 00 frames
+0-2 of tests/data repeated under consecutive names, so every frame is a real 124k-point HDL-64E scan), run by
+``rp.batch.run_batch`` on a LocalCluster of 1 and of 2 single-threaded worker processes (cluster start and
+one warm-up task outside the timing), ``--repeat`` times each; the table gives the median wall time, the
+workers' CPU time, frames/s and the speedup (median wall 1 worker / median wall 2 workers). Target ≥ 1.8×.
+
+Memory: one recording of ``--long-frames`` frames (default 10,000) on one worker, unsplit (``chunk_frames=0``,
+as a pcap or bag is run), the worker's RSS sampled every 0.5 s; the table gives RSS at 10 %, 50 % and 100 % of
+the run and the spread after the first 10 % (target: within 10 %), after a 3-frame warm-up batch on the same
+worker (module imports are a one-off, not growth). Also the single-worker throughput, which
+docs/scale.md turns into a cost per hour of driving.
+
+Usage: ``python bench/batch.py [--recordings N] [--frames N] [--repeat N] [--long-frames N] [--quick]
+[--skip-speedup | --skip-memory]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+FRAMES = sorted((REPO / "tests" / "data" / "semantickitti").glob("00000[0-2].bin"))
+RUN = {"config": {"sensor_height": 1.73}, "motion": (8.6, None), "frame_rate": 10.0}
+
+
+def make_recording(folder: Path, frames: int) -> str:
+    folder.mkdir(parents=True)
+    for k in range(frames):
+        (folder / f"{k:06d}.bin").symlink_to(FRAMES[k % len(FRAMES)])
+    return str(folder)
+
+
+def worker_pids(client) -> list[int]:
+    return list(client.run(os.getpid).values())
+
+
+def cpu_seconds(pids) -> float:
+    import psutil
+
+    total = 0.0
+    for pid in pids:
+        t = psutil.Process(pid).cpu_times()
+        total += t.user + t.system
+    return total
+
+
+def cluster(workers: int):
+    from distributed import Client, LocalCluster
+
+    c = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    client = Client(c)
+    client.run(lambda: __import__("roadpreview.batch"))  # imports outside the timing
+    return c, client
+
+
+def time_batches(workers: int, inputs: list[str], repeat: int, tmp: Path) -> tuple[list[float], list[float]]:
+    from roadpreview import batch
+
+    c, client = cluster(workers)
+    walls, cpus = [], []
+    try:
+        batch.run_batch(inputs[:workers], tmp / f"warm{workers}", client=client, quiet=True, **RUN)  # warm-up
+        for k in range(repeat):
+            pids = worker_pids(client)
+            cpu0, t0 = cpu_seconds(pids), time.perf_counter()
+            report = batch.run_batch(inputs, tmp / f"out{workers}-{k}", client=client, quiet=True, **RUN)
+            walls.append(time.perf_counter() - t0)
+            cpus.append(cpu_seconds(pids) - cpu0)
+            assert not report["failed"], report
+            print(f"  {workers} worker(s), run {k + 1}: {walls[-1]:.1f} s", file=sys.stderr)
+    finally:
+        client.close()
+        c.close()
+    return walls, cpus
+
+
+def speedup_table(args, tmp: Path) -> str:
+    inputs = [make_recording(tmp / "in" / f"r{k:02d}", args.frames) for k in range(args.recordings)]
+    total = args.recordings * args.frames
+    load0 = os.getloadavg()[0]
+    rows, medians = [], {}
+    for workers in (1, 2):
+        walls, cpus = time_batches(workers, inputs, args.repeat, tmp)
+        medians[workers] = statistics.median(walls)
+        rows.append(f"| {workers} | {args.recordings} × {args.frames} | {medians[workers]:.1f} "
+                    f"({min(walls):.1f}–{max(walls):.1f}) | {statistics.median(cpus):.1f} | "
+                    f"{total / medians[workers]:.1f} |")
+    speedup = medians[1] / medians[2]
+    head = ["| workers | recordings × frames | wall s, median (min–max) | workers' CPU s | frames/s |",
+            "|---|---|---|---|---|"]
+    return "\n".join(head + rows) + (f"\n\nSpeedup 2 workers vs 1: **{speedup:.2f}×** (target ≥ 1.8×: "
+                                     f"{'met' if speedup >= 1.8 else 'not met'}); 1-min load "
+                                     f"{load0:.1f} before, {os.getloadavg()[0]:.1f} after.\n")
+
+
+def memory_table(args, tmp: Path) -> str:
+    import psutil
+
+    from roadpreview import batch
+
+    drive = make_recording(tmp / "long" / "drive", args.long_frames)
+    c, client = cluster(1)
+    (pid,) = worker_pids(client)
+    # warm-up: a 3-frame batch imports every module a task and a summary use, so the samples show growth only
+    batch.run_batch([make_recording(tmp / "long" / "warm", 3)], tmp / "long-warm", client=client, quiet=True, **RUN)
+    samples, done = [], threading.Event()
+
+    def sample():
+        proc = psutil.Process(pid)
+        while not done.is_set():
+            samples.append((time.perf_counter(), proc.memory_info().rss / 2**20))
+            if len(samples) % 60 == 0:  # every 30 s, to stderr: the trace of a long run
+                print(f"  {samples[-1][0] - t0:.0f} s: worker RSS {samples[-1][1]:.0f} MB", file=sys.stderr, flush=True)
+            done.wait(0.5)
+
+    try:
+        idle = psutil.Process(pid).memory_info().rss / 2**20
+        thread = threading.Thread(target=sample)
+        t0 = time.perf_counter()
+        thread.start()
+        report = batch.run_batch([drive], tmp / "long-out", client=client, quiet=True, chunk_frames=0, **RUN)
+        wall = time.perf_counter() - t0
+        done.set()
+        thread.join()
+        cpu = cpu_seconds([pid])
+    finally:
+        client.close()
+        c.close()
+    assert not report["failed"], report
+
+    def at(fraction):
+        t = t0 + fraction * wall
+        return min(samples, key=lambda s: abs(s[0] - t))[1]
+
+    steady = [r for t, r in samples if t >= t0 + 0.1 * wall]
+    spread = 100.0 * (max(steady) - min(steady)) / min(steady)
+    head = ["| frames | wall s | frames/s (wall) | worker CPU s | frames/s per CPU s | RSS MB warmed up | at 10 % | "
+            "at 50 % | at 100 % | spread after 10 % | met |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    row = (f"| {args.long_frames:,} | {wall:.0f} | {args.long_frames / wall:.1f} | {cpu:.0f} | "
+           f"{args.long_frames / cpu:.1f} | {idle:.0f} | {at(0.1):.0f} | {at(0.5):.0f} | {at(1.0):.0f} | "
+           f"{spread:.1f} % | {'yes' if spread <= 10 else 'no'} |")
+    return "\n".join(head + [row]) + f"\n\n1-min load at the end {os.getloadavg()[0]:.1f}.\n"
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--recordings", type=int, default=20)
+    p.add_argument("--frames", type=int, default=20)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--long-frames", type=int, default=10_000)
+    p.add_argument("--quick", action="store_true", help="4 recordings × 3 frames, 1 run, a 60-frame drive")
+    p.add_argument("--skip-memory", action="store_true")
+    p.add_argument("--skip-speedup", action="store_true")
+    args = p.parse_args()
+    if args.quick:
+        args.recordings, args.frames, args.repeat, args.long_frames = 4, 3, 1, 60
+    tmp = Path(tempfile.mkdtemp(prefix="rp-bench-batch-"))
+    try:
+        if not args.skip_speedup:
+            print(f"## Speedup ({os.cpu_count()} cores)\n")
+            print(speedup_table(args, tmp))
+        if not args.skip_memory:
+            print("## Worker memory over a long drive\n")
+            print(memory_table(args, tmp))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,90 @@
+"""Drives, not frames: ``rp.run`` turns a recording into per-frame results with the policy ``roadpreview run``
+follows (the C++ ``DriveRunner``; docs/method.md, "Drives")."""
+
+from __future__ import annotations
+
+import os
+from typing import Iterator, Optional, Sequence, Union
+
+from ._native import core
+from .config import Config
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class Drive:
+    """Iterates a recording's results (``roadpreview.Result``), one frame at a time with constant memory.
+
+    ``.notes``: what the run told the user so far (e.g. the mounting estimated from the first frame; warnings are
+    also issued as RuntimeWarning). ``.config``: the config in force (with an estimated mounting once the first
+    frame gave it). ``.frame``: the frame of the last result. ``.mounting_disagreements``: frames whose ground
+    disagreed with the given mounting.
+    """
+
+    def __init__(self, source, runner):
+        self._source = source  # kept alive: the runner reads from it
+        self._runner = runner
+        self.notes: list[str] = []
+        self.frame = None
+
+    def __iter__(self) -> Iterator:
+        return self
+
+    def __next__(self):
+        step = self._runner.next(self.notes)
+        if step is None:
+            raise StopIteration
+        self.frame, result = step
+        return result
+
+    @property
+    def config(self) -> Config:
+        import json
+
+        return Config.from_dict(json.loads(self._runner.config_json))
+
+    @property
+    def mounting_disagreements(self) -> int:
+        return self._runner.mounting_disagreements
+
+    @property
+    def frames_read(self) -> int:
+        """Frames read from the recording so far, those skipped by ``frames`` included."""
+        return self._runner.frames_read
+
+
+def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Config] = None, *,
+        motion: Optional[PathLike] = None, poses: Optional[PathLike] = None, speed: Optional[float] = None,
+        yaw_rate: Optional[float] = None, frame_rate: float = 0.0,
+        frames: Optional[tuple[int, Optional[int]]] = None, **source_options) -> Drive:
+    """The results of a recording's frames, as ``roadpreview run`` computes them.
+
+    inputs: what :func:`roadpreview.io.open` reads (pcaps, frame files, directories), with ``source_options``
+    passed to it, or a source it (or ``rp.io.open_stereo``) returned. config: ``roadpreview.Config``.
+    Motion per frame (m/s, rad/s): ``motion`` (CSV t,speed,yaw_rate looked up at each frame's time) wins over
+    ``yaw_rate``, which wins over the recording's IMU, which wins over 0; ``speed`` is needed without ``motion``.
+    ``poses``: a KITTI poses file, one per frame, moving the fusion map (needs ``config.fusion.method``).
+    ``frame_rate``: Hz, timestamps index / rate for frames without their own. ``frames``: (first, last) indices,
+    last excluded (None: to the end). Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
+    mounting. A file frame that does not continue the previous file's sequence resets the fusion map.
+    Bad input raises ValueError (options) or RuntimeError naming the file.
+    """
+    cfg = config if config is not None else Config()
+    if not isinstance(cfg, Config):
+        raise TypeError(f"config must be a roadpreview.Config, got {type(cfg).__name__}")
+    first, last = frames if frames is not None else (0, None)
+    source = inputs if isinstance(inputs, core().FrameSource) else _open(inputs, source_options)
+    runner = core().DriveRunner(source, cfg.to_json(), None if speed is None else float(speed),
+                                None if yaw_rate is None else float(yaw_rate), _path(motion), _path(poses),
+                                float(frame_rate), int(first), 2**63 - 1 if last is None else int(last))
+    return Drive(source, runner)
+
+
+def _open(inputs, source_options: dict):
+    from . import io
+
+    return io.open(inputs, **source_options)
+
+
+def _path(p: Optional[PathLike]) -> str:
+    return os.fspath(p) if p is not None else ""

@@ -1,0 +1,143 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""``roadpreview-drives``: the commands of the Python package, reached through the ``roadpreview`` CLI.
+
+    roadpreview batch INPUTS... -o OUT_DIR [--workers N | --scheduler ADDRESS] [--resume] [run options]
+    roadpreview run DRIVE.bag [--topic T] (--speed V | --motion CSV | --motion-from lidar|bag) [-o OUT.jsonl]
+    roadpreview run DRIVE.pcap --motion-from lidar [--poses-out POSES.txt] [--motion-out MOTION.csv] ...
+    roadpreview info DRIVE.bag                  topics, message types and counts; the sensor of the chosen topic
+    roadpreview-drives odometry INPUT... -o POSES.txt [--motion-out MOTION.csv] [--reference POSES_KITTI.txt]
+
+The C++ ``roadpreview`` executable hands ``batch``, and ``run`` / ``info`` of bags or with ``--topic`` /
+``--motion-from``, to this entry point unchanged.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Optional, Sequence
+
+from . import batch, drive
+
+
+def _run_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="roadpreview run", description="One recording (a bag, or any input with "
+                                "--motion-from) to JSON lines, one per frame")
+    p.add_argument("inputs", nargs="+", metavar="INPUT")
+    batch.add_run_options(p)
+    p.add_argument("--frames", default="", help="frames A:B (0-based, B excluded)")
+    p.add_argument("--poses-out", help="--motion-from lidar: the odometry's KITTI poses file")
+    p.add_argument("--motion-out", help="--motion-from lidar: the odometry's t,speed,yaw_rate CSV")
+    p.add_argument("-o", "--output", help="output JSON-lines file (default stdout)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no per-frame progress on stderr")
+    return p
+
+
+def _frames(text: str) -> tuple[int, Optional[int]]:
+    if not text:
+        return 0, None
+    a, _, b = text.partition(":")
+    try:
+        first, last = int(a or 0), (int(b) if b else None) if ":" in text else int(a) + 1
+    except ValueError:
+        raise ValueError(f"--frames {text}: expected A, A:B, A: or :B") from None
+    if first < 0 or (last is not None and last <= first):
+        raise ValueError(f"--frames {text}: expected 0 <= A < B")
+    return first, last
+
+
+def run(argv: Sequence[str]) -> int:
+    from .config import Config
+
+    args = _run_parser().parse_args(argv)
+    opts = batch.run_options_from(args)
+    cfg = Config.from_dict(opts.pop("config"))
+    kind = opts.pop("motion_from", None)
+    if kind == "lidar":
+        from . import odometry
+
+        source = {k: v for k, v in opts.items() if k in ("topic", "meta")}
+        odo = odometry.estimate(args.inputs, cfg, frame_rate=args.frame_rate or 10.0, quiet=args.quiet, **source)
+        odo.write(args.poses_out, args.motion_out)
+        opts["motion"] = odo.motion_table(f"{args.inputs[0]}: lidar odometry")
+        if cfg.fusion.method != "none":
+            opts["poses"] = odo.planar()
+    elif kind == "bag":
+        from . import io_bags
+
+        speed = opts["motion"][0] if isinstance(opts.get("motion"), tuple) else None
+        opts["motion"] = io_bags.motion_table(args.inputs, speed_mps=speed)
+    out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
+    frames = 0
+    try:
+        for res in drive.run(args.inputs, cfg, frames=_frames(args.frames), **opts):
+            out.write(res.to_json() + "\n")
+            frames += 1
+            if not args.quiet:
+                print(f"[{frames}] {res!r}", file=sys.stderr)
+    finally:
+        if out is not sys.stdout:
+            out.close()
+    if not frames:
+        raise RuntimeError(f"{args.inputs[0]}: no frames in the input; nothing was written")
+    print(f"roadpreview: {frames} frame(s)", file=sys.stderr)
+    return 0
+
+
+def info(argv: Sequence[str]) -> int:
+    p = argparse.ArgumentParser(prog="roadpreview info", description="Topics of a ROS bag or MCAP file")
+    p.add_argument("inputs", nargs="+", metavar="INPUT")
+    p.add_argument("--topic", help="the point-cloud or packet topic to describe")
+    args = p.parse_args(argv)
+    from . import io_bags
+
+    for entry in io_bags.topics(args.inputs):
+        print(f"{entry['topic']}\t{entry['type']}\t{entry['messages']} messages")
+    src = drive.open_source(args.inputs, topic=args.topic)
+    shown = {k: v for k, v in src.info.items() if k != "topics" and v not in ("", 0, [], None)}
+    print(json.dumps(shown))
+    return 0
+
+
+def odometry_command(argv: Sequence[str]) -> int:
+    from . import odometry
+    from .config import Config
+
+    p = argparse.ArgumentParser(prog="roadpreview-drives odometry", description=odometry.__doc__.split("\n\n")[0])
+    p.add_argument("inputs", nargs="+", metavar="INPUT")
+    p.add_argument("-o", "--output", required=True, help="KITTI poses file to write (base frame)")
+    p.add_argument("--motion-out", help="t,speed,yaw_rate CSV to write")
+    p.add_argument("--reference", help="KITTI poses of the same frames: print speed error and drift")
+    p.add_argument("--sensor-height", type=float)
+    p.add_argument("--frame-rate", type=float, default=10.0)
+    p.add_argument("--topic")
+    args = p.parse_args(argv)
+    cfg = Config(sensor_height=args.sensor_height)
+    odo = odometry.estimate(args.inputs, cfg, frame_rate=args.frame_rate, topic=args.topic)
+    odo.write(args.output, args.motion_out)
+    if args.reference:
+        print(json.dumps(odometry.compare(odo.poses, odometry.read_kitti_matrices(args.reference), odo.times_s)))
+    return 0
+
+
+COMMANDS = {"batch": batch.main, "run": run, "info": info, "odometry": odometry_command}
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] not in COMMANDS:
+        print(f"usage: roadpreview-drives {{{','.join(COMMANDS)}}} ...", file=sys.stderr)
+        return 2
+    command, rest = argv[0], argv[1:]
+    if command == "batch":
+        return batch.main(rest)
+    try:
+        return COMMANDS[command](rest)
+    except (ValueError, RuntimeError, OSError) as err:
+        print(f"roadpreview: error: {err}", file=sys.stderr)
+        return 2 if isinstance(err, ValueError) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
