@@ -111,7 +111,7 @@ def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
     return z
 
 
-LEVEL_CORRIDOR_HALF_WIDTH_M = 3.0  # both wheels and a margin, not the kerbs and pavements beside the road
+LEVEL_CORRIDOR_HALF_WIDTH_M = 4.0  # both wheels and a margin, not the kerbs and pavements beside the road
 LEVEL_MIN_SPAN = 0.5  # of the band: the corridor points must span this much range to tell a grade
 
 
@@ -125,7 +125,7 @@ def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
 
 def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None) -> np.ndarray:
     """Each ground point's height above the plane of the ground points in its band ⌊r / level_band_m⌋ of horizontal
-    distance r that lie within 3 m of the vehicle's path (straight ahead without ``path``; the frame plane where
+    distance r that lie within 4 m of the vehicle's path (straight ahead without ``path``; the frame plane where
     they span less than half the band in range or their fit is degenerate), plus the frame plane's level −d
     (method.md §3)."""
     from .ground import DegenerateFit, fit_plane, height_above  # the profile builds on the ground stage's fit

@@ -43,7 +43,7 @@ Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 
 /// Half-width of the corridor about the vehicle's path whose ground points the local planes are fitted to (m):
 /// both wheels and a margin, not the kerbs and pavements beside the road (docs/method.md §3).
-constexpr double kLevelCorridorHalfWidthM = 3.0;
+constexpr double kLevelCorridorHalfWidthM = 4.0;
 /// A band's plane is fitted only when its corridor points span at least this fraction of the band in range.
 constexpr double kLevelMinSpan = 0.5;
 
