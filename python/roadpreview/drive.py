@@ -6,8 +6,9 @@
 
 The per-frame policy (motion CSV > given yaw rate > the frame's IMU > 0; timestamps from the recording, else
 index / frame rate; poses; a new file sequence clears the fusion map; the mounting from the first frame's ground
-when none is configured) is that of cpp/apps/roadpreview_cli.cpp. It will move into the C++ library's
-DriveRunner; batch, bags and odometry code call only :func:`run` and :func:`open_source`.
+when none is configured) is that of the C++ DriveRunner (cpp/src/drive/, ``rp.run``, ``roadpreview run``). This
+Python copy serves what the C++ runner cannot read yet — ROS bag frames and in-memory motion tables and poses —
+and is to be folded into it; batch, bags and odometry code call only :func:`run` and :func:`open_source`.
 """
 
 from __future__ import annotations
