@@ -39,6 +39,7 @@ def cli() -> str:
 
 
 def free_port_pair() -> int:
+    """A loopback port that is free, and its successor too (Ouster lidar and IMU)."""
     for _ in range(50):
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as a, \
                 socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as b:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import socket
 import subprocess
+import sys
 import tempfile
 import threading
 
@@ -14,22 +15,10 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
-from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, VELODYNE, cli, run_cli
+from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, REPO, VELODYNE, cli, run_cli
 
-
-def free_port_pair() -> int:
-    """A loopback port that is free, and its successor too (Ouster lidar and IMU)."""
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as a, \
-                socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as b:
-            a.bind(("127.0.0.1", 0))
-            port = a.getsockname()[1]
-            try:
-                b.bind(("127.0.0.1", port + 1))
-            except OSError:
-                continue
-            return port
-    raise RuntimeError("no free pair of loopback ports")
+sys.path.insert(0, str(REPO / "bench"))
+from live import free_port_pair  # noqa: E402  (the benchmark's loopback port pair, one definition)
 
 
 def live_frames(pcap, meta=None, **replay):
