@@ -123,7 +123,11 @@ void bind_stages(py::module_& m) {
         const rp::Levelling L = rp::levelling_for(cfg.profile.level && pl ? &*pl : nullptr);
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
         const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
-        rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile);
+        const std::vector<double> local_z = cfg.profile.level && cfg.profile.level_local && pl
+                                                ? rp::local_ground_heights(view, all, *pl, cfg.profile.level_band_m, paths)
+                                                : std::vector<double>{};
+        rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile, nullptr,
+                                                 local_z.empty() ? nullptr : &local_z);
         for (rp::Profile* p : {&w.left, &w.right}) {
             if (paths.status == rp::PathStatus::Stopped) p->roughness.reason = p->roughness.iri.reason = "vehicle stopped";
             else rp::rate_profile(*p, cfg);

@@ -344,11 +344,15 @@ def test_levelling_flattens_a_pitched_ground(impl, offset):
     xyz = points_on_plane(plane, x, y)
     path = impl.plan_path(10.0, 0.0, Config())
     levelled = impl.wheel_profile(xyz, impl.fit_plane(xyz), path, "left", 10.0, 0.0, Config())
+    one_plane = impl.wheel_profile(xyz, impl.fit_plane(xyz), path, "left", 10.0, 0.0,
+                                   Config(profile={"level_local": False}))
     raw = impl.wheel_profile(xyz, plane, path, "left", 10.0, 0.0, Config(profile={"level": False}))
     valid = ~np.isnan(levelled.z)
     assert valid.sum() > 380
-    # The plane becomes z' = −d; 1 µm leaves room for float32 point storage (§3 does not demand doubles).
-    np.testing.assert_allclose(levelled.z[valid], -plane[3], atol=1e-6)
+    # Levelled locally the road reads 0 (its height above its band's plane); with one plane, the plane becomes
+    # z' = −d. 1 µm leaves room for float32 point storage (§3 does not demand doubles).
+    np.testing.assert_allclose(levelled.z[valid], 0.0, atol=1e-6)
+    np.testing.assert_allclose(one_plane.z[valid], -plane[3], atol=1e-6)
     slope = np.polyfit(raw.s[~np.isnan(raw.z)], raw.z[~np.isnan(raw.z)], 1)[0]
     assert slope == pytest.approx(math.tan(pitch), rel=1e-3)
     assert levelled.roughness.iso_class == "A"  # the profile comes with its roughness: flat is class A

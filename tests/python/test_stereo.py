@@ -199,10 +199,7 @@ def test_real_kitti_pair_agrees_with_its_lidar_scan():
     sys.path.insert(0, str(REPO / "bench"))
     from stereo import BANDS_M, real_pair
 
-    # One PCA plane, as measured for the README's stereo table. With the defaults (zone ground, local levelling)
-    # the stereo profiles differ from the LiDAR's by 11 cm RMS on this pair: an open defect of those two stages on
-    # stereo clouds (README, Stereo cameras), not of the stereo source this test checks.
-    pair = real_pair(PAIR, ground={"method": "pca"}, profile={"level_local": False})
+    pair = real_pair(PAIR)  # the defaults: zone ground, local levelling
     stereo, lidar = pair["stereo"], pair["lidar"]
     assert len(pair["found"].points) > 100000
     assert stereo.plane is not None and lidar.plane is not None
@@ -212,7 +209,9 @@ def test_real_kitti_pair_agrees_with_its_lidar_scan():
         both = (np.asarray(a.count) > 0) & (np.asarray(b.count) > 0) & (s >= BANDS_M[0][0]) & (s < 15)
         assert both.sum() >= 15  # the LiDAR's rings back about one bin in three there
         diff = np.asarray(a.z)[both] - np.asarray(b.z)[both]
-        assert np.sqrt(np.mean(diff ** 2)) < 0.04  # 5–15 m: within 4 cm RMS of the LiDAR (measured 1.2–2.4 cm)
+        # 5–15 m: within 5 cm RMS of the LiDAR (measured 2.0 / 3.8 cm; 11–12 cm while the zone root leaned through
+        # a parked car and the local heights carried each sensor's frame-plane offset, docs/method.md §1, §3)
+        assert np.sqrt(np.mean(diff ** 2)) < 0.05
 
 
 # ------------------------------------------------------------------------------------------- CLI

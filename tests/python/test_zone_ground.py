@@ -60,6 +60,15 @@ def canopy_scene():
     return with_extra(road, roof)
 
 
+def car_beside_a_camera():
+    """A camera's view: the road from 6 m on, and the side of a car 2 m to the right filling the near field (a fit
+    of every point within the root's 10 m leans 10° through it: the KITTI stereo pair's case)."""
+    road = road_grid(lambda x, y: 0.0 * x, x_range=(6.0, 40.0))
+    x, z = np.meshgrid(np.arange(3.5, 5.5, 0.05), np.arange(0.4, 1.5, 0.05))
+    side = np.column_stack([x.ravel(), np.full(x.size, -2.0), z.ravel()])
+    return with_extra(road, side)
+
+
 def surface_scene(height):
     road = road_grid(height)
     return road, np.ones(len(road), dtype=bool)
@@ -72,6 +81,7 @@ SCENES = {
     "bank": lambda: surface_scene(bank),
     "wall beside the road": wall_scene,
     "overhead canopy": canopy_scene,
+    "car beside a camera": car_beside_a_camera,
 }
 
 

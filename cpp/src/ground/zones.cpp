@@ -97,8 +97,38 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
     return fit;
 }
 
+// The points the root fit starts from: the horizontal slab `pca_threshold_m` thick that holds the most of them —
+// the road, whose heights crowd together, where a car's or a wall's side spreads over metres of height. Started
+// from every point, the first fit leaned 10° through a car beside a stereo camera and kept its side as ground.
+// Heights are counted in bins a quarter of the slab thick within ±kSlabSearchM of the level (docs/method.md §1).
+std::vector<std::uint8_t> densest_slab(const std::vector<Eigen::Vector3d>& pts, double thickness_m) {
+    constexpr double kSlabSearchM = 20.0;  // a 10 m mounting plus the tilt limit over the root disc
+    constexpr int kBinsPerSlab = 4;
+    const double bin_m = thickness_m / kBinsPerSlab;
+    const auto bins = static_cast<int>(std::ceil(2.0 * kSlabSearchM / bin_m));
+    const auto bin_of = [&](double z) {
+        const double at = std::floor((z + kSlabSearchM) / bin_m);
+        return at >= 0.0 && at < bins ? static_cast<int>(at) : -1;
+    };
+    std::vector<int> count(static_cast<std::size_t>(bins) + kBinsPerSlab, 0);
+    for (const auto& p : pts)
+        if (const int b = bin_of(p.z()); b >= 0) ++count[static_cast<std::size_t>(b)];
+    int best = 0, most = -1, window = 0;  // window = points in bins [b, b + kBinsPerSlab)
+    for (int b = 0; b < kBinsPerSlab; ++b) window += count[static_cast<std::size_t>(b)];
+    for (int b = 0; b < bins; ++b) {
+        if (window > most) most = window, best = b;  // ties keep the lower slab
+        window += count[static_cast<std::size_t>(b + kBinsPerSlab)] - count[static_cast<std::size_t>(b)];
+    }
+    std::vector<std::uint8_t> in(pts.size());
+    std::transform(pts.begin(), pts.end(), in.begin(), [&](const Eigen::Vector3d& p) {
+        const int b = bin_of(p.z());
+        return b >= best && b < best + kBinsPerSlab;
+    });
+    return in;
+}
+
 // The reference of the innermost ring: the paper's fit of the points within zone_root_m (the road the vehicle
-// stands on), or the level the extrinsics give when that fails or is too steep.
+// stands on) started from their densest slab, or the level the extrinsics give when that fails or is too steep.
 Plane root_reference(PointsView points, const GroundConfig& cfg) {
     std::vector<Eigen::Vector3d> near;
     near.reserve(static_cast<std::size_t>(points.rows()));
@@ -107,7 +137,7 @@ Plane root_reference(PointsView points, const GroundConfig& cfg) {
         const Eigen::Vector3d p = row(points, i);
         if (p.x() * p.x() + p.y() * p.y() < r_sq) near.push_back(p);
     }
-    std::vector<std::uint8_t> kept(near.size(), 1);
+    std::vector<std::uint8_t> kept = densest_slab(near, cfg.pca_threshold_m);
     const auto fit = iterate_fit(near, kept, cfg);
     return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? fit->plane : kLevel;
 }

@@ -102,7 +102,7 @@ std::vector<double> local_ground_heights(PointsView points, const std::vector<st
         const auto k = band[static_cast<std::size_t>(i)];
         if (k >= 0)
             z[static_cast<std::size_t>(i)] =
-                height_above(plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2)) - frame[3];
+                height_above(plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2));
     }
     return z;
 }

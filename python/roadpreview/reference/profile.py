@@ -126,8 +126,7 @@ def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
 def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None) -> np.ndarray:
     """Each ground point's height above the plane of the ground points in its band ⌊r / level_band_m⌋ of horizontal
     distance r that lie within 4 m of the vehicle's path (straight ahead without ``path``; the frame plane where
-    they span less than half the band in range or their fit is degenerate), plus the frame plane's level −d
-    (method.md §3)."""
+    they span less than half the band in range or their fit is degenerate) (method.md §3)."""
     from .ground import DegenerateFit, fit_plane, height_above  # the profile builds on the ground stage's fit
 
     xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
@@ -143,7 +142,7 @@ def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = Non
                 local = fit_plane(xyz[mine & near])
             except DegenerateFit:
                 pass
-        z[mine] = height_above(xyz[mine], local) - plane[3]
+        z[mine] = height_above(xyz[mine], local)
     return z
 
 

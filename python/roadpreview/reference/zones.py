@@ -45,11 +45,28 @@ def _flatness_and_centre(xyz: np.ndarray) -> tuple[float, np.ndarray]:
     return math.sqrt(max(smallest, 0.0)), centre
 
 
+SLAB_SEARCH_M = 20.0  # the root's seeds lie within ±20 m of the level (a 10 m mounting plus the tilt limit)
+
+
+def densest_slab(heights: np.ndarray, thickness_m: float) -> np.ndarray:
+    """Mask of the heights in the slab `thickness_m` thick (four bins of a quarter of it, counted from
+    −SLAB_SEARCH_M) that holds the most of them; the lowest such slab on ties."""
+    bin_m = thickness_m / 4
+    bins = math.ceil(2 * SLAB_SEARCH_M / bin_m)
+    index = np.floor((heights + SLAB_SEARCH_M) / bin_m)
+    index = np.where((index >= 0) & (index < bins), index, -1).astype(np.int64)
+    count = np.bincount(index[index >= 0], minlength=bins)
+    window = np.convolve(count, np.ones(4, dtype=np.int64))[3:]  # window[b] = count[b] + … + count[b + 3]
+    best = int(np.argmax(window))
+    return (index >= best) & (index < best + 4)
+
+
 def _root_reference(xyz: np.ndarray, cfg: Config) -> np.ndarray:
-    """The innermost ring's reference: the paper's plane of the points within zone_root_m, else the level z = 0."""
+    """The innermost ring's reference: the paper's plane of the points within zone_root_m, started from their
+    densest horizontal slab (the road, not the side of a car beside it), else the level z = 0."""
     xyz = xyz[np.hypot(xyz[:, 0], xyz[:, 1]) < cfg.ground.zone_root_m]
     try:
-        plane, _, _ = paper_fit(xyz, np.ones(len(xyz), dtype=bool), cfg)
+        plane, _, _ = paper_fit(xyz, densest_slab(xyz[:, 2], cfg.ground.pca_threshold_m), cfg)
     except DegenerateFit:
         return LEVEL
     return plane if tilt_deg(plane) <= cfg.ground.max_tilt_deg else LEVEL

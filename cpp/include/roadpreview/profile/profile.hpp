@@ -54,7 +54,8 @@ double distance_from_path(const WheelPaths& paths, double x, double y);
 /// Levelling by the local ground model (docs/method.md §3): each ground point's height above the PCA plane of
 /// the ground points in its band k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²) that lie within
 /// kLevelCorridorHalfWidthM of the vehicle's path (the frame plane where they span less than kLevelMinSpan of the
-/// band in range, or their fit is degenerate), plus the frame plane's level −d. One entry per point, NaN off the ground.
+/// band in range, or their fit is degenerate): the road reads about 0 whatever the frame plane's offset. One entry
+/// per point, NaN off the ground.
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
                                          double band_m, const WheelPaths& paths);
 
