@@ -68,9 +68,9 @@ def run(inputs, config: Optional[Config] = None, motion=None, poses=None, *, fra
 
     inputs: what :func:`open_source` reads (pcaps, frame files, bags), or a frame source it returned.
     motion: a CSV path (``t,speed,yaw_rate``, interpolated at each frame's time) or a :data:`MotionTable`, or
-    ``(speed_mps, yaw_rate_rps)`` with yaw rate None for the frame's IMU (else 0). poses: a KITTI poses file or
-    a list of (x, y, yaw), one per frame of the input: each frame's pose (moving the fusion map when there is
-    one). frames: (first, last) indices, last excluded or None. frame_rate: Hz, timestamps for frames that carry
+    ``(speed_mps, yaw_rate_rps)`` with yaw rate None for the frame's IMU (else 0). poses: a list of (x, y, yaw),
+    one per frame of the input: each frame's pose, moving the fusion map when there is one, else only placing
+    the frame; or a KITTI poses file, which needs ``config.fusion.method``. frames: (first, last) indices, last excluded or None. frame_rate: Hz, timestamps for frames that carry
     none. source_options: those of ``rp.io.open``, and ``topic`` for bags. Returns a ``roadpreview.Drive``
     (an iterator; ``.notes``, ``.config``).
     """
