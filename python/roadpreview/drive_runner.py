@@ -64,8 +64,9 @@ def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Co
     ``rp.io.open_stereo``) returned. config: ``roadpreview.Config``.
     Motion per frame (m/s, rad/s): ``motion`` (a CSV t,speed,yaw_rate or an ``rp.drive.MotionTable``, looked up
     at each frame's time) wins over ``yaw_rate``, which wins over the recording's IMU, which wins over 0;
-    ``speed`` is needed without ``motion``. ``poses``: a KITTI poses file or a list of (x, y, yaw), one per frame:
-    each frame's pose, moving the fusion map when ``config.fusion.method`` is set.
+    ``speed`` is needed without ``motion``. ``poses``: one per frame, a KITTI poses file (moves the fusion map:
+    needs ``config.fusion.method``) or a list of (x, y, yaw) (moves the map when there is one, else places the
+    frames).
     ``frame_rate``: Hz, timestamps index / rate for frames without their own. ``frames``: (first, last) indices,
     last excluded (None: to the end). Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
     mounting. A file frame that does not continue the previous file's sequence resets the fusion map.
