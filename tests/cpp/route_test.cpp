@@ -131,8 +131,11 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
     const rp::StitchedProfile a = from_results.left(), b = from_lines.left();
     ASSERT_EQ(a.z.size(), b.z.size());
     for (std::size_t j = 0; j < a.z.size(); ++j) {
-        if (std::isnan(a.z[j])) EXPECT_TRUE(std::isnan(b.z[j])) << j;
-        else EXPECT_DOUBLE_EQ(a.z[j], b.z[j]) << j;
+        if (std::isnan(a.z[j])) {
+            EXPECT_TRUE(std::isnan(b.z[j])) << j;
+        } else {
+            EXPECT_DOUBLE_EQ(a.z[j], b.z[j]) << j;
+        }
     }
     EXPECT_EQ(a.count, b.count);
     EXPECT_EQ(a.frames, b.frames);
