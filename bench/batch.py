@@ -13,8 +13,12 @@ the run and the spread after the first 10 % (target: within 10 %), after a 3-fra
 worker (module imports are a one-off, not growth). Also the single-worker throughput, which
 docs/scale.md turns into a cost per hour of driving.
 
+Segments: the summary step's stitching of each recording's profiles along the drive and its 10 / 100 m segments,
+with the C++ RouteBuilder batch uses against the numpy reference Route it used before, on the same Parquet parts
+(``--recordings`` × ``--frames``, written in this process), median seconds per recording.
+
 Usage: ``python bench/batch.py [--recordings N] [--frames N] [--repeat N] [--long-frames N] [--quick]
-[--skip-speedup | --skip-memory]``
+[--skip-speedup | --skip-memory | --skip-segments]``
 """
 
 from __future__ import annotations
@@ -153,6 +157,54 @@ def memory_table(args, tmp: Path) -> str:
     return "\n".join(head + [row]) + f"\n\n1-min load at the end {os.getloadavg()[0]:.1f}.\n"
 
 
+def reference_route(out_dir: Path, rid: str):
+    """The stitching batch did before it used the C++ RouteBuilder: the numpy reference over the stored lines."""
+    import json
+
+    from roadpreview import batch
+    from roadpreview.config import Config
+    from roadpreview.reference.route import Route
+
+    route = Route(Config.from_dict(RUN["config"]))
+    for row in batch.frame_rows(out_dir, rid, ("line", "pose_x_m", "pose_y_m", "pose_yaw_rad")):
+        route.add(json.loads(row["line"]), None if row["pose_x_m"] is None else
+                  (row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"]))
+    return route
+
+
+def segments_table(args, tmp: Path) -> str:
+    from roadpreview import batch
+
+    out = tmp / "segments"
+    rids = []
+    for k in range(args.recordings):
+        rid = f"r{k:02d}"
+        recording = make_recording(tmp / "segments-in" / rid, args.frames)
+        batch.process_chunk(rid, [recording], batch.Chunk(0, 0, None, 0), dict(RUN), str(out))
+        rids.append(rid)
+    load0 = os.getloadavg()[0]
+    times = {"reference": [], "C++": []}
+    for rid in rids:
+        t0 = time.perf_counter()
+        ref_rows = batch.segment_rows(rid, reference_route(out, rid), batch.SEGMENT_LENGTHS_M)
+        t1 = time.perf_counter()
+        route, _ = batch.stitch(out, rid, RUN["config"])
+        rows = batch.segment_rows(rid, route, batch.SEGMENT_LENGTHS_M)
+        t2 = time.perf_counter()
+        classes = [r["class_vehicle"] for r in rows]
+        assert len(rows) == len(ref_rows) and classes == [r["class_vehicle"] for r in ref_rows], rid
+        times["reference"].append(t1 - t0)
+        times["C++"].append(t2 - t1)
+    ref, cpp = statistics.median(times["reference"]), statistics.median(times["C++"])
+    head = ["| stitching | recordings × frames | s per recording, median (min–max) |", "|---|---|---|"]
+    size = f"{args.recordings} × {args.frames}"
+    named = (("numpy reference Route", times["reference"]), ("C++ RouteBuilder", times["C++"]))
+    rows = [f"| {name} | {size} | {statistics.median(t):.3f} ({min(t):.3f}–{max(t):.3f}) |" for name, t in named]
+    return "\n".join(head + rows) + (f"\n\nTime per recording, reference / C++ RouteBuilder: **{ref / cpp:.1f}×** "
+                                     f"(the same segment classes); 1-min load {load0:.1f} before, "
+                                     f"{os.getloadavg()[0]:.1f} after.\n")
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--recordings", type=int, default=20)
@@ -162,6 +214,7 @@ def main() -> int:
     p.add_argument("--quick", action="store_true", help="4 recordings × 3 frames, 1 run, a 60-frame drive")
     p.add_argument("--skip-memory", action="store_true")
     p.add_argument("--skip-speedup", action="store_true")
+    p.add_argument("--skip-segments", action="store_true")
     args = p.parse_args()
     if args.quick:
         args.recordings, args.frames, args.repeat, args.long_frames = 4, 3, 1, 60
@@ -170,6 +223,9 @@ def main() -> int:
         if not args.skip_speedup:
             print(f"## Speedup ({os.cpu_count()} cores)\n")
             print(speedup_table(args, tmp))
+        if not args.skip_segments:
+            print("## Segments step: stitching a recording\n")
+            print(segments_table(args, tmp))
         if not args.skip_memory:
             print("## Worker memory over a long drive\n")
             print(memory_table(args, tmp))

@@ -26,6 +26,7 @@ void bind_io(py::module_& m);         // io.cpp
 void bind_calibration(py::module_& m);  // calibration.cpp
 void bind_range_sensor(py::module_& m);  // range_sensor.cpp
 void bind_drive(py::module_& m);      // drive.cpp
+void bind_route(py::module_& m);      // route.cpp
 void bind_roadside(py::module_& m);   // roadside.cpp
 void bind_ouster_packets(py::module_& m);  // ouster_packets.cpp
 

@@ -22,6 +22,7 @@ PYBIND11_MODULE(_core, m) {
     bind_calibration(m);
     bind_range_sensor(m);
     bind_drive(m);
+    bind_route(m);
     bind_roadside(m);
     bind_ouster_packets(m);
     m.def("read_frame", [](const std::string& path, int columns) {

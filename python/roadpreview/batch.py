@@ -327,16 +327,18 @@ class Summary:
 
 
 def stitch(out_dir, rid: str, config: Optional[dict]):
-    """(route, summary) of one recording read from its parts: the frames' profiles stitched along the drive,
-    placed by the frames' poses when they have them, else by speed × time."""
+    """(route, summary) of one recording read from its parts: the frames' profiles stitched along the drive
+    (the C++ RouteBuilder of ``roadpreview run --segments``), placed by the frames' poses when they have them,
+    else by speed × time."""
+    from ._native import core
     from .config import Config
-    from .reference.route import Route
 
-    route, summary = Route(Config.from_dict(config) if config else Config()), Summary(rid)
-    for row in frame_rows(out_dir, rid, ("line", "pose_x_m", "pose_y_m", "pose_yaw_rad")):
-        line = json.loads(row["line"])
-        route.add(line, None if row["pose_x_m"] is None else (row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"]))
-        summary.add(line)
+    route = core().RouteBuilder((Config.from_dict(config) if config else Config()).to_json())
+    summary = Summary(rid)
+    for row in frame_rows(out_dir, rid, ("frame", "line", "pose_x_m", "pose_y_m", "pose_yaw_rad")):
+        pose = None if row["pose_x_m"] is None else (row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"])
+        route.add_line(row["line"], pose, where=f"{rid}: frame {row['frame']}")
+        summary.add(json.loads(row["line"]))
     return route, summary
 
 

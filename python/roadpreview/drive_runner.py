@@ -54,36 +54,43 @@ class Drive:
 
 
 def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Config] = None, *,
-        motion: Optional[PathLike] = None, poses: Optional[PathLike] = None, speed: Optional[float] = None,
-        yaw_rate: Optional[float] = None, frame_rate: float = 0.0,
+        motion: Optional[Union[PathLike, object]] = None, poses: Optional[Union[PathLike, Sequence]] = None,
+        speed: Optional[float] = None, yaw_rate: Optional[float] = None, frame_rate: float = 0.0,
         frames: Optional[tuple[int, Optional[int]]] = None, **source_options) -> Drive:
     """The results of a recording's frames, as ``roadpreview run`` computes them.
 
-    inputs: what :func:`roadpreview.io.open` reads (pcaps, frame files, directories), with ``source_options``
-    passed to it, or a source it (or ``rp.io.open_stereo``) returned. config: ``roadpreview.Config``.
-    Motion per frame (m/s, rad/s): ``motion`` (CSV t,speed,yaw_rate looked up at each frame's time) wins over
-    ``yaw_rate``, which wins over the recording's IMU, which wins over 0; ``speed`` is needed without ``motion``.
-    ``poses``: a KITTI poses file, one per frame, moving the fusion map (needs ``config.fusion.method``).
+    inputs: what :func:`roadpreview.io.open` reads (pcaps, frame files, directories) or a ROS bag / MCAP file
+    (``topic`` among ``source_options``), with ``source_options`` passed to the reader, or a source either (or
+    ``rp.io.open_stereo``) returned. config: ``roadpreview.Config``.
+    Motion per frame (m/s, rad/s): ``motion`` (a CSV t,speed,yaw_rate or an ``rp.drive.MotionTable``, looked up
+    at each frame's time) wins over ``yaw_rate``, which wins over the recording's IMU, which wins over 0;
+    ``speed`` is needed without ``motion``. ``poses``: one per frame, a KITTI poses file (moves the fusion map:
+    needs ``config.fusion.method``) or a list of (x, y, yaw) (moves the map when there is one, else places the
+    frames).
     ``frame_rate``: Hz, timestamps index / rate for frames without their own. ``frames``: (first, last) indices,
     last excluded (None: to the end). Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
     mounting. A file frame that does not continue the previous file's sequence resets the fusion map.
     Bad input raises ValueError (options) or RuntimeError naming the file.
     """
+    from . import drive
+
     cfg = config if config is not None else Config()
     if not isinstance(cfg, Config):
         raise TypeError(f"config must be a roadpreview.Config, got {type(cfg).__name__}")
     first, last = frames if frames is not None else (0, None)
-    source = inputs if isinstance(inputs, core().FrameSource) else _open(inputs, source_options)
-    runner = core().DriveRunner(source, cfg.to_json(), None if speed is None else float(speed),
-                                None if yaw_rate is None else float(yaw_rate), _path(motion), _path(poses),
-                                float(frame_rate), int(first), 2**63 - 1 if last is None else int(last))
+    source = inputs if drive.is_source(inputs) else drive.open_source(inputs, **source_options)
+    in_memory = motion is not None and not isinstance(motion, (str, os.PathLike))
+    runner = core().DriveRunner(
+        source, cfg.to_json(), speed_mps=None if speed is None else float(speed),
+        yaw_rate_rps=None if yaw_rate is None else float(yaw_rate), motion_file="" if in_memory else _path(motion),
+        motion=motion if in_memory else None, poses_file=_path(poses) if _is_path(poses) else "",
+        poses=None if poses is None or _is_path(poses) else [tuple(map(float, p)) for p in poses],
+        frame_rate_hz=float(frame_rate), first_frame=int(first), last_frame=2**63 - 1 if last is None else int(last))
     return Drive(source, runner)
 
 
-def _open(inputs, source_options: dict):
-    from . import io
-
-    return io.open(inputs, **source_options)
+def _is_path(p) -> bool:
+    return isinstance(p, (str, os.PathLike))
 
 
 def _path(p: Optional[PathLike]) -> str:

@@ -215,7 +215,7 @@ def open_bag(inputs, topic: Optional[str] = None, **source_options) -> BagSource
 def motion_table(inputs, topic: Optional[str] = None, speed_mps: Optional[float] = None):
     """Motion of the drive from the bag: an Odometry topic gives speed (twist.linear.x) and yaw rate
     (twist.angular.z, base frame); an Imu topic gives the yaw rate (angular_velocity.z), the speed coming from
-    ``speed_mps``. Returns a ``roadpreview.drive.MotionTable`` in the bag's clock."""
+    ``speed_mps``. Returns a ``roadpreview.drive.MotionTable`` (at least two messages) in the bag's clock."""
     from .drive import MotionTable
 
     paths = _paths(inputs)
@@ -241,4 +241,4 @@ def motion_table(inputs, topic: Optional[str] = None, speed_mps: Optional[float]
             else:
                 v.append(speed_mps)
                 w.append(msg.angular_velocity.z)
-    return MotionTable.checked(t, v, w, f"{paths[0]}: {chosen}")
+    return MotionTable.from_samples(t, v, w, f"{paths[0]}: {chosen}")

@@ -38,7 +38,7 @@ class Odometry:
     def motion_table(self, source: str = "lidar odometry") -> drive.MotionTable:
         if len(self.times_s) < 2:
             raise RuntimeError(f"{source}: odometry needs at least two frames")
-        return drive.MotionTable.checked(self.times_s, self.speed_mps, self.yaw_rate_rps, source)
+        return drive.MotionTable.from_samples(self.times_s, self.speed_mps, self.yaw_rate_rps, source)
 
     def write(self, poses_path: Optional[str] = None, motion_path: Optional[str] = None) -> None:
         if poses_path:

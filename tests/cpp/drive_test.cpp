@@ -175,6 +175,13 @@ TEST(Drive, ContradictingOrMissingOptionsAreErrorsNamingWhatIsWrong) {
     } catch (const std::invalid_argument& e) {
         EXPECT_NE(std::string(e.what()).find("fusion"), std::string::npos);
     }
+    rp::DriveOptions both = poses;
+    both.poses = std::vector<rp::Pose2>{{0.0, 0.0, 0.0}};
+    EXPECT_THROW(rp::DriveFrames(frames(1), mounted(), both), std::invalid_argument);  // a file and poses in memory
+    both = rp::DriveOptions{};
+    both.motion_file = write("drive_motion_both.csv", "t,speed,yaw_rate\n0,2,0\n1,2,0\n");
+    both.motion = rp::MotionTable::from_samples({0.0, 1.0}, {2.0, 2.0}, {0.0, 0.0}, "odometry");
+    EXPECT_THROW(rp::DriveFrames(frames(1), mounted(), both), std::invalid_argument);
     rp::Config fused = mounted();
     fused.fusion.method = rp::FusionMethod::Ema;
     rp::DriveRunner short_poses(frames(2), fused, poses);
@@ -200,4 +207,50 @@ TEST(Drive, ContradictingOrMissingOptionsAreErrorsNamingWhatIsWrong) {
     range.first_frame = 3;
     range.last_frame = 3;
     EXPECT_THROW(rp::DriveFrames(frames(1), mounted(), range), std::invalid_argument);
+}
+
+// What a bag or LiDAR odometry gives in memory drives the frames exactly as the same numbers in files do; poses
+// in memory without fusion place the frames and leave the results as they are.
+TEST(Drive, MotionAndPosesInMemoryGiveWhatTheirFilesGive) {
+    rp::Config fused = mounted();
+    fused.fusion.method = rp::FusionMethod::Ema;
+    rp::DriveOptions files;
+    files.frame_rate_hz = 10.0;
+    files.motion_file = write("drive_motion_mem.csv", "t,speed,yaw_rate\n0,4,0.0\n1,6,0.2\n");
+    files.poses_file = write("drive_poses_mem.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0.5 0 1 0 0 0 0 1 0\n");
+    rp::DriveOptions memory;
+    memory.frame_rate_hz = 10.0;
+    memory.motion = rp::MotionTable::from_samples({0.0, 1.0}, {4.0, 6.0}, {0.0, 0.2}, "odometry");
+    memory.poses = std::vector<rp::Pose2>{{0.0, 0.0, 0.0}, {0.5, 0.0, 0.0}};
+    rp::DriveOptions no_poses = memory;
+    no_poses.poses.reset();
+    rp::DriveRunner a(frames(2), fused, files), b(frames(2), fused, memory);
+    rp::DriveRunner placed(frames(2), mounted(), memory), plain(frames(2), mounted(), no_poses);
+    for (int k = 0; k < 2; ++k) {
+        const auto sa = a.next(), sb = b.next(), sp = placed.next(), sq = plain.next();
+        ASSERT_TRUE(sa && sb && sp && sq);
+        EXPECT_DOUBLE_EQ(sb->input.motion.speed_mps, 4.0 + 0.2 * k);
+        EXPECT_DOUBLE_EQ(sa->input.motion.speed_mps, sb->input.motion.speed_mps);
+        EXPECT_DOUBLE_EQ(sa->input.motion.yaw_rate_rps, sb->input.motion.yaw_rate_rps);
+        EXPECT_EQ(sb->input.yaw_rate_source, "motion");
+        ASSERT_TRUE(sa->result.fusion && sb->result.fusion);
+        EXPECT_DOUBLE_EQ(sb->result.fusion->pose.x_m, 0.5 * k);
+        EXPECT_DOUBLE_EQ(sa->result.fusion->pose.x_m, sb->result.fusion->pose.x_m);
+        EXPECT_FALSE(sb->result.left.count.empty());
+        EXPECT_EQ(sa->result.left.count, sb->result.left.count);
+        ASSERT_TRUE(sp->input.at.pose);  // fusion off: the poses only place the frames
+        EXPECT_DOUBLE_EQ(sp->input.at.pose->x_m, 0.5 * k);
+        EXPECT_FALSE(sp->result.fusion);
+        EXPECT_EQ(sp->result.left.count, sq->result.left.count);
+    }
+    rp::DriveOptions short_poses = memory;
+    short_poses.poses = std::vector<rp::Pose2>{{0.0, 0.0, 0.0}};
+    rp::DriveFrames one_pose(frames(2), mounted(), short_poses);
+    EXPECT_TRUE(one_pose.next());
+    try {
+        one_pose.next();
+        FAIL() << "a frame without a pose accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("poses: no pose for frame 1 (it has 1)"), std::string::npos);
+    }
 }

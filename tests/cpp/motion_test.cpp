@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <vector>
 
 #include <roadpreview/paths/motion.hpp>
 
@@ -49,6 +50,34 @@ TEST(Motion, BadCsvNamesTheFileAndLine) {
     EXPECT_NE(error_of(write("o.csv", "t,speed,yaw_rate\n0,1,0\n0,1,0\n")).find("increase"), std::string::npos);
     EXPECT_NE(error_of(write("s.csv", "t,speed,yaw_rate\n0,1,0\n")).find("two rows"), std::string::npos);
     EXPECT_NE(error_of(testing::TempDir() + "absent.csv").find("cannot open"), std::string::npos);
+}
+
+TEST(Motion, SamplesInMemoryAreCheckedLikeAFileAndLookedUpTheSameWay) {
+    const auto table = rp::MotionTable::from_samples({10.0, 12.0}, {2.0, 4.0}, {0.0, 0.2}, "bag: /odom");
+    EXPECT_DOUBLE_EQ(table.at(10.5).speed_mps, 2.5);
+    EXPECT_DOUBLE_EQ(table.at(10.5).yaw_rate_rps, 0.05);
+    EXPECT_DOUBLE_EQ(table.distance_m(12.0), 6.0);
+    EXPECT_EQ(table.times(), (std::vector<double>{10.0, 12.0}));
+    const auto error = [](std::vector<double> t, std::vector<double> v, std::vector<double> w) -> std::string {
+        try {
+            rp::MotionTable::from_samples(std::move(t), std::move(v), std::move(w), "odo");
+        } catch (const std::runtime_error& e) {
+            return e.what();
+        }
+        return "";
+    };
+    EXPECT_NE(error({0.0, 1.0}, {1.0}, {0.0, 0.0}).find("odo: the motion table's columns differ"), std::string::npos);
+    EXPECT_NE(error({0.0}, {1.0}, {0.0}).find("odo: the motion table needs at least two rows"), std::string::npos);
+    EXPECT_NE(error({0.0, NAN}, {1.0, 1.0}, {0.0, 0.0}).find("non-finite"), std::string::npos);
+    EXPECT_NE(error({1.0, 1.0}, {1.0, 1.0}, {0.0, 0.0}).find("odo: the motion table's times must increase (row 1"),
+              std::string::npos);
+    try {
+        table.at(13.0);
+        FAIL() << "no error outside the table";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("bag: /odom: frame time 13 s lies outside the table's span [10, 12] s"),
+                  std::string::npos) << e.what();
+    }
 }
 
 TEST(Motion, ImuYawRateIsTheGyroRotatedIntoTheBaseFrame) {

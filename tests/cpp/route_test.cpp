@@ -113,3 +113,44 @@ TEST(Route, ErdHeaderAndSamples) {
     rp::RouteBuilder empty{rp::Config{}};
     EXPECT_THROW(rp::write_profile_erd(erd, empty.left(), "left", "test"), std::runtime_error);
 }
+
+// A run's output lines stitch to the same drive as its results: what batch runs read back from Parquet.
+TEST(Route, OutputLinesStitchLikeTheirResults) {
+    rp::RouteBuilder from_results{rp::Config{}}, from_lines{rp::Config{}};
+    for (int f = 0; f < 4; ++f) {
+        rp::Result r = frame(f, f * 0.9, 0.01 * f);
+        if (f == 2) {  // an arc: the wheels' arc lengths are scaled onto the drive
+            r.path.status = rp::PathStatus::Arc;
+            r.path.icr_y = 20.0, r.path.left_radius = 19.2, r.path.right_radius = 20.8;
+        }
+        r.left.z[7] = std::nan("");  // missing bins travel as null
+        from_results.add(r);
+        from_lines.add(rp::route_input_from_json(rp::result_to_json(r), "line " + std::to_string(f)));
+    }
+    EXPECT_DOUBLE_EQ(from_lines.distance_m(), from_results.distance_m());
+    const rp::StitchedProfile a = from_results.left(), b = from_lines.left();
+    ASSERT_EQ(a.z.size(), b.z.size());
+    for (std::size_t j = 0; j < a.z.size(); ++j) {
+        if (std::isnan(a.z[j])) {
+            EXPECT_TRUE(std::isnan(b.z[j])) << j;
+        } else {
+            EXPECT_DOUBLE_EQ(a.z[j], b.z[j]) << j;
+        }
+    }
+    EXPECT_EQ(a.count, b.count);
+    EXPECT_EQ(a.frames, b.frames);
+
+    rp::Result stopped;
+    stopped.reason = "vehicle stopped";
+    const rp::Result back = rp::route_input_from_json(rp::result_to_json(stopped));
+    EXPECT_EQ(back.reason, "vehicle stopped");
+    EXPECT_TRUE(back.left.z.empty());
+    try {
+        rp::route_input_from_json("{\"source\": \"a.bin\"}", "part-0.parquet row 3");
+        FAIL() << "a line without its motion accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("part-0.parquet row 3: the output line has no 'motion'"),
+                  std::string::npos) << e.what();
+    }
+    EXPECT_THROW(rp::route_input_from_json("not json", "x"), std::invalid_argument);
+}

@@ -201,7 +201,7 @@ def test_cli_calibrates_and_runs(bench, tmp_path):
     ("0.2,laser_left,0.25\n0.1,laser_left,0.25\n", "time goes backwards"),
     ("0.0,laser_left,0.25\n0.1,laser_left,nan\n", "not a finite number"),
     ("0.0,laser_left,0.25\n0.1,laser_left,-1\n", "outside the layout's range"),
-    ("0.0,laser_left,0.25\n99.0,laser_left,0.25\n", "outside the motion table's span"),
+    ("0.0,laser_left,0.25\n99.0,laser_left,0.25\n", "outside the table's span"),
 ])
 def test_bad_readings_name_the_file_and_line(bench, tmp_path, body, fragment):
     bad = tmp_path / "bad.csv"

@@ -147,3 +147,49 @@ def test_route_errors_name_the_problem(tmp_path):
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--export-profile",
                blocked / "sub", "-q", "-o", tmp_path / "o.jsonl", check=False)
     assert proc.returncode != 0 and "sub" in proc.stderr
+
+
+def test_the_cpp_route_builder_matches_the_numpy_reference_on_the_same_frames():
+    """What batch runs stitch with (the bound C++ RouteBuilder, fed results or output lines) against the
+    reference Route fed the same lines: on a curve (arc-length scaling) and with poses placing the segments."""
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    results = list(rp.run(KITTI_FRAMES[:3], cfg, speed=KITTI_SPEED, yaw_rate=0.05, frame_rate=10))
+    poses = [(0.86 * k, 0.02 * k, 0.005 * k) for k in range(3)]
+    native = rp._native.core()
+    for placed in (None, poses):
+        from_results, from_lines = native.RouteBuilder(cfg.to_json()), native.RouteBuilder(cfg.to_json())
+        reference = rp.reference.Route(cfg)
+        for k, res in enumerate(results):
+            pose = placed[k] if placed else None
+            from_results.add(res, pose)
+            from_lines.add_line(res.to_json(), pose, where=f"frame {k}")
+            reference.add(res.to_dict(), pose)
+        assert from_lines.distance_m == pytest.approx(reference.distance, abs=1e-12)
+        for wheel in ("left", "right"):
+            ref = reference.stitched(wheel)
+            for built in (from_results.stitched(wheel), from_lines.stitched(wheel)):
+                np.testing.assert_allclose(built.z, ref.z, atol=1e-9, equal_nan=True)
+                np.testing.assert_allclose(built.spread, ref.spread, atol=1e-9, equal_nan=True)
+                np.testing.assert_array_equal(built.count, ref.count)
+                np.testing.assert_array_equal(built.frames, ref.frames)
+        for length in (10.0, 100.0):
+            mine, theirs = from_lines.segments(length), reference.segments(length)
+            assert len(mine) == len(theirs) > 0
+            for a, b in zip(mine, theirs):
+                assert (a["start_m"], a["end_m"]) == pytest.approx((b["start_m"], b["end_m"]))
+                assert (a["start"] is None) == (b["start"] is None)
+                if a["start"] is not None:
+                    assert a["start"] == pytest.approx(b["start"]) and a["end"] == pytest.approx(b["end"])
+                for side in ("left", "right", "vehicle"):
+                    ra, rb = a[side]["roughness"], b[side]["roughness"]
+                    assert ra.iso_class == rb.iso_class
+                    if ra.iso_class:
+                        assert ra.gd_n0 == pytest.approx(rb.gd_n0, rel=1e-6)
+                    iri_a, iri_b = a[side]["iri"].value, b[side]["iri"].value
+                    assert (iri_a is None) == (iri_b is None)
+                    if iri_b is not None:
+                        assert iri_a == pytest.approx(iri_b, rel=1e-6)
+                    assert a[side]["backed_fraction"] == pytest.approx(b[side]["backed_fraction"])
+    assert any(s["vehicle"]["roughness"].iso_class for s in from_lines.segments(10.0))
+    with pytest.raises(ValueError, match="frame 3: the output line has no 'motion'"):
+        from_lines.add_line('{"source": "x.bin"}', where="frame 3")

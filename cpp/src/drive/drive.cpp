@@ -40,8 +40,13 @@ std::string frame_label(const Frame& f) {
 DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options)
     : source_(std::move(source)), cfg_(std::move(cfg)), options_(std::move(options)) {
     if (!source_) throw std::invalid_argument("DriveFrames: no frame source");
-    if (!options_.speed_mps && options_.motion_file.empty() && options_.poses_file.empty())
+    const bool has_motion = !options_.motion_file.empty() || options_.motion;
+    if (!options_.speed_mps && !has_motion && options_.poses_file.empty() && !options_.poses)
         throw std::invalid_argument("give the vehicle's motion: a speed (and yaw rate), a motion file or a poses file");
+    if (!options_.motion_file.empty() && options_.motion)
+        throw std::invalid_argument("give a motion file or a motion table, not both");
+    if (!options_.poses_file.empty() && options_.poses)
+        throw std::invalid_argument("give a poses file or poses, not both");
     if (options_.speed_mps && !std::isfinite(*options_.speed_mps))
         throw std::invalid_argument("the speed must be finite");
     if (options_.yaw_rate_rps && !std::isfinite(*options_.yaw_rate_rps))
@@ -50,8 +55,9 @@ DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveO
         throw std::invalid_argument("the frame rate must be >= 0 Hz");
     if (options_.first_frame < 0 || options_.first_frame >= options_.last_frame)
         throw std::invalid_argument("the frame range must have 0 <= first < last");
-    if (!options_.motion_file.empty()) table_ = MotionTable::read_csv(options_.motion_file);
-    if (!options_.poses_file.empty()) poses_ = read_kitti_poses(options_.poses_file);
+    table_ = options_.motion_file.empty() ? std::move(options_.motion) : MotionTable::read_csv(options_.motion_file);
+    poses_ = options_.poses_file.empty() ? std::move(options_.poses) : read_kitti_poses(options_.poses_file);
+    poses_name_ = options_.poses_file.empty() ? "poses" : options_.poses_file;
 }
 
 void DriveFrames::note(bool warning, const std::string& text) const {
@@ -109,21 +115,22 @@ std::optional<DriveFrame> DriveFrames::next() {
         d.motion.yaw_rate_rps = options_.yaw_rate_rps ? *options_.yaw_rate_rps : imu.value_or(0.0);
         d.yaw_rate_source = options_.yaw_rate_rps ? "option" : imu ? "imu" : "default";
     }
-    if (!options_.poses_file.empty()) {
-        if (d.index >= static_cast<std::int64_t>(poses_.size()))
-            throw std::runtime_error(options_.poses_file + ": no pose for frame " + std::to_string(d.index) +
-                                     " (it has " + std::to_string(poses_.size()) + ")");
-        d.at.pose = poses_[static_cast<std::size_t>(d.index)];
+    if (poses_) {
+        if (d.index >= static_cast<std::int64_t>(poses_->size()))
+            throw std::runtime_error(poses_name_ + ": no pose for frame " + std::to_string(d.index) + " (it has " +
+                                     std::to_string(poses_->size()) + ")");
+        d.at.pose = (*poses_)[static_cast<std::size_t>(d.index)];
     }
     d.frame = std::move(*frame);
     return d;
 }
 
+// A poses file is there to move the fusion map (--poses); poses in memory may also just place the frames
+// (DriveStep::input.at.pose: a batch's segments), with or without fusion.
 DriveRunner::DriveRunner(std::unique_ptr<FrameSource> source, Config cfg, DriveOptions options)
-    : on_note_(options.on_note),
-      has_poses_(!options.poses_file.empty()),
+    : on_note_(options.on_note), has_poses_file_(!options.poses_file.empty()),
       frames_(std::move(source), std::move(cfg), std::move(options)) {
-    if (frames_.config().fusion.method == FusionMethod::None && has_poses_)
+    if (frames_.config().fusion.method == FusionMethod::None && has_poses_file_)
         throw std::invalid_argument("poses move the fusion map: set fusion.method to ema or kalman too");
 }
 

@@ -11,6 +11,12 @@
 #include "core/csv.hpp"
 
 namespace roadpreview {
+namespace {
+
+std::string csv_number(double v) { return csv::number_text(v, 15); }
+
+}  // namespace
+
 MotionTable MotionTable::read_csv(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open motion file");
@@ -29,7 +35,9 @@ MotionTable MotionTable::read_csv(const std::string& path) {
         if (column.empty()) {
             for (const char* name : {"t", "speed", "yaw_rate"}) {
                 const auto it = std::find(cells.begin(), cells.end(), name);
-                if (it == cells.end()) fail(number, std::string("the header has no column '") + name + "' (need t,speed,yaw_rate)");
+                if (it == cells.end())
+                    throw std::runtime_error(path + ": the motion table needs the header t,speed,yaw_rate (line " +
+                                             std::to_string(number) + " has no column '" + name + "')");
                 column.push_back(static_cast<int>(it - cells.begin()));
             }
             continue;
@@ -42,20 +50,52 @@ MotionTable MotionTable::read_csv(const std::string& path) {
             if (c >= cells.size() || end == cells[c].c_str() || *end != '\0' || !std::isfinite(v[k]))
                 fail(number, "expected a finite number in every column, got \"" + line + "\"");
         }
-        if (!table.t_.empty() && v[0] <= table.t_.back()) fail(number, "t must increase from row to row");
+        if (!table.t_.empty() && v[0] <= table.t_.back())
+            throw std::runtime_error(path + ": the motion table's times must increase (line " +
+                                     std::to_string(number) + ": t " + csv_number(v[0]) + " after " +
+                                     csv_number(table.t_.back()) + ")");
         table.t_.push_back(v[0]);
         table.speed_.push_back(v[1]);
         table.yaw_rate_.push_back(v[2]);
     }
     if (column.empty() || table.t_.size() < 2) fail(number, "need a header t,speed,yaw_rate and at least two rows");
-    table.distance_.assign(1, 0.0);
-    table.heading_.assign(1, 0.0);
-    for (std::size_t i = 1; i < table.t_.size(); ++i) {
-        const double dt = table.t_[i] - table.t_[i - 1];
-        table.distance_.push_back(table.distance_.back() + 0.5 * dt * (table.speed_[i - 1] + table.speed_[i]));
-        table.heading_.push_back(table.heading_.back() + 0.5 * dt * (table.yaw_rate_[i - 1] + table.yaw_rate_[i]));
-    }
+    table.integrate();
     return table;
+}
+
+MotionTable MotionTable::from_samples(std::vector<double> t, std::vector<double> speed_mps,
+                                      std::vector<double> yaw_rate_rps, std::string source) {
+    if (t.size() != speed_mps.size() || t.size() != yaw_rate_rps.size())
+        throw std::runtime_error(source + ": the motion table's columns differ in length (t " +
+                                 std::to_string(t.size()) + ", speed " + std::to_string(speed_mps.size()) +
+                                 ", yaw rate " + std::to_string(yaw_rate_rps.size()) + ")");
+    if (t.size() < 2) throw std::runtime_error(source + ": the motion table needs at least two rows");
+    const auto finite = [](const std::vector<double>& v) {
+        return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+    };
+    if (!finite(t) || !finite(speed_mps) || !finite(yaw_rate_rps))
+        throw std::runtime_error(source + ": the motion table holds a non-finite value");
+    for (std::size_t i = 1; i < t.size(); ++i)
+        if (!(t[i] > t[i - 1]))
+            throw std::runtime_error(source + ": the motion table's times must increase (row " + std::to_string(i) +
+                                     ": t " + csv_number(t[i]) + " after " + csv_number(t[i - 1]) + ")");
+    MotionTable table;
+    table.source_ = std::move(source);
+    table.t_ = std::move(t);
+    table.speed_ = std::move(speed_mps);
+    table.yaw_rate_ = std::move(yaw_rate_rps);
+    table.integrate();
+    return table;
+}
+
+void MotionTable::integrate() {
+    distance_.assign(1, 0.0);
+    heading_.assign(1, 0.0);
+    for (std::size_t i = 1; i < t_.size(); ++i) {
+        const double dt = t_[i] - t_[i - 1];
+        distance_.push_back(distance_.back() + 0.5 * dt * (speed_[i - 1] + speed_[i]));
+        heading_.push_back(heading_.back() + 0.5 * dt * (yaw_rate_[i - 1] + yaw_rate_[i]));
+    }
 }
 
 double MotionTable::integral(const std::vector<double>& rate, const std::vector<double>& cumulative, double t) const {
@@ -72,11 +112,9 @@ double MotionTable::heading_rad(double t) const { return integral(yaw_rate_, hea
 
 Motion MotionTable::at(double t) const {
     if (!(t >= t_.front() && t <= t_.back())) {
-        std::ostringstream msg;
-        msg.precision(15);
-        msg << source_ << ": frame time " << t << " s lies outside the motion table's span [" << t_.front() << ", "
-            << t_.back() << "] s (the t column must use the frames' clock)";
-        throw std::runtime_error(msg.str());
+        throw std::runtime_error(source_ + ": frame time " + csv_number(t) + " s lies outside the table's span [" +
+                                 csv_number(t_.front()) + ", " + csv_number(t_.back()) +
+                                 "] s (a motion table's t column must use the frames' clock)");
     }
     const auto hi = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
     const std::size_t i = std::min(hi, t_.size() - 1) - 1;

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "core/csv.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
@@ -44,12 +45,7 @@ bool parse_double(std::string_view s, double& v) {
     return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
-std::string number_text(double v) {
-    std::ostringstream out;
-    out.precision(12);
-    out << v;
-    return out.str();
-}
+std::string number_text(double v) { return csv::number_text(v, 12); }
 
 }  // namespace
 

@@ -20,13 +20,18 @@
 
 namespace roadpreview {
 
-/// Where a drive's frames get their motion and time from. The motion table wins over a constant yaw rate, which
-/// wins over the frames' IMU, which wins over 0 (driving straight).
+/// Where a drive's frames get their motion and time from. The motion table (a file or one in memory, not both)
+/// wins over a constant yaw rate, which wins over the frames' IMU, which wins over 0 (driving straight).
 struct DriveOptions {
     std::optional<double> speed_mps;     ///< constant speed (m/s, negative reversing); needed without motion_file
     std::optional<double> yaw_rate_rps;  ///< constant yaw rate (rad/s, positive left)
     std::string motion_file;             ///< CSV t,speed,yaw_rate looked up at each frame's time
-    std::string poses_file;              ///< KITTI poses, one per frame of the recording: they move the fusion map
+    std::optional<MotionTable> motion;   ///< the same in memory (a bag's odometry topic, LiDAR odometry)
+    /// KITTI poses, one per frame of the recording: each frame's pose (DriveFrame::at), moving the fusion map
+    /// (DriveRunner refuses them without fusion)
+    std::string poses_file;
+    /// The same in memory (x, y, yaw per frame); without fusion they only place the frames (a batch's segments)
+    std::optional<std::vector<Pose2>> poses;
     double frame_rate_hz = 0.0;          ///< frames without a timestamp get index / rate (0: no timestamp)
     std::int64_t first_frame = 0;        ///< the frames [first_frame, last_frame) of the recording are processed
     std::int64_t last_frame = std::numeric_limits<std::int64_t>::max();
@@ -71,7 +76,8 @@ private:
     Config cfg_;
     DriveOptions options_;
     std::optional<MotionTable> table_;
-    std::vector<Pose2> poses_;
+    std::optional<std::vector<Pose2>> poses_;
+    std::string poses_name_;  // for messages: the poses file, or "poses"
     std::string mounting_source_;
     std::int64_t read_ = 0;
     bool started_ = false;
@@ -102,7 +108,7 @@ private:
     void check_mounting_of(const Result& r, const Frame& f);
 
     std::function<void(bool, const std::string&)> on_note_;
-    bool has_poses_;
+    bool has_poses_file_;
     DriveFrames frames_;
     std::optional<Estimator> estimator_;  // made at the first frame, which may give the mounting
     std::int64_t disagreeing_ = 0;

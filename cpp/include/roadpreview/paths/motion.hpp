@@ -25,6 +25,11 @@ public:
     /// with '#' and blank lines are skipped. Throws std::runtime_error naming the file and line.
     static MotionTable read_csv(const std::string& path);
 
+    /// A table from samples in memory (a bag's odometry topic, LiDAR odometry): equal lengths, at least two
+    /// rows, finite values, strictly increasing t. Throws std::runtime_error naming `source`.
+    static MotionTable from_samples(std::vector<double> t, std::vector<double> speed_mps,
+                                    std::vector<double> yaw_rate_rps, std::string source);
+
     /// Motion at time t (s, the frames' clock). Throws std::runtime_error naming the file when t lies
     /// outside the table's time span (no extrapolation).
     Motion at(double t) const;
@@ -37,7 +42,13 @@ public:
     double heading_rad(double t) const;
     double first_time() const { return t_.front(); }
 
+    const std::vector<double>& times() const { return t_; }          ///< s
+    const std::vector<double>& speeds() const { return speed_; }     ///< m/s
+    const std::vector<double>& yaw_rates() const { return yaw_rate_; }  ///< rad/s
+
 private:
+    void integrate();  // distance_ and heading_ from the rows
+
     double integral(const std::vector<double>& rate, const std::vector<double>& cumulative, double t) const;
 
     std::string source_;

@@ -78,6 +78,12 @@ private:
     std::vector<std::pair<double, Pose2>> track_;  // (distance, pose) of each frame, with poses only
 };
 
+/// What RouteBuilder::add reads of one output line (docs/output.md: motion.speed, and profiles unless reason is
+/// set; source, timestamp and path when present), so a run's lines can be stitched after the fact; the Result's
+/// other fields stay empty. Throws std::invalid_argument starting with `where` for a line that is not JSON or
+/// lacks motion.speed or the profiles.
+Result route_input_from_json(const std::string& line, const std::string& where = "output line");
+
 /// The segments as CSV rows, one per segment (columns in docs/output.md, "Route outputs").
 void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segments);
 /// One wheel's stitched profile as CSV: distance_m, z_m, count, frames, filled.
