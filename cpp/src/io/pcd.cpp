@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -50,6 +51,14 @@ std::uint64_t header_count(const std::string& path, const std::string& key, cons
     return v;
 }
 
+// PCL 1.13 stops reading a header at the first line it does not know and then dereferences a null pointer
+// reading the data: such a line is refused here (exact keywords; PCL would also take "FIELDSX" for FIELDS).
+bool is_header_keyword(const std::string& word) {
+    static const std::set<std::string> kKeywords = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                                    "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    return kKeywords.count(word) > 0;
+}
+
 void read_sizes(const std::string& path, const std::vector<std::string>& w, std::vector<std::uint64_t>& out) {
     out.clear();
     for (std::size_t i = 1; i < w.size(); ++i) out.push_back(header_count(path, w[0], w[i]));
@@ -65,7 +74,9 @@ PcdHeader scan_header(const std::string& path) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
         const auto w = words(line);
         if (w.empty() || w[0][0] == '#') continue;
-        if (w[0] == "FIELDS") fields = w.size() - 1;
+        if (!is_header_keyword(w[0]))
+            fail_file(path, "PCD header: unknown line '" + line.substr(0, 80) + "' before DATA");
+        if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
         if (w[0] == "SIZE") read_sizes(path, w, sizes);
         if (w[0] == "COUNT") read_sizes(path, w, counts);
         if (w[0] == "WIDTH" && w.size() > 1) h.width = header_count(path, "WIDTH", w[1]), h.has_width = true;
