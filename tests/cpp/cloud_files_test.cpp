@@ -66,6 +66,13 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     const std::string junk = header.substr(0, fields) + "VIEWPOI 0.7\n" + header.substr(fields);
     expect_error(written("junk.pcd", junk + std::string(24, '\0')), "unknown line 'VIEWPOI 0.7'");
     EXPECT_EQ(rp::read_frame(written("fine.pcd", header + std::string(24, '\0'))).points.rows(), 2);
+    // PCL throws exceptions of its own for a TYPE letter or size it does not know.
+    std::string bad_type = header;
+    bad_type.replace(bad_type.find("TYPE F F F"), 10, "TYPE F 1F F");
+    expect_error(written("type.pcd", bad_type + std::string(24, '\0')), "TYPE '1F'");
+    std::string bad_size = header;
+    bad_size.replace(bad_size.find("SIZE 4 4 4"), 10, "SIZE 4 3 4");
+    expect_error(written("size.pcd", bad_size + std::string(24, '\0')), "TYPE 'F' and SIZE 3");
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {

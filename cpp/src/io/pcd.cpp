@@ -59,6 +59,22 @@ bool is_header_keyword(const std::string& word) {
     return kKeywords.count(word) > 0;
 }
 
+// TYPE gives one of I, U, F per field with a size PCL knows for it (PCL throws its own exceptions otherwise).
+void check_types(const std::string& path, const std::vector<std::string>& types,
+                 const std::vector<std::uint64_t>& sizes) {
+    if (types.size() != sizes.size())
+        fail_file(path, "PCD header: TYPE must give one letter per field (" + std::to_string(sizes.size()) +
+                            " FIELDS)");
+    for (std::size_t i = 0; i < types.size(); ++i) {
+        const std::uint64_t n = sizes[i];
+        const bool integer = types[i] == "I" || types[i] == "U";
+        const bool ok = types[i] == "F" ? (n == 4 || n == 8) : integer && (n == 1 || n == 2 || n == 4 || n == 8);
+        if (!ok)
+            fail_file(path, "PCD header: field " + std::to_string(i + 1) + " has TYPE '" + types[i] + "' and SIZE " +
+                                std::to_string(n) + " (F: 4 or 8 bytes; I, U: 1, 2, 4 or 8)");
+    }
+}
+
 void read_sizes(const std::string& path, const std::vector<std::string>& w, std::vector<std::uint64_t>& out) {
     out.clear();
     for (std::size_t i = 1; i < w.size(); ++i) out.push_back(header_count(path, w[0], w[i]));
@@ -69,6 +85,8 @@ PcdHeader scan_header(const std::string& path) {
     if (!in) fail_file(path, "cannot open file");
     PcdHeader h;
     std::vector<std::uint64_t> sizes, counts;
+    std::vector<std::string> types;
+    bool has_types = false;
     std::size_t fields = 0;
     for (std::string line; std::getline(in, line);) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
@@ -79,6 +97,7 @@ PcdHeader scan_header(const std::string& path) {
         if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
         if (w[0] == "SIZE") read_sizes(path, w, sizes);
         if (w[0] == "COUNT") read_sizes(path, w, counts);
+        if (w[0] == "TYPE") types.assign(w.begin() + 1, w.end()), has_types = true;
         if (w[0] == "WIDTH" && w.size() > 1) h.width = header_count(path, "WIDTH", w[1]), h.has_width = true;
         if (w[0] == "HEIGHT" && w.size() > 1) h.height = header_count(path, "HEIGHT", w[1]);
         if (w[0] == "POINTS" && w.size() > 1) h.points = header_count(path, "POINTS", w[1]), h.has_points = true;
@@ -91,6 +110,7 @@ PcdHeader scan_header(const std::string& path) {
     if (sizes.size() != fields || (!counts.empty() && counts.size() != fields))
         fail_file(path, "PCD header: SIZE and COUNT must give one number per field (" + std::to_string(fields) +
                             " FIELDS)");
+    if (has_types) check_types(path, types, sizes);
     for (std::size_t i = 0; i < fields; ++i) {
         const std::uint64_t count = counts.empty() ? 1 : counts[i];
         if (sizes[i] > 8 || count > kMaxValuesPerField)
