@@ -11,6 +11,8 @@
 
 #include <unistd.h>
 
+#include <roadpreview/io/readers.hpp>
+
 namespace roadpreview_fuzz {
 
 /// Writes `data` to a file named scratch_<pid><suffix> and returns its path.
@@ -34,6 +36,16 @@ void expect_clean_errors(Parse parse) {
     } catch (const std::runtime_error&) {
     } catch (const std::invalid_argument&) {
     }
+}
+
+/// Reads `data` as a frame file with the reader `suffix` picks (".pcd", ".ply"); a frame with more points than
+/// the file has bytes must have been refused.
+inline void read_cloud_file(const std::uint8_t* data, std::size_t size, const std::string& suffix) {
+    const std::string path = scratch_file(data, size, suffix);
+    expect_clean_errors([&] {
+        const roadpreview::Frame frame = roadpreview::read_frame(path);
+        if (frame.points.rows() > static_cast<Eigen::Index>(size)) std::abort();
+    });
 }
 
 }  // namespace roadpreview_fuzz

@@ -43,10 +43,33 @@ def packet_decoder_seeds(data_dir):
             yield f"{pick}_{n}", bytes([pick, 1]) + payload
 
 
+def pcapng_block(kind, body):
+    """One pcapng block: type, total length, body padded to 4 bytes, total length again (little endian)."""
+    body += b"\0" * (-len(body) % 4)
+    return struct.pack("<II", kind, len(body) + 12) + body + struct.pack("<I", len(body) + 12)
+
+
+def as_pcapng(pcap):
+    """The same records as a pcapng: section header, one interface (the pcap's link type), enhanced packets."""
+    header, records = pcap_records(pcap)
+    link_type = struct.unpack_from("<I", header, 20)[0]
+    out = pcapng_block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1))
+    out += pcapng_block(1, struct.pack("<HHI", link_type, 0, 65535))
+    for rec in records:
+        sec, usec, incl, orig = struct.unpack_from("<IIII", rec)
+        stamp = sec * 1_000_000 + usec
+        out += pcapng_block(6, struct.pack("<IIIII", 0, stamp >> 32, stamp & 0xFFFFFFFF, incl, orig) + rec[16:])
+    return out
+
+
 def pcap_seeds(data_dir):
-    yield "ouster_os1_32", b"\x01" + leading_records(data_dir / "ouster/OS-1-32-G_v2.1.1_1024x10.pcap")
+    ouster = leading_records(data_dir / "ouster/OS-1-32-G_v2.1.1_1024x10.pcap")
+    yield "ouster_os1_32", b"\x01" + ouster
+    yield "ouster_os1_32_pcapng", b"\x01" + as_pcapng(ouster)
     for name in ("velodyne_example", "hdl32_example", "velodyne_vlp16"):
-        yield name, b"\x00" + leading_records(data_dir / f"velodyne/{name}.pcap")
+        velodyne = leading_records(data_dir / f"velodyne/{name}.pcap")
+        yield name, b"\x00" + velodyne
+    yield "velodyne_vlp16_pcapng", b"\x00" + as_pcapng(velodyne)
 
 
 def pcd_text(fields, count, encoding):
@@ -65,9 +88,13 @@ def lzf_literals(raw):
     return bytes(out)
 
 
+def kitti_rows(data_dir, count=64):
+    kitti = (data_dir / "semantickitti/000000.bin").read_bytes()[: count * 16]
+    return kitti, [struct.unpack_from("<4f", kitti, 16 * i) for i in range(count)]
+
+
 def pcd_seeds(data_dir):
-    kitti = (data_dir / "semantickitti/000000.bin").read_bytes()[: 64 * 16]
-    rows = [struct.unpack_from("<4f", kitti, 16 * i) for i in range(64)]
+    kitti, rows = kitti_rows(data_dir)
     fields = ["x", "y", "z", "intensity"]
     yield "ascii", pcd_text(fields, 64, "ascii") + "".join(" ".join(f"{v:.4f}" for v in r) + "\n" for r in rows).encode()
     yield "binary", pcd_text(fields, 64, "binary") + kitti
@@ -76,6 +103,47 @@ def pcd_seeds(data_dir):
     yield "binary_compressed", pcd_text(fields, 64, "binary_compressed") + struct.pack("<II", len(packed), len(soa)) + packed
     real = (data_dir / "pcd/patchwork_128ring_000000.pcd").read_bytes()
     yield "real_head", real[:4096]
+
+
+def ply_seeds(data_dir):
+    kitti, rows = kitti_rows(data_dir)
+    fields = "".join(f"property float {name}\n" for name in ("x", "y", "z", "intensity"))
+
+    def header(encoding):
+        return f"ply\nformat {encoding} 1.0\nelement vertex {len(rows)}\n{fields}end_header\n".encode()
+    yield "ascii", header("ascii") + "".join(" ".join(f"{v:.4f}" for v in r) + "\n" for r in rows).encode()
+    yield "binary_little_endian", header("binary_little_endian") + kitti
+    yield "binary_big_endian", header("binary_big_endian") + b"".join(struct.pack(">4f", *r) for r in rows)
+    with_face = header("ascii").replace(b"end_header", b"element face 1\nproperty list uchar int vertex_indices\n"
+                                                       b"end_header")
+    yield "face", with_face + b"".join(b"%.4f %.4f %.4f %.4f\n" % r for r in rows) + b"3 0 1 2\n"
+
+
+def beams_seeds():
+    """Beams files as `roadpreview calibrate` writes them (docs/output.md, "Beams file"): by decoder, by elevation."""
+    def beams(count, elevation):
+        return "".join(f"  - {{beam: {b}, determined: {str(b % 3 > 0).lower()}, elevation_offset_deg: {0.01 * b}, "
+                       f"elevation_sigma_deg: {'0.002' if b % 3 else 'null'}, range_offset_m: 0, range_sigma_m: null, "
+                       f"observations: {120 * b}" + (f", elevation_deg: {2.0 - 0.4 * b}" if elevation else "") + "}\n"
+                       for b in range(count))
+    common = ("format: roadpreview beam calibration 1\nsensor_model: {model}\nserial: \"{serial}\"\n"
+              "beam_count: {count}\nunits: {{angles: deg, ranges: m}}\nbeam_index: {index}\n")
+    drive = "drive: {frames: 12, travel_m: 3.1, residual_m: 0.012}\nbeams:\n"
+    decoder = common.format(model="OS-1-32", serial="122201000998", count=8, index="decoder") + drive + beams(8, False)
+    elevation = (common.format(model="", serial="", count=12, index="elevation") +
+                 "elevation_tilt_deg: [0.1, -0.04]\nindex_tolerance_deg: 0.2\n" + drive + beams(12, True))
+    return {"decoder": decoder.encode(), "elevation": elevation.encode()}
+
+
+def carmen_log():
+    """A few lines of a CARMEN log (the shared recording is GPL-3.0 and stays out): PARAMs and FLASER scans."""
+    lines = ["# CARMEN Logfile", "PARAM robot_front_laser_max 50.0 nohost 0",
+             "PARAM laser_front_laser_resolution 1.0 nohost 0"]
+    for k in range(3):
+        ranges = " ".join(f"{4.0 + 0.01 * ((i * 7 + k) % 50):.2f}" for i in range(181))
+        pose, stamp = f"{k * 0.1:.1f} 0.0 0.0", f"{100.0 + k / 37.5:.6f}"
+        lines.append(f"FLASER 181 {ranges} {pose} {pose} {stamp} host {stamp}")
+    return ("\n".join(lines) + "\n").encode()
 
 
 def sick_seeds():
@@ -99,7 +167,8 @@ def sick_seeds():
             b"processing: {cell_m: 0.1, dilation_cells: 2}\n")
     return {"cola_b": b"\x00" + cola_b, "cola_a": b"\x00" + cola_a, "stream": b"\x01xx" + cola_b + cola_a + cola_b,
             "site": b"\x02" + site, "scan_csv": b"\x03t,scanner,angle_deg,range_m\n0,0,-90,5\n0,0,-89.5,\n",
-            "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n"}
+            "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n",
+            "carmen": b"\x05" + carmen_log()}
 
 
 def main():
@@ -116,6 +185,12 @@ def main():
         "ouster_metadata": {p.stem: p.read_bytes() for p in sorted((data_dir / "ouster").glob("*.json"))},
         "velodyne_calibration": {"four_lasers": calibration.encode()},
         "pcd": dict(pcd_seeds(data_dir)),
+        "ply": dict(ply_seeds(data_dir)),
+        "beams": beams_seeds(),
+        "stereo_calibration": {"kitti": b"\x00" + (data_dir / "stereo/kitti_object_calib.txt").read_bytes(),
+                               "yaml": b"\x01fx: 721.5\nfy: 721.5\ncx: 609.6\ncy: 172.9\nbaseline: 0.54\n"
+                                       b"extrinsics: {x_m: 0.27, y_m: 0.06, z_m: 1.65, roll_rad: 0, pitch_rad: 0.01, "
+                                       b"yaw_rad: 0}\n"},
         "kitti_bin": {"first_rows": kitti[: 256 * 16]},
         "config": {"json": b"\x00" + json.dumps(config).encode(),
                    "yaml": b"\x01sensor_height: 1.73\nground:\n  method: ransac\nprofile:\n  ds_m: 0.1\n"},

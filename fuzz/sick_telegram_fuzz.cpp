@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // libFuzzer target for the roadside inputs. First byte: 0 one SICK telegram (CoLa-A or CoLa-B), 1 a byte stream
-// cut into telegrams by the framer and each decoded, 2 a site file (YAML), 3 a scan CSV, 4 a detections CSV.
+// cut into telegrams by the framer and each decoded, 2 a site file (YAML), 3 a scan CSV, 4 a detections CSV,
+// 5 a CARMEN log.
 #include <cstdint>
 
 #include <roadpreview/roadside/processor.hpp>
+#include <roadpreview/roadside/scan.hpp>
 #include <roadpreview/roadside/sick.hpp>
 
 #include "scratch_file.hpp"
@@ -34,7 +36,7 @@ void decode_stream(const std::uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size < 1) return 0;
-    const std::uint8_t kind = data[0] % 5;
+    const std::uint8_t kind = data[0] % 6;
     ++data, --size;
     roadpreview_fuzz::expect_clean_errors([&] {
         switch (kind) {
@@ -42,7 +44,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             case 1: decode_stream(data, size); break;
             case 2: rs::parse_site(std::string(reinterpret_cast<const char*>(data), size), "fuzz"); break;
             case 3: rs::read_scan_csv(roadpreview_fuzz::scratch_file(data, size, ".csv")); break;
-            default: rs::read_detections(roadpreview_fuzz::scratch_file(data, size, ".csv")); break;
+            case 4: rs::read_detections(roadpreview_fuzz::scratch_file(data, size, ".csv")); break;
+            default: rs::read_carmen_log(roadpreview_fuzz::scratch_file(data, size, ".log"), 37.5); break;
         }
     });
     return 0;

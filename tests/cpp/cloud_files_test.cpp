@@ -59,6 +59,22 @@ TEST(CloudFiles, NegativeAndHugeWidthsAreHeaderErrors) {
     expect_error(written("mismatch.pcd", pcd_header("4", "5", "binary") + std::string(60, '\0')), "POINTS = 5");
 }
 
+TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
+    // PCL stops at such a line and reads the data without fields (a null dereference; found by fuzzing).
+    const std::string header = pcd_header("2", "2", "binary");
+    const std::size_t fields = header.find("FIELDS");
+    const std::string junk = header.substr(0, fields) + "VIEWPOI 0.7\n" + header.substr(fields);
+    expect_error(written("junk.pcd", junk + std::string(24, '\0')), "unknown line 'VIEWPOI 0.7'");
+    EXPECT_EQ(rp::read_frame(written("fine.pcd", header + std::string(24, '\0'))).points.rows(), 2);
+    // PCL throws exceptions of its own for a TYPE letter or size it does not know.
+    std::string bad_type = header;
+    bad_type.replace(bad_type.find("TYPE F F F"), 10, "TYPE F 1F F");
+    expect_error(written("type.pcd", bad_type + std::string(24, '\0')), "TYPE '1F'");
+    std::string bad_size = header;
+    bad_size.replace(bad_size.find("SIZE 4 4 4"), 10, "SIZE 4 3 4");
+    expect_error(written("size.pcd", bad_size + std::string(24, '\0')), "TYPE 'F' and SIZE 3");
+}
+
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {
     const std::string good = written("good.pcd", pcd_header("2", "2", "ascii") + "1 2 3\n4 5.5 nan\n");
     const rp::Frame f = rp::read_frame(good);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -50,6 +51,30 @@ std::uint64_t header_count(const std::string& path, const std::string& key, cons
     return v;
 }
 
+// PCL 1.13 stops reading a header at the first line it does not know and then dereferences a null pointer
+// reading the data: such a line is refused here (exact keywords; PCL would also take "FIELDSX" for FIELDS).
+bool is_header_keyword(const std::string& word) {
+    static const std::set<std::string> kKeywords = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                                    "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    return kKeywords.count(word) > 0;
+}
+
+// TYPE gives one of I, U, F per field with a size PCL knows for it (PCL throws its own exceptions otherwise).
+void check_types(const std::string& path, const std::vector<std::string>& types,
+                 const std::vector<std::uint64_t>& sizes) {
+    if (types.size() != sizes.size())
+        fail_file(path, "PCD header: TYPE must give one letter per field (" + std::to_string(sizes.size()) +
+                            " FIELDS)");
+    for (std::size_t i = 0; i < types.size(); ++i) {
+        const std::uint64_t n = sizes[i];
+        const bool integer = types[i] == "I" || types[i] == "U";
+        const bool ok = types[i] == "F" ? (n == 4 || n == 8) : integer && (n == 1 || n == 2 || n == 4 || n == 8);
+        if (!ok)
+            fail_file(path, "PCD header: field " + std::to_string(i + 1) + " has TYPE '" + types[i] + "' and SIZE " +
+                                std::to_string(n) + " (F: 4 or 8 bytes; I, U: 1, 2, 4 or 8)");
+    }
+}
+
 void read_sizes(const std::string& path, const std::vector<std::string>& w, std::vector<std::uint64_t>& out) {
     out.clear();
     for (std::size_t i = 1; i < w.size(); ++i) out.push_back(header_count(path, w[0], w[i]));
@@ -60,14 +85,19 @@ PcdHeader scan_header(const std::string& path) {
     if (!in) fail_file(path, "cannot open file");
     PcdHeader h;
     std::vector<std::uint64_t> sizes, counts;
+    std::vector<std::string> types;
+    bool has_types = false;
     std::size_t fields = 0;
     for (std::string line; std::getline(in, line);) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
         const auto w = words(line);
         if (w.empty() || w[0][0] == '#') continue;
-        if (w[0] == "FIELDS") fields = w.size() - 1;
+        if (!is_header_keyword(w[0]))
+            fail_file(path, "PCD header: unknown line '" + line.substr(0, 80) + "' before DATA");
+        if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
         if (w[0] == "SIZE") read_sizes(path, w, sizes);
         if (w[0] == "COUNT") read_sizes(path, w, counts);
+        if (w[0] == "TYPE") types.assign(w.begin() + 1, w.end()), has_types = true;
         if (w[0] == "WIDTH" && w.size() > 1) h.width = header_count(path, "WIDTH", w[1]), h.has_width = true;
         if (w[0] == "HEIGHT" && w.size() > 1) h.height = header_count(path, "HEIGHT", w[1]);
         if (w[0] == "POINTS" && w.size() > 1) h.points = header_count(path, "POINTS", w[1]), h.has_points = true;
@@ -80,6 +110,7 @@ PcdHeader scan_header(const std::string& path) {
     if (sizes.size() != fields || (!counts.empty() && counts.size() != fields))
         fail_file(path, "PCD header: SIZE and COUNT must give one number per field (" + std::to_string(fields) +
                             " FIELDS)");
+    if (has_types) check_types(path, types, sizes);
     for (std::size_t i = 0; i < fields; ++i) {
         const std::uint64_t count = counts.empty() ? 1 : counts[i];
         if (sizes[i] > 8 || count > kMaxValuesPerField)
