@@ -55,9 +55,9 @@ struct PathCrossings {
 void cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result& r, const Levelling& L,
                  const Config& cfg, PathCrossings& out) {
     auto cross = [&](Wheel w, std::vector<PathObstacle>& obstacles, std::vector<std::uint8_t>& blocked) {
-        obstacles = wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width,
-                                    cfg.profile.preview_length_m, cfg.obstacles);
-        blocked = blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m);
+        wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width, cfg.profile.preview_length_m,
+                        cfg.obstacles, obstacles);
+        blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m, blocked);
     };
     cross(Wheel::Left, out.left, out.blocked.left);
     cross(Wheel::Right, out.right, out.blocked.right);
@@ -75,6 +75,7 @@ struct Estimator::Impl {
     // Per-stage scratch, kept so that a stream of frames allocates nothing once the buffers have grown.
     GroundScratch ground_scratch;
     GroundFit ground;
+    ObstacleScratch obstacle_scratch;
     Clustering clustering;
     PathCrossings crossings;
     std::vector<double> local_z;
@@ -147,8 +148,9 @@ void Estimator::Impl::find_ground(PointsView points, const float* range_variance
 
 // Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
 void Estimator::Impl::find_obstacles_in(Result& r) {
-    clustering = Clustering{};
-    if (r.plane) clustering = find_obstacles(roi, ground.mask, *r.plane, cfg.obstacles);
+    clustering.clusters.clear();
+    clustering.label.clear();
+    if (r.plane) find_obstacles(roi, ground.mask, *r.plane, cfg.obstacles, obstacle_scratch, clustering);
     if (!clustering.label.empty()) to_input_rows(roi, clustering.label, r.cluster_labels);
     if (!r.obstacles) r.obstacles.emplace();
     r.obstacles->assign(clustering.clusters.begin(), clustering.clusters.end());
