@@ -10,6 +10,7 @@
 #include "obstacles/obstacles_pcl.hpp"
 #include "core/roi_cloud.hpp"
 #include "core/stopwatch.hpp"
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
@@ -24,13 +25,23 @@ FrameStatus blocking_status(const Result& r, const GroundFit& ground, bool map_h
     return FrameStatus::Ok;
 }
 
-void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
-    p = Profile{};
+void mark_declined(Roughness& r, const char* reason) {
+    clear(r);
+    r.reason = reason;
+    r.iri.reason = reason;
+}
+
+// A profile without bins, declined for `reason`; its buffers kept.
+void mark_empty(Profile& p, const Config& cfg, const char* reason) {
+    for (auto* v : {&p.s, &p.z, &p.spread}) v->clear();
+    p.count.clear();
+    p.blocked.clear();
     p.ds = cfg.profile.ds_m;
     p.s0 = 0.5 * cfg.profile.ds_m;
-    p.roughness.reason = reason;
-    p.roughness.iri.reason = reason;
-    if (cfg.obstacles.enabled) p.obstacles.emplace();
+    mark_declined(p.roughness, reason);
+    if (!cfg.obstacles.enabled) p.obstacles.reset();
+    else if (p.obstacles) p.obstacles->clear();
+    else p.obstacles.emplace();
 }
 
 // Per-ROI-point values written to their input rows (`rows`, one per input row, already holding the value for
@@ -79,6 +90,7 @@ struct Estimator::Impl {
     Clustering clustering;
     PathCrossings crossings;
     std::vector<double> local_z;
+    RoughnessScratch roughness_scratch;
 
     void run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
              const FrameMotion& motion, const float* range_variances_m2, Result& r);
@@ -96,6 +108,7 @@ Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
     impl_->roi_ahead = roi_facing(cfg.ground, 1.0);
     impl_->roi_behind = roi_facing(cfg.ground, -1.0);
+    impl_->roughness_scratch.plan_ffts(bin_count(cfg.profile));
     if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
 }
 
@@ -179,10 +192,13 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
 }
 
 void Estimator::Impl::rate(Result& r) {
-    for (Profile* p : {&r.left, &r.right}) rate_profile(*p, cfg);
-    r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
+    for (Profile* p : {&r.left, &r.right}) {
+        analyze_roughness(*p, cfg.roughness, roughness_scratch, p->roughness);
+        wheel_iri(*p, p->roughness, cfg.iri, p->roughness.iri);
+    }
+    vehicle_roughness(r.left, r.right, cfg.roughness, roughness_scratch, r.vehicle);
     reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);
-    r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);
+    vehicle_iri(r.left.roughness.iri, r.right.roughness.iri, r.vehicle.iri);
 }
 
 void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
@@ -217,8 +233,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
     if (r.status != FrameStatus::Ok) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, to_string(r.status));
-        r.vehicle = Roughness{};
-        r.vehicle.reason = r.vehicle.iri.reason = to_string(r.status);
+        mark_declined(r.vehicle, to_string(r.status));
     } else {
         if (cfg.obstacles.enabled && r.plane) cross_paths(roi, clustering, r, L, cfg, crossings);
         r.timing_ms.obstacles += ms_since(mark);
