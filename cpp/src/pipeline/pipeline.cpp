@@ -10,6 +10,7 @@
 #include "obstacles/obstacles_pcl.hpp"
 #include "core/roi_cloud.hpp"
 #include "core/stopwatch.hpp"
+#include "profile/profile_scratch.hpp"
 #include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
@@ -90,6 +91,7 @@ struct Estimator::Impl {
     Clustering clustering;
     PathCrossings crossings;
     std::vector<double> local_z;
+    ProfileScratch profile_scratch;
     RoughnessScratch roughness_scratch;
 
     void run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
@@ -172,15 +174,16 @@ void Estimator::Impl::find_obstacles_in(Result& r) {
 void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances) {
     const bool crossed = cfg.obstacles.enabled && r.plane;  // without a plane (profiles from the map): none
     const BlockedBins* blocked = crossed ? &crossings.blocked : nullptr;
-    // Levelling by the local ground model (method.md §3); empty: by the one plane.
-    local_z.clear();
-    if (cfg.profile.level && cfg.profile.level_local && r.plane)
-        local_z = local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path);
-    WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
-                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile,
-                                                   blocked, local_z.empty() ? nullptr : &local_z, height_variances);
-    r.left = std::move(wheels.left);
-    r.right = std::move(wheels.right);
+    if (fusion) {
+        fusion->profiles(r.path, blocked, *r.fusion, r.left, r.right);
+    } else {
+        // Levelling by the local ground model (method.md §3); without it, by the one plane.
+        const bool local = cfg.profile.level && cfg.profile.level_local && r.plane;
+        if (local) local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path,
+                                        profile_scratch, local_z);
+        build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
+                       local ? &local_z : nullptr, height_variances, profile_scratch, r.left, r.right);
+    }
     if (!cfg.obstacles.enabled) return;
     for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {
         if (!p->obstacles) p->obstacles.emplace();
@@ -191,7 +194,16 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
     }
 }
 
+// The roughness results' vectors at their largest (a stretch of every bin), so that a longer stretch than any
+// before does not grow them; a no-op once they are.
+void reserve_roughness(Roughness& r, std::size_t bins) {
+    for (auto* v : {&r.spectrum.n, &r.spectrum.psd, &r.noise_psd}) v->reserve(bins / 2 + 1);
+    r.octave_centers.reserve(9);  // ISO 8608's octaves 2^−6 … 2^2 cycles/m
+    r.octave_gd.reserve(9);
+}
+
 void Estimator::Impl::rate(Result& r) {
+    for (Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle}) reserve_roughness(*x, r.left.z.size());
     for (Profile* p : {&r.left, &r.right}) {
         analyze_roughness(*p, cfg.roughness, roughness_scratch, p->roughness);
         wheel_iri(*p, p->roughness, cfg.iri, p->roughness.iri);
@@ -210,6 +222,8 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     r.timing_ms.path = ms_since(mark);
     if (fusion) {
         if (!r.fusion) r.fusion.emplace();
+        r.fusion->reset.clear();
+        r.fusion->coverage = r.fusion->frame_coverage = 0.0;
         fusion->advance(speed_mps, yaw_rate_rps, motion, *r.fusion);
     } else {
         r.fusion.reset();

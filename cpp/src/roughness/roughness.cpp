@@ -120,6 +120,10 @@ void displacement_psd(const double* z, std::size_t count, double ds, RoughnessSc
 }  // namespace
 
 void RoughnessScratch::plan_ffts(std::size_t bins) {
+    const std::size_t ordinates = bins / 2 + 1;
+    for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
+    used.reserve(ordinates);
+    strong.reserve(ordinates);
     Spectrum sp;
     std::vector<double> z;
     for (std::size_t n = 2; n <= bins; ++n) {

@@ -47,7 +47,8 @@ struct RoughnessScratch {
     std::vector<std::size_t> used, strong;
     std::vector<double> x, y, shape, floor, share, corrected;
 
-    /// Plans the FFT of every stretch length up to `bins`, so that no frame pays (or allocates) for a plan.
+    /// Plans the FFT of every stretch length up to `bins`, so that no frame pays (or allocates) for a plan, and
+    /// reserves the fits' buffers for that many bins.
     void plan_ffts(std::size_t bins);
 };
 
