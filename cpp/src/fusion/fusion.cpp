@@ -178,12 +178,22 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
     status.frames = fused_;
 }
 
+// A frame touches at most one cell per point: buffers that large grow only with a larger frame than any before.
+void TemporalFusion::reserve_cells(std::size_t cells) {
+    touched_.reserve(cells);
+    for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
+    counts_.reserve(cells);
+    align_v_.reserve(cells);
+    shared_.reserve(cells);
+}
+
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                           const std::vector<float>* height_variances) {
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
     std::vector<std::int64_t>& touched = touched_;
     touched.clear();
+    reserve_cells(static_cast<std::size_t>(points.rows()));
     z_.resize(static_cast<std::size_t>(points.rows()));
     variance_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort

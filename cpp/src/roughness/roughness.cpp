@@ -124,6 +124,11 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
     used.reserve(ordinates);
     strong.reserve(ordinates);
+    for (auto* v : {&variance, &lag_sum, &window, &support.noise, &support.resolved, &other.noise, &other.resolved})
+        v->reserve(bins);
+    anchors.reserve(bins);
+    interval.reserve(bins);
+    power_by_interval.reserve(bins);
     Spectrum sp;
     std::vector<double> z;
     for (std::size_t n = 2; n <= bins; ++n) {

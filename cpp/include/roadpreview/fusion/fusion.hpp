@@ -130,6 +130,7 @@ private:
     /// Removes from the frame's cell medians the plane of their differences to the map and adds the excess
     /// disagreement to the variances (method.md §7); the first time, half of it to the map's cells.
     void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances, std::vector<double>& medians);
+    void reserve_cells(std::size_t cells);
     void sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked, std::size_t& ahead,
                 std::size_t& ahead_now, Profile& p) const;
 
