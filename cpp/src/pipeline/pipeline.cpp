@@ -2,6 +2,7 @@
 #include "roadpreview/pipeline/pipeline.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -83,6 +84,7 @@ struct Estimator::Impl {
     GroundConfig roi_ahead, roi_behind;  // the region of interest driving forward and reversing
     RoiCloud roi;  // reused across frames
     std::int64_t frames = 0;
+    std::size_t bins = 0;  // of a profile: its largest stretch
     std::optional<TemporalFusion> fusion;  // only with fusion.method other than "none"
     // Per-stage scratch, kept so that a stream of frames allocates nothing once the buffers have grown.
     GroundScratch ground_scratch;
@@ -110,7 +112,8 @@ Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
     impl_->roi_ahead = roi_facing(cfg.ground, 1.0);
     impl_->roi_behind = roi_facing(cfg.ground, -1.0);
-    impl_->roughness_scratch.plan_ffts(bin_count(cfg.profile));
+    impl_->bins = bin_count(cfg.profile) + static_cast<std::size_t>(std::ceil(cfg.fusion.behind_m / cfg.profile.ds_m));
+    impl_->roughness_scratch.plan_ffts(impl_->bins);
     if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
 }
 
@@ -194,16 +197,20 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
     }
 }
 
-// The roughness results' vectors at their largest (a stretch of every bin), so that a longer stretch than any
-// before does not grow them; a no-op once they are.
+// Room for the longest of the documented reasons (docs/output.md), so that a reason longer than any before does
+// not allocate.
+constexpr std::size_t kReasonCapacity = 64;
+
+// The roughness results' vectors at their largest (a stretch of every bin) and their reasons' room, so that a
+// longer stretch or reason than any before does not grow them; a no-op once they are.
 void reserve_roughness(Roughness& r, std::size_t bins) {
     for (auto* v : {&r.spectrum.n, &r.spectrum.psd, &r.noise_psd}) v->reserve(bins / 2 + 1);
     r.octave_centers.reserve(9);  // ISO 8608's octaves 2^−6 … 2^2 cycles/m
     r.octave_gd.reserve(9);
+    for (std::string* text : {&r.reason, &r.band_limit, &r.iri.reason}) text->reserve(kReasonCapacity);
 }
 
 void Estimator::Impl::rate(Result& r) {
-    for (Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle}) reserve_roughness(*x, r.left.z.size());
     for (Profile* p : {&r.left, &r.right}) {
         analyze_roughness(*p, cfg.roughness, roughness_scratch, p->roughness);
         wheel_iri(*p, p->roughness, cfg.iri, p->roughness.iri);
@@ -218,11 +225,13 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     auto mark = Clock::now();
     const auto start = mark;
     r.timing_ms = {};
+    for (Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle}) reserve_roughness(*x, bins);
     start_frame(speed_mps, yaw_rate_rps, source, motion, r);
     r.timing_ms.path = ms_since(mark);
     if (fusion) {
         if (!r.fusion) r.fusion.emplace();
         r.fusion->reset.clear();
+        r.fusion->reset.reserve(kReasonCapacity);
         r.fusion->coverage = r.fusion->frame_coverage = 0.0;
         fusion->advance(speed_mps, yaw_rate_rps, motion, *r.fusion);
     } else {
