@@ -48,7 +48,7 @@ struct ComponentScratch {
 /// the same way — from each point not yet taken, by radius searches — into buffers kept between frames, where
 /// PCL allocates a queue and an index list per cluster: the connected components of the search's whole input
 /// cloud, points joined when closer than `tolerance`. Writes each point's component, numbered in the order of
-/// their first points (as PCL lists its clusters), and returns how many there are.
+/// their first points (PCL's extract() then lists its clusters largest first), and returns how many there are.
 std::int32_t euclidean_components(const GridRadiusSearch& search, double tolerance, ComponentScratch& scratch,
                                   std::vector<std::int32_t>& component_of);
 
