@@ -30,26 +30,30 @@ double quantile(std::vector<double> v, double q) {
     return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
 }
 
-// Frames k = 0 … warmup + frames − 1 (frame k mod 3 of the recording, 0.1 s apart); the last `frames` measured.
-template <class Process>
-Measured measure(const std::vector<rp::Frame>& kitti, int warmup, int frames, Process&& process) {
+struct Sample {
     std::vector<double> ms;
-    std::vector<long> allocs;
-    for (int k = 0; k < warmup + frames; ++k) {
-        const rp::Frame& f = kitti[static_cast<std::size_t>(k) % kitti.size()];
-        rp::FrameMotion motion;
-        motion.timestamp_s = 0.1 * k;
-        on_frame(k);
-        const auto start = std::chrono::steady_clock::now();
-        const long n = allocations_in([&] { process(f, motion); });
-        const double elapsed = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        if (k < warmup) continue;
-        ms.push_back(elapsed);
-        allocs.push_back(n);
+    std::vector<long> allocations;
+
+    Measured summary() const {
+        const std::vector<double> a(allocations.begin(), allocations.end());
+        return {quantile(ms, 0.5), quantile(ms, 0.9), static_cast<long>(quantile(a, 0.5)),
+                *std::max_element(allocations.begin(), allocations.end())};
     }
-    std::vector<double> a(allocs.begin(), allocs.end());
-    return {quantile(ms, 0.5), quantile(ms, 0.9), static_cast<long>(quantile(a, 0.5)),
-            *std::max_element(allocs.begin(), allocs.end())};
+};
+
+// One call of `process` on frame k of the recording (k mod 3, 0.1 s apart), timed and its allocations counted.
+template <class Process>
+void run_frame(const std::vector<rp::Frame>& kitti, int k, bool keep, Process&& process, Sample& into) {
+    const rp::Frame& f = kitti[static_cast<std::size_t>(k) % kitti.size()];
+    rp::FrameMotion motion;
+    motion.timestamp_s = 0.1 * k;
+    on_frame(k);
+    const auto start = std::chrono::steady_clock::now();
+    const long n = allocations_in([&] { process(f, motion); });
+    const double elapsed = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (!keep) return;
+    into.ms.push_back(elapsed);
+    into.allocations.push_back(n);
 }
 
 double load_average() {
@@ -82,13 +86,17 @@ int main(int argc, char** argv) {
         cfg.fusion.method = method;
         rp::Estimator fresh(cfg), reusing(cfg);
         rp::Result out;
-        const Measured a = measure(kitti, warmup, frames, [&](const rp::Frame& f, const rp::FrameMotion& m) {
-            const rp::Result r = fresh.process(f, 5.0, 0.02, m);
-            if (r.frame < 0) std::abort();  // keeps the result alive
-        });
-        const Measured b = measure(kitti, warmup, frames, [&](const rp::Frame& f, const rp::FrameMotion& m) {
-            reusing.process(f, 5.0, 0.02, m, out);
-        });
+        Sample returning, reused;  // the two calls take turns frame by frame: both see the same load
+        for (int k = 0; k < warmup + frames; ++k) {
+            run_frame(kitti, k, k >= warmup, [&](const rp::Frame& f, const rp::FrameMotion& m) {
+                const rp::Result r = fresh.process(f, 5.0, 0.02, m);
+                if (r.frame < 0) std::abort();  // keeps the result alive
+            }, returning);
+            run_frame(kitti, k, k >= warmup, [&](const rp::Frame& f, const rp::FrameMotion& m) {
+                reusing.process(f, 5.0, 0.02, m, out);
+            }, reused);
+        }
+        const Measured a = returning.summary(), b = reused.summary();
         std::printf("| %s | process() → Result | %.2f | %.2f | %ld | %ld |\n", name, a.median_ms, a.p90_ms,
                     a.median_allocations, a.max_allocations);
         std::printf("| %s | process(..., out) | %.2f | %.2f | %ld | %ld |\n", name, b.median_ms, b.p90_ms,
