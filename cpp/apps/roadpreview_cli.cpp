@@ -141,8 +141,8 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     std::fprintf(stderr, "[%s] %s: %lld points, %lld ground%s, class L=%s R=%s vehicle=%s%s%s, %.2f ms%s\n",
                  counter.c_str(), rp::frame_label(f).c_str(), static_cast<long long>(r.points.input),
                  static_cast<long long>(r.points.ground), obstacles_of(r).c_str(), class_of(r.left.roughness).c_str(),
-                 class_of(r.right.roughness).c_str(), class_of(r.vehicle).c_str(), r.reason.empty() ? "" : " — ",
-                 r.reason.c_str(), r.timing_ms.total, decode.c_str());
+                 class_of(r.right.roughness).c_str(), class_of(r.vehicle).c_str(), r.status == rp::FrameStatus::Ok ? "" : " — ",
+                 rp::to_string(r.status), r.timing_ms.total, decode.c_str());
 }
 
 void report_source(const rp::SourceInfo& s) {

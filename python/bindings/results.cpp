@@ -75,7 +75,7 @@ std::string result_repr(const rp::Result& r) {
     if (!r.source.empty()) out += " of " + r.source;
     out += ": " + std::to_string(r.points.input) + " points, " + std::to_string(r.points.ground) + " ground, " +
            rp::to_string(r.path.status);
-    if (!r.reason.empty()) return out + "; no profiles: " + r.reason + ">";
+    if (r.status != rp::FrameStatus::Ok) return out + "; no profiles: " + rp::to_string(r.status) + ">";
     return out + "; class left " + cls(r.left.roughness) + ", right " + cls(r.right.roughness) + ", vehicle " +
            cls(r.vehicle) + "; " + printed("%.2f", r.timing_ms.total) + " ms>";
 }
@@ -206,7 +206,7 @@ void bind_results(py::module_& m) {
             return d;
         })
         .def_property_readonly("reason", [](const rp::Result& r) -> py::object {
-            return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
+            return r.status == rp::FrameStatus::Ok ? py::object(py::none()) : py::object(py::str(rp::to_string(r.status)));
         })
         .def_property_readonly("fusion", [](const rp::Result& r) -> py::object {
             if (!r.fusion) return py::none();

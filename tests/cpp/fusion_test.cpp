@@ -222,7 +222,7 @@ TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
     double t = 1.0;
     const scenes::Cloud empty(0, 3);
     const rp::Result no_ground = est.process(empty, 8.0, 0.0, "", rp::FrameMotion{t, std::nullopt});
-    EXPECT_EQ(no_ground.reason, "");  // the map stands in for the frame: profiles from it, at the moved pose
+    EXPECT_EQ(no_ground.status, rp::FrameStatus::Ok);  // the map stands in for the frame: profiles from it, at the moved pose
     EXPECT_EQ(no_ground.fusion->frames, 10);
     EXPECT_EQ(no_ground.fusion->frame_coverage, 0.0);
     EXPECT_FALSE(no_ground.plane);
@@ -252,12 +252,12 @@ TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
 TEST(Fusion, AFrameWithoutGroundOnAnEmptyMapHasNoProfiles) {
     rp::Estimator est(fusion_config(rp::FusionMethod::Kalman));
     const scenes::Cloud empty(0, 3);
-    EXPECT_EQ(est.process(empty, 8.0, 0.0, "", rp::FrameMotion{0.0, std::nullopt}).reason, "no finite points");
+    EXPECT_EQ(est.process(empty, 8.0, 0.0, "", rp::FrameMotion{0.0, std::nullopt}).status, rp::FrameStatus::NoFinitePoints);
     scenes::Cloud far(10, 3);  // points, but none in the region of interest
     for (int i = 0; i < 10; ++i) far.row(i) << 100.0f, float(i), 0.0f;
     const rp::Result r = est.process(far, 8.0, 0.0, "", rp::FrameMotion{0.1, std::nullopt});
     EXPECT_FALSE(r.plane);
-    EXPECT_EQ(r.reason, "no ground");
+    EXPECT_EQ(r.status, rp::FrameStatus::NoGround);
     EXPECT_TRUE(r.left.z.empty());
 }
 

@@ -126,6 +126,35 @@ TEST(GridRadiusSearch, GivesPclsEuclideanClusterExtractionTheKdTreesClusters) {
     EXPECT_EQ(clusters(cloud, pcl::make_shared<rp::GridRadiusSearch>(0.5), 0.5), want);
 }
 
+// The clusters the obstacle stage grows itself (into kept buffers) are those of PCL's extraction (which lists
+// them largest first; the components are numbered by their first point), also when the same scratch serves a second, different cloud and when the grid is rebuilt in place.
+TEST(GridRadiusSearch, EuclideanComponentsAreThoseOfPclsExtraction) {
+    rp::ComponentScratch scratch;
+    rp::GridRadiusSearch grid(0.5);
+    for (unsigned seed : {6u, 8u}) {
+        const auto cloud = random_cloud(6000, 30.0, 2.0, seed);
+        pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+        extraction.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
+        extraction.setClusterTolerance(0.5);
+        extraction.setInputCloud(cloud);
+        std::vector<pcl::PointIndices> want;
+        extraction.extract(want);
+        grid.setInputCloud(cloud);
+        std::vector<std::int32_t> component_of;
+        const auto n = rp::euclidean_components(grid, 0.5, scratch, component_of);
+        ASSERT_EQ(static_cast<std::size_t>(n), want.size());
+        EXPECT_GT(n, 50);
+        std::vector<std::int32_t> seen;  // each cluster's component: one per cluster, all different
+        for (const auto& cluster : want) {
+            const std::int32_t c = component_of[static_cast<std::size_t>(cluster.indices.front())];
+            for (const auto i : cluster.indices) ASSERT_EQ(component_of[static_cast<std::size_t>(i)], c);
+            seen.push_back(c);
+        }
+        std::sort(seen.begin(), seen.end());
+        EXPECT_EQ(std::unique(seen.begin(), seen.end()), seen.end());
+    }
+}
+
 TEST(GridRadiusSearch, RejectsWhatItCannotDo) {
     EXPECT_THROW(rp::GridRadiusSearch(0.0), std::invalid_argument);
     rp::GridRadiusSearch grid(0.5);

@@ -207,12 +207,12 @@ TEST(Obstacles, OffStoppedAndNoGround) {
     EXPECT_EQ(std::count(r_off.cluster_labels.begin(), r_off.cluster_labels.end(), -1), scene.rows());
 
     const rp::Result stopped = run(scene, 0.0, 0.0);
-    EXPECT_EQ(stopped.reason, "vehicle stopped");
+    EXPECT_EQ(stopped.status, rp::FrameStatus::VehicleStopped);
     EXPECT_EQ(stopped.obstacles->size(), 1u);  // what is around a stopped vehicle is still reported
     EXPECT_TRUE(stopped.left.obstacles && stopped.left.obstacles->empty());
 
     const rp::Result nothing = run(scenes::box(80.0, 0.0, 1.0, 1.0, 1.0), 5.0, 0.0);  // outside the ROI
-    EXPECT_EQ(nothing.reason, "no ground");
+    EXPECT_EQ(nothing.status, rp::FrameStatus::NoGround);
     EXPECT_TRUE(nothing.obstacles && nothing.obstacles->empty());
 }
 

@@ -40,7 +40,7 @@ TEST(Pipeline, SceneGivesGroundProfilesAndClasses) {
     EXPECT_EQ(r.left.z.size(), 400u);
     EXPECT_TRUE(r.left.roughness.iso_class) << r.left.roughness.reason;
     EXPECT_TRUE(r.vehicle.iso_class) << r.vehicle.reason;
-    EXPECT_TRUE(r.reason.empty());
+    EXPECT_EQ(r.status, rp::FrameStatus::Ok);
     EXPECT_GT(r.timing_ms.total, 0.0);
 }
 
@@ -69,14 +69,14 @@ TEST(Pipeline, NonFinitePointsAreDroppedAndCounted) {
 TEST(Pipeline, EmptyAndAllNanCloudsGiveReasonsNotCrashes) {
     rp::Estimator est(kitti_like());
     const rp::Result empty = est.process(scenes::Cloud(0, 3), 5.0, 0.0);
-    EXPECT_EQ(empty.reason, "no finite points");
+    EXPECT_EQ(empty.status, rp::FrameStatus::NoFinitePoints);
     EXPECT_FALSE(empty.plane);
     EXPECT_TRUE(empty.left.z.empty());
     EXPECT_EQ(empty.vehicle.reason, "no finite points");
     const scenes::Cloud nans = scenes::Cloud::Constant(100, 3, std::numeric_limits<float>::quiet_NaN());
-    EXPECT_EQ(est.process(nans, 5.0, 0.0).reason, "no finite points");
+    EXPECT_EQ(est.process(nans, 5.0, 0.0).status, rp::FrameStatus::NoFinitePoints);
     const scenes::Cloud far = scenes::plane(0, 0, -1.8, 500, 60.0, 80.0);  // nothing in the ROI
-    EXPECT_EQ(est.process(far, 5.0, 0.0).reason, "no ground");
+    EXPECT_EQ(est.process(far, 5.0, 0.0).status, rp::FrameStatus::NoGround);
 }
 
 TEST(Pipeline, StoppedVehicleKeepsTheGroundButHasNoProfiles) {
@@ -84,7 +84,7 @@ TEST(Pipeline, StoppedVehicleKeepsTheGroundButHasNoProfiles) {
     const rp::Result r = est.process(road_scene(), 0.0, 0.1);
     EXPECT_TRUE(r.plane);
     EXPECT_GT(r.points.ground, 0);
-    EXPECT_EQ(r.reason, "vehicle stopped");
+    EXPECT_EQ(r.status, rp::FrameStatus::VehicleStopped);
     EXPECT_TRUE(r.left.z.empty());
     EXPECT_EQ(r.left.roughness.reason, "vehicle stopped");
 }

@@ -8,8 +8,11 @@
 
 namespace roadpreview {
 
-ColumnGrid::ColumnGrid(std::vector<Point> points, double edge) : points_(std::move(points)) {
+ColumnGrid::ColumnGrid(std::vector<Point> points, double edge) : points_(std::move(points)) { build(edge); }
+
+void ColumnGrid::build(double edge) {
     if (!(edge > 0.0)) throw std::invalid_argument("ColumnGrid: the column edge must be positive");
+    start_.clear();
     if (points_.empty()) return;
     x0_ = y0_ = std::numeric_limits<double>::infinity();
     x1_ = y1_ = -std::numeric_limits<double>::infinity();
@@ -22,17 +25,17 @@ ColumnGrid::ColumnGrid(std::vector<Point> points, double edge) : points_(std::mo
     const std::size_t nx = column(x1_, x0_) + 1;
     ny_ = column(y1_, y0_) + 1;
     // Counting sort by column.
-    std::vector<std::uint32_t> key(points_.size());
+    key_.resize(points_.size());
     start_.assign(nx * ny_ + 1, 0);
     for (std::size_t k = 0; k < points_.size(); ++k) {
-        key[k] = static_cast<std::uint32_t>(column(points_[k].x, x0_) * ny_ + column(points_[k].y, y0_));
-        ++start_[key[k] + 1];
+        key_[k] = static_cast<std::uint32_t>(column(points_[k].x, x0_) * ny_ + column(points_[k].y, y0_));
+        ++start_[key_[k] + 1];
     }
     for (std::size_t c = 0; c + 1 < start_.size(); ++c) start_[c + 1] += start_[c];
-    std::vector<Point> sorted(points_.size());
-    std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
-    for (std::size_t k = 0; k < points_.size(); ++k) sorted[next[key[k]]++] = points_[k];
-    points_ = std::move(sorted);
+    sorted_.resize(points_.size());
+    next_.assign(start_.begin(), start_.end() - 1);
+    for (std::size_t k = 0; k < points_.size(); ++k) sorted_[next_[key_[k]]++] = points_[k];
+    points_.swap(sorted_);
 }
 
 }  // namespace roadpreview

@@ -22,6 +22,14 @@ public:
     /// max(4096, 4 × points) of them.
     ColumnGrid(std::vector<Point> points, double edge);
 
+    /// Grids the points that fill(buffer) appends to an emptied buffer, reusing every buffer of the grid.
+    template <class Fill>
+    void rebuild(double edge, Fill&& fill) {
+        points_.clear();
+        fill(points_);
+        build(edge);
+    }
+
     /// Calls visit(p) for every point p of the columns that overlap [x_lo, x_hi] × [y_lo, y_hi]: those inside
     /// it and some around it, for the caller to test.
     template <class Visit>
@@ -37,12 +45,15 @@ public:
     }
 
 private:
+    void build(double edge);
     std::size_t column(double v, double origin) const { return static_cast<std::size_t>((v - origin) / edge_); }
 
     double x0_ = 0.0, x1_ = 0.0, y0_ = 0.0, y1_ = 0.0, edge_ = 1.0;
     std::size_t ny_ = 0;
     std::vector<std::uint32_t> start_;  // column c holds points_[start_[c] … start_[c + 1])
     std::vector<Point> points_;
+    std::vector<std::uint32_t> key_, next_;  // scratch of build, kept for rebuild
+    std::vector<Point> sorted_;
 };
 
 }  // namespace roadpreview

@@ -14,6 +14,7 @@
 
 #include "core/median.hpp"
 #include "roadpreview/roughness/support.hpp"
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
@@ -177,11 +178,22 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
     status.frames = fused_;
 }
 
+// A frame touches at most one cell per point: buffers that large grow only with a larger frame than any before.
+void TemporalFusion::reserve_cells(std::size_t cells) {
+    touched_.reserve(cells);
+    for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
+    counts_.reserve(cells);
+    align_v_.reserve(cells);
+    shared_.reserve(cells);
+}
+
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                           const std::vector<float>* height_variances) {
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
-    std::vector<std::int64_t> touched;
+    std::vector<std::int64_t>& touched = touched_;
+    touched.clear();
+    reserve_cells(static_cast<std::size_t>(points.rows()));
     z_.resize(static_cast<std::size_t>(points.rows()));
     variance_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
@@ -201,8 +213,10 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     // without the cells spread over kPoolMaxSpread × the median spread — the foot of a wall or a car counts
     // as ground up to 0.2 m high and says nothing of the road's noise).
     const std::size_t cells = touched.size();
-    std::vector<double> medians(cells), spreads(cells), cell_z;
-    std::vector<std::int32_t> counts(cells);
+    std::vector<double>&medians = medians_, &spreads = spreads_, &cell_z = cell_z_;
+    medians.resize(cells);
+    spreads.resize(cells);
+    counts_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
         double variance_sum = 0.0;
@@ -212,22 +226,22 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
             variance_sum += variance_[static_cast<std::size_t>(i)];
         }
         head = -1;
-        counts[c] = static_cast<std::int32_t>(cell_z.size());
-        spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts[c])
+        counts_[c] = static_cast<std::int32_t>(cell_z.size());
+        spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts_[c])
                                         : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
     }
     cell_z.clear();  // now the spreads of the cells that have one
     for (std::size_t c = 0; c < cells; ++c)
-        if (counts[c] >= 2) cell_z.push_back(spreads[c]);
+        if (counts_[c] >= 2) cell_z.push_back(spreads[c]);
     const double typical = cell_z.empty() ? kNaN : median(cell_z.begin(), cell_z.end());
-    const auto pooled = backed_variances(counts.data(), spreads.data(), cells, kPoolMaxSpread * typical);
+    const bool pooled = backed_variances(counts_.data(), spreads.data(), cells, kPoolMaxSpread * typical, pooled_);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
-    std::vector<double> variances(cells);
-    for (std::size_t c = 0; c < cells; ++c) variances[c] = std::max(pooled ? (*pooled)[c] : single_point, kMinVariance);
-    if (cfg_.fusion.align) align(touched, variances, medians);
+    variances_.resize(cells);
+    for (std::size_t c = 0; c < cells; ++c) variances_[c] = std::max(pooled ? pooled_[c] : single_point, kMinVariance);
+    if (cfg_.fusion.align) align(touched, variances_, medians);
     for (std::size_t c = 0; c < cells; ++c)
-        fuse_cell(map_.cell(touched[c]), medians[c], variances[c], counts[c], frame_, cfg_.fusion);
+        fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], counts_[c], frame_, cfg_.fusion);
     ++fused_;
 }
 
@@ -253,21 +267,18 @@ std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) 
 
 void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
                            std::vector<double>& medians) {
-    struct Shared {
-        std::size_t index;
-        double difference, variance;
-        bool inlier = true;
-    };
-    std::vector<Eigen::Vector3d> v(slots.size());  // (1, x, y) about the vehicle, for a well-conditioned fit
-    std::vector<Shared> shared;
-    shared.reserve(slots.size());
+    using Shared = SharedCell;
+    std::vector<Eigen::Vector3d>& v = align_v_;  // (1, x, y) about the vehicle, for a well-conditioned fit
+    v.resize(slots.size());
+    std::vector<Shared>& shared = shared_;
+    shared.clear();
     for (std::size_t c = 0; c < slots.size(); ++c) {
         const auto [x, y] = map_.centre(slots[c]);
         v[c] = Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
         const MapCell& cell = map_.cell(slots[c]);
         if (cell.observations > 0)
             shared.push_back({c, medians[c] - cell.height,
-                              variances[c] + std::max<double>(cell.variance, kMinVariance)});
+                              variances[c] + std::max<double>(cell.variance, kMinVariance), true});
     }
     if (shared.size() < kMinAlignCells) return;
     // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the
@@ -287,8 +298,8 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     // Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and their
     // disagreement joins their own variance. They are judged against the median difference: a least-squares
     // plane would tilt towards them (many shared cells outweigh the slope prior) and hide them.
-    std::vector<double> deviations;
-    deviations.reserve(shared.size());
+    std::vector<double>& deviations = deviations_;
+    deviations.clear();
     for (const Shared& s : shared) deviations.push_back(s.difference);
     const double offset = median(deviations.begin(), deviations.end());
     for (std::size_t i = 0; i < shared.size(); ++i) deviations[i] = std::abs(shared[i].difference - offset);
@@ -328,8 +339,8 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     }
 }
 
-Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
-                               std::size_t& ahead, std::size_t& ahead_now) const {
+void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
+                            std::size_t& ahead, std::size_t& ahead_now, Profile& p) const {
     const ProfileConfig& pc = cfg_.profile;
     const std::size_t bins_ahead = bin_count(pc);
     const auto behind = static_cast<std::size_t>(std::ceil(cfg_.fusion.behind_m / pc.ds_m - 1e-9));
@@ -338,7 +349,6 @@ Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vect
     const double c = std::cos(pose_.yaw_rad), sn = std::sin(pose_.yaw_rad);
     const double y_w = paths.wheel_y(w), r_w = paths.radius(w);
 
-    Profile p;
     p.ds = pc.ds_m;
     p.s0 = (0.5 - static_cast<double>(behind)) * pc.ds_m;
     p.s.resize(bins);
@@ -378,19 +388,23 @@ Profile TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vect
         p.spread[k] = spread_for_variance(variance / (valid * valid), p.count[k]);
     }
     fill_gaps(p.z, pc.ds_m, pc.max_gap_m, &p.blocked);
-    return p;
+}
+
+void TemporalFusion::profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status,
+                              Profile& left, Profile& right) const {
+    std::size_t ahead = 0, ahead_now = 0;
+    sample(paths, Wheel::Left, blocked ? &blocked->left : nullptr, ahead, ahead_now, left);
+    sample(paths, Wheel::Right, blocked ? &blocked->right : nullptr, ahead, ahead_now, right);
+    const double total = 2.0 * static_cast<double>(bin_count(cfg_.profile));
+    status.coverage = static_cast<double>(ahead) / total;
+    status.frame_coverage = static_cast<double>(ahead_now) / total;
+    status.frames = fused_;
 }
 
 WheelProfiles TemporalFusion::profiles(const WheelPaths& paths, const BlockedBins* blocked,
                                        FusionStatus& status) const {
     WheelProfiles out;
-    std::size_t ahead = 0, ahead_now = 0;
-    out.left = sample(paths, Wheel::Left, blocked ? &blocked->left : nullptr, ahead, ahead_now);
-    out.right = sample(paths, Wheel::Right, blocked ? &blocked->right : nullptr, ahead, ahead_now);
-    const double total = 2.0 * static_cast<double>(bin_count(cfg_.profile));
-    status.coverage = static_cast<double>(ahead) / total;
-    status.frame_coverage = static_cast<double>(ahead_now) / total;
-    status.frames = fused_;
+    profiles(paths, blocked, status, out.left, out.right);
     return out;
 }
 

@@ -10,6 +10,7 @@
 
 #include "ground/ground_pcl.hpp"
 #include "ground/plane_fit.hpp"
+#include "ground/zone_scratch.hpp"
 #include "roadpreview/ground/zones.hpp"
 
 namespace roadpreview {
@@ -42,8 +43,9 @@ std::optional<Plane> plane_from(const Moments& m) {
 Eigen::Vector3d row(PointsView pts, Eigen::Index i) { return pts.row(i).cast<double>().transpose(); }
 
 // The paper's method: fit, drop points more than `threshold` above the plane, repeat.
-GroundFit pca_ground(PointsView pts, const GroundConfig& cfg) {
-    GroundFit fit;
+void pca_ground(PointsView pts, const GroundConfig& cfg, GroundFit& fit) {
+    fit.reason.clear();
+    fit.plane.reset();
     fit.mask.assign(static_cast<std::size_t>(pts.rows()), 1);
     Moments kept;
     for (Eigen::Index i = 0; i < pts.rows(); ++i) kept.add(row(pts, i));
@@ -63,7 +65,6 @@ GroundFit pca_ground(PointsView pts, const GroundConfig& cfg) {
     }
     fit.count = fit.plane ? kept.count : 0;
     if (!fit.plane) std::fill(fit.mask.begin(), fit.mask.end(), 0);
-    return fit;
 }
 
 // PCL's up-axis-constrained plane model; subclassed only to set the seed of its sampler.
@@ -124,18 +125,33 @@ std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t
     return plane_from(m);
 }
 
-GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
-    GroundFit fit = cfg.method == GroundMethod::Pca      ? pca_ground(roi.view(), cfg)
-                    : cfg.method == GroundMethod::Ransac ? ransac_ground(roi, cfg)
-                                                         : zone_ground(roi.view(), cfg);
+GroundScratch::GroundScratch() = default;
+GroundScratch::~GroundScratch() = default;
+
+void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scratch, GroundFit& fit) {
+    if (cfg.method == GroundMethod::Zones) {
+        if (!scratch.zones) scratch.zones = std::make_unique<ZoneScratch>(cfg);
+        zone_ground(roi.view(), cfg, *scratch.zones, fit);
+    } else if (cfg.method == GroundMethod::Pca) {
+        pca_ground(roi.view(), cfg, fit);
+    } else {
+        fit = ransac_ground(roi, cfg);
+    }
     // A wall, a bank of vegetation: not ground. The zones hold each patch to the limit (their frame plane only
     // sums up upright patches, on a hillside it may lie steeper).
     if (cfg.method != GroundMethod::Zones && fit.plane && !within_tilt(*fit.plane, cfg.max_tilt_deg)) {
-        fit = GroundFit{};
-        fit.mask.assign(static_cast<std::size_t>(roi.size()), 0);
+        std::fill(fit.mask.begin(), fit.mask.end(), 0);
+        fit.plane.reset();
+        fit.count = 0;
         fit.reason = kTiltedGround;
     }
     if (!fit.plane && fit.reason.empty()) fit.reason = "no ground";
+}
+
+GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
+    GroundScratch scratch;
+    GroundFit fit;
+    fit_ground(roi, cfg, scratch, fit);
     return fit;
 }
 

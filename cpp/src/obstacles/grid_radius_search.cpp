@@ -12,19 +12,17 @@ GridRadiusSearch::GridRadiusSearch(double column_edge) : Search("GridRadiusSearc
 void GridRadiusSearch::setInputCloud(const PointCloudConstPtr& cloud, const IndicesConstPtr& indices) {
     input_ = cloud;
     indices_ = indices;
-    std::vector<ColumnGrid::Point> points;
-    const auto add = [&](pcl::index_t i) {
-        const pcl::PointXYZ& p = (*cloud)[static_cast<std::size_t>(i)];
-        points.push_back({p.x, p.y, p.z, i});
-    };
-    if (indices) {
-        points.reserve(indices->size());
-        for (const auto i : *indices) add(i);
-    } else {
-        points.reserve(cloud->size());
-        for (std::size_t i = 0; i < cloud->size(); ++i) add(static_cast<pcl::index_t>(i));
-    }
-    grid_ = ColumnGrid(std::move(points), column_edge_);
+    grid_.rebuild(column_edge_, [&](std::vector<ColumnGrid::Point>& points) {
+        const auto add = [&](pcl::index_t i) {
+            const pcl::PointXYZ& p = (*cloud)[static_cast<std::size_t>(i)];
+            points.push_back({p.x, p.y, p.z, i});
+        };
+        if (indices) {
+            for (const auto i : *indices) add(i);
+        } else {
+            for (std::size_t i = 0; i < cloud->size(); ++i) add(static_cast<pcl::index_t>(i));
+        }
+    });
 }
 
 int GridRadiusSearch::radiusSearch(const pcl::PointXYZ& point, double radius, pcl::Indices& k_indices,
@@ -50,6 +48,29 @@ int GridRadiusSearch::radiusSearch(const pcl::PointXYZ& point, double radius, pc
         k_sqr_distances.resize(max_nn);
     }
     return static_cast<int>(k_indices.size());
+}
+
+std::int32_t euclidean_components(const GridRadiusSearch& search, double tolerance, ComponentScratch& scratch,
+                                  std::vector<std::int32_t>& component_of) {
+    const auto& cloud = *search.getInputCloud();
+    component_of.assign(cloud.size(), -1);
+    std::int32_t components = 0;
+    for (std::size_t seed = 0; seed < cloud.size(); ++seed) {
+        if (component_of[seed] >= 0) continue;
+        scratch.queue.assign(1, static_cast<std::int32_t>(seed));
+        component_of[seed] = components;
+        for (std::size_t next = 0; next < scratch.queue.size(); ++next) {
+            const auto& p = cloud[static_cast<std::size_t>(scratch.queue[next])];
+            search.radiusSearch(p, tolerance, scratch.neighbours, scratch.sqr_distances);
+            for (const auto j : scratch.neighbours) {
+                if (component_of[static_cast<std::size_t>(j)] >= 0) continue;
+                component_of[static_cast<std::size_t>(j)] = components;
+                scratch.queue.push_back(j);
+            }
+        }
+        ++components;
+    }
+    return components;
 }
 
 int GridRadiusSearch::nearestKSearch(const pcl::PointXYZ&, int, pcl::Indices&, std::vector<float>&) const {

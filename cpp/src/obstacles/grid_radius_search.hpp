@@ -37,4 +37,19 @@ private:
     ColumnGrid grid_;
 };
 
+/// Buffers of euclidean_components, kept between calls so that clustering a stream of frames allocates nothing.
+struct ComponentScratch {
+    std::vector<std::int32_t> queue;
+    pcl::Indices neighbours;
+    std::vector<float> sqr_distances;
+};
+
+/// The clusters of PCL's Euclidean cluster extraction (pcl::extractEuclideanClusters, every size kept), grown
+/// the same way — from each point not yet taken, by radius searches — into buffers kept between frames, where
+/// PCL allocates a queue and an index list per cluster: the connected components of the search's whole input
+/// cloud, points joined when closer than `tolerance`. Writes each point's component, numbered in the order of
+/// their first points (PCL's extract() then lists its clusters largest first), and returns how many there are.
+std::int32_t euclidean_components(const GridRadiusSearch& search, double tolerance, ComponentScratch& scratch,
+                                  std::vector<std::int32_t>& component_of);
+
 }  // namespace roadpreview

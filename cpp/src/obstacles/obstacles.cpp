@@ -7,8 +7,6 @@
 #include <stdexcept>
 #include <tuple>
 
-#include <pcl/segmentation/extract_clusters.h>
-
 #include "core/column_grid.hpp"
 #include "obstacles/grid_radius_search.hpp"
 #include "core/median.hpp"
@@ -20,31 +18,15 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-using Cloud = pcl::PointCloud<pcl::PointXYZ>;
-using Groups = std::vector<pcl::Indices>;  // clusters as ascending point indices
-
-// PCL's Euclidean cluster extraction of the cloud's points (radius searches in a grid of columns).
-std::vector<pcl::PointIndices> euclidean_clusters(const Cloud::ConstPtr& cloud, double tolerance) {
-    std::vector<pcl::PointIndices> clusters;
-    if (cloud->empty()) return clusters;
-    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
-    extraction.setSearchMethod(pcl::make_shared<GridRadiusSearch>(tolerance));
-    extraction.setClusterTolerance(tolerance);
-    extraction.setMinClusterSize(1);  // the size limits count points, applied after voxels are expanded
-    extraction.setMaxClusterSize(std::numeric_limits<pcl::uindex_t>::max());
-    extraction.setInputCloud(cloud);
-    extraction.extract(clusters);
-    return clusters;
-}
-
-// What is clustered: the centroid of each occupied voxel (each candidate itself when the voxel edge is 0),
-// and the representative of each candidate (by its position in the candidate list).
-struct Representatives {
-    Cloud::Ptr cloud = pcl::make_shared<Cloud>();
-    std::vector<std::int32_t> of;
+// One cluster's points: a stretch of ObstacleScratch::members.
+struct Members {
+    const pcl::index_t *first, *last;
+    const pcl::index_t* begin() const { return first; }
+    const pcl::index_t* end() const { return last; }
+    std::size_t size() const { return static_cast<std::size_t>(last - first); }
 };
 
-using Voxel = std::array<std::int64_t, 3>;  // voxel indices in x, y, z
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 // floor(v / edge), clamped so that an absurd (finite) coordinate cannot overflow the index; the integer
 // conversion and its correction below zero spare a call of std::floor per coordinate.
@@ -54,22 +36,23 @@ std::int64_t voxel_index(float v, double edge) {
     return truncated - (q < static_cast<double>(truncated) ? 1 : 0);
 }
 
-// Stable counting sort of `order` by key(k) in [0, buckets).
+// Stable counting sort of s.order by key(k) in [0, buckets).
 template <class Key>
-void counting_sort(std::vector<std::int32_t>& order, std::size_t buckets, Key key) {
-    std::vector<std::uint32_t> next(buckets + 1, 0);
-    for (const auto k : order) ++next[key(k) + 1];
-    for (std::size_t b = 0; b < buckets; ++b) next[b + 1] += next[b];
-    std::vector<std::int32_t> sorted(order.size());
-    for (const auto k : order) sorted[next[key(k)]++] = k;
-    order = std::move(sorted);
+void counting_sort(ObstacleScratch& s, std::size_t buckets, Key key) {
+    s.next.assign(buckets + 1, 0);
+    for (const auto k : s.order) ++s.next[key(k) + 1];
+    for (std::size_t b = 0; b < buckets; ++b) s.next[b + 1] += s.next[b];
+    s.sorted.resize(s.order.size());
+    for (const auto k : s.order) s.sorted[s.next[key(k)]++] = k;
+    s.order.swap(s.sorted);
 }
 
-// Positions 0 … n−1 ordered by voxel, each voxel's ascending: counting sorts by z, then by the (x, y) column
-// when the spans are small (the ROI bounds x and y); one comparison sort otherwise.
-std::vector<std::int32_t> voxel_order(const std::vector<Voxel>& voxel) {
-    std::vector<std::int32_t> order(voxel.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<std::int32_t>(k);
+// s.order: positions 0 … n−1 of s.voxel ordered by voxel, each voxel's ascending: counting sorts by z, then by
+// the (x, y) column when the spans are small (the ROI bounds x and y); one comparison sort otherwise.
+void voxel_order(ObstacleScratch& s) {
+    const auto& voxel = s.voxel;
+    s.order.resize(voxel.size());
+    for (std::size_t k = 0; k < s.order.size(); ++k) s.order[k] = static_cast<std::int32_t>(k);
     Voxel lo = voxel.front(), hi = voxel.front();
     for (const Voxel& v : voxel)
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
@@ -77,108 +60,107 @@ std::vector<std::int32_t> voxel_order(const std::vector<Voxel>& voxel) {
     const std::uint64_t most = 4 * voxel.size() + 4096;
     if (span(2) <= most && span(0) <= most && span(1) <= most / span(0)) {
         const auto offset = [&](std::int32_t k, int a) { return static_cast<std::size_t>(voxel[static_cast<std::size_t>(k)][a] - lo[a]); };
-        counting_sort(order, span(2), [&](std::int32_t k) { return offset(k, 2); });
-        counting_sort(order, span(0) * span(1), [&](std::int32_t k) { return offset(k, 0) * span(1) + offset(k, 1); });
+        counting_sort(s, span(2), [&](std::int32_t k) { return offset(k, 2); });
+        counting_sort(s, span(0) * span(1), [&](std::int32_t k) { return offset(k, 0) * span(1) + offset(k, 1); });
     } else {
-        std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+        std::sort(s.order.begin(), s.order.end(), [&](std::int32_t a, std::int32_t b) {
             return std::tie(voxel[static_cast<std::size_t>(a)], a) < std::tie(voxel[static_cast<std::size_t>(b)], b);
         });
     }
-    return order;
 }
 
 // The voxel centroids, each the mean of its candidates in ascending order (double precision).
-Representatives voxel_centroids(PointsView pts, const pcl::Indices& candidates, double edge) {
-    Representatives r;
-    if (candidates.empty()) return r;
-    std::vector<Voxel> voxel(candidates.size());
+void voxel_centroids(PointsView pts, const pcl::Indices& candidates, double edge, ObstacleScratch& s) {
+    if (candidates.empty()) return;
+    s.voxel.resize(candidates.size());
     for (std::size_t k = 0; k < candidates.size(); ++k)
-        for (int a = 0; a < 3; ++a) voxel[k][a] = voxel_index(pts(candidates[k], a), edge);
-    const std::vector<std::int32_t> order = voxel_order(voxel);
-    r.of.resize(candidates.size());
+        for (int a = 0; a < 3; ++a) s.voxel[k][a] = voxel_index(pts(candidates[k], a), edge);
+    voxel_order(s);
+    const auto& order = s.order;
     for (std::size_t first = 0, last = 0; first < order.size(); first = last) {
-        const Voxel& v = voxel[static_cast<std::size_t>(order[first])];
+        const Voxel& v = s.voxel[static_cast<std::size_t>(order[first])];
         Vec3 sum{};
-        for (last = first; last < order.size() && voxel[static_cast<std::size_t>(order[last])] == v; ++last) {
+        for (last = first; last < order.size() && s.voxel[static_cast<std::size_t>(order[last])] == v; ++last) {
             const auto k = static_cast<std::size_t>(order[last]);
             for (int a = 0; a < 3; ++a) sum[a] += pts(candidates[k], a);
-            r.of[k] = static_cast<std::int32_t>(r.cloud->size());
+            s.representative_of[k] = static_cast<std::int32_t>(s.representatives->size());
         }
         const double n = static_cast<double>(last - first);
-        r.cloud->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
-                                         static_cast<float>(sum[2] / n)));
+        s.representatives->push_back(pcl::PointXYZ(static_cast<float>(sum[0] / n), static_cast<float>(sum[1] / n),
+                                                   static_cast<float>(sum[2] / n)));
     }
-    return r;
 }
 
-Representatives representatives(PointsView pts, const pcl::Indices& candidates, double voxel_edge) {
-    if (voxel_edge > 0.0) return voxel_centroids(pts, candidates, voxel_edge);
-    Representatives r;
-    for (const auto i : candidates) {
-        r.of.push_back(static_cast<std::int32_t>(r.cloud->size()));
-        r.cloud->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
-    }
-    return r;
-}
-
-// Cluster id per candidate (−1: none): PCL's Euclidean clusters of the representatives, each candidate joining
-// its representative's; clusters outside the size limits (in points) dropped, the rest ranked nearest first
-// (smallest x of their points), ties by their lowest input row (`row_of` each point, the point itself if null).
-std::vector<std::int32_t> candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
-                                           const std::vector<std::int32_t>* row_of) {
-    const Representatives reps = representatives(pts, candidates, cfg.voxel_m);
-    const std::vector<pcl::PointIndices> components = euclidean_clusters(reps.cloud, cfg.cluster_tolerance_m);
-    std::vector<std::int32_t> component_of(reps.cloud->size());
-    for (std::size_t c = 0; c < components.size(); ++c)
-        for (const auto r : components[c].indices) component_of[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(c);
-    struct Extent {
-        std::int64_t count = 0;
-        float x_min = std::numeric_limits<float>::infinity();
-        pcl::index_t first = std::numeric_limits<pcl::index_t>::max();
-        bool operator<(const Extent& o) const { return std::tie(x_min, first) < std::tie(o.x_min, o.first); }
-    };
-    std::vector<Extent> extent(components.size());
-    std::vector<std::int32_t> label(candidates.size());
+// What is clustered: the centroid of each occupied voxel (each candidate itself when the voxel edge is 0),
+// and the representative of each candidate (by its position in the candidate list).
+void representatives(PointsView pts, const pcl::Indices& candidates, double voxel_edge, ObstacleScratch& s) {
+    s.representatives->clear();
+    s.representative_of.resize(candidates.size());
+    if (voxel_edge > 0.0) return voxel_centroids(pts, candidates, voxel_edge, s);
     for (std::size_t k = 0; k < candidates.size(); ++k) {
-        label[k] = component_of[static_cast<std::size_t>(reps.of[k])];
-        Extent& e = extent[static_cast<std::size_t>(label[k])];
+        const auto i = candidates[k];
+        s.representative_of[k] = static_cast<std::int32_t>(s.representatives->size());
+        s.representatives->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
+    }
+}
+
+// Cluster id per candidate (−1: none) in s.candidate_label: the Euclidean clusters of the representatives
+// (as PCL's EuclideanClusterExtraction finds them), each candidate joining its representative's; clusters outside
+// the size limits (in points) dropped, the rest ranked nearest first (smallest x of their points), ties by their
+// lowest input row (`row_of` each point, the point itself if null).
+void candidate_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
+                      const std::vector<std::int32_t>* row_of, ObstacleScratch& s) {
+    representatives(pts, candidates, cfg.voxel_m, s);
+    if (!s.search || s.search_edge != cfg.cluster_tolerance_m) {
+        s.search = pcl::make_shared<GridRadiusSearch>(cfg.cluster_tolerance_m);
+        s.search_edge = cfg.cluster_tolerance_m;
+    }
+    s.search->setInputCloud(s.representatives);
+    const auto components = static_cast<std::size_t>(
+        euclidean_components(*s.search, cfg.cluster_tolerance_m, s.components, s.component_of));
+    s.extent.assign(components, ClusterExtent{});
+    s.candidate_label.resize(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const std::int32_t c = s.component_of[static_cast<std::size_t>(s.representative_of[k])];
+        s.candidate_label[k] = c;
+        ClusterExtent& e = s.extent[static_cast<std::size_t>(c)];
         ++e.count;
         e.x_min = std::min(e.x_min, pts(candidates[k], 0));
         e.first = std::min(e.first, row_of ? (*row_of)[static_cast<std::size_t>(candidates[k])] : candidates[k]);
     }
-    std::vector<std::int32_t> kept;
-    for (std::size_t c = 0; c < extent.size(); ++c)
-        if (extent[c].count >= cfg.min_cluster_points && extent[c].count <= cfg.max_cluster_points)
-            kept.push_back(static_cast<std::int32_t>(c));
-    std::sort(kept.begin(), kept.end(), [&](std::int32_t a, std::int32_t b) { return extent[a] < extent[b]; });
-    std::vector<std::int32_t> id(components.size(), -1);
-    for (std::size_t rank = 0; rank < kept.size(); ++rank) id[static_cast<std::size_t>(kept[rank])] = static_cast<std::int32_t>(rank);
-    for (auto& l : label) l = id[static_cast<std::size_t>(l)];
-    return label;
+    s.kept.clear();
+    for (std::size_t c = 0; c < components; ++c)
+        if (s.extent[c].count >= cfg.min_cluster_points && s.extent[c].count <= cfg.max_cluster_points)
+            s.kept.push_back(static_cast<std::int32_t>(c));
+    std::sort(s.kept.begin(), s.kept.end(), [&](std::int32_t a, std::int32_t b) { return s.extent[a] < s.extent[b]; });
+    s.id.assign(components, -1);
+    for (std::size_t rank = 0; rank < s.kept.size(); ++rank) s.id[static_cast<std::size_t>(s.kept[rank])] = static_cast<std::int32_t>(rank);
+    for (auto& l : s.candidate_label) l = s.id[static_cast<std::size_t>(l)];
 }
 
 // Cluster id per point (−1: none) of the `candidates` among `points` points.
-std::vector<std::int32_t> point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
-                                       const std::vector<std::int32_t>* row_of = nullptr) {
-    std::vector<std::int32_t> label(static_cast<std::size_t>(pts.rows()), -1);
-    const std::vector<std::int32_t> of_candidate = candidate_labels(pts, candidates, cfg, row_of);
-    for (std::size_t k = 0; k < candidates.size(); ++k) label[static_cast<std::size_t>(candidates[k])] = of_candidate[k];
-    return label;
+void point_labels(PointsView pts, const pcl::Indices& candidates, const ObstaclesConfig& cfg,
+                  const std::vector<std::int32_t>* row_of, ObstacleScratch& s, std::vector<std::int32_t>& label) {
+    label.assign(static_cast<std::size_t>(pts.rows()), -1);
+    candidate_labels(pts, candidates, cfg, row_of, s);
+    for (std::size_t k = 0; k < candidates.size(); ++k) label[static_cast<std::size_t>(candidates[k])] = s.candidate_label[k];
 }
 
-// Each cluster's points, ascending.
-Groups groups_of(const std::vector<std::int32_t>& label) {
-    Groups groups;
-    for (std::size_t i = 0; i < label.size(); ++i) {
-        if (label[i] < 0) continue;
-        if (static_cast<std::size_t>(label[i]) >= groups.size()) groups.resize(static_cast<std::size_t>(label[i]) + 1);
-        groups[static_cast<std::size_t>(label[i])].push_back(static_cast<pcl::index_t>(i));
-    }
-    return groups;
+// Each cluster's points, ascending (counting sort): cluster g holds s.members[s.member_start[g] …
+// s.member_start[g + 1]).
+void group_members(const std::vector<std::int32_t>& label, std::size_t clusters, ObstacleScratch& s) {
+    s.member_start.assign(clusters + 1, 0);
+    for (const auto l : label)
+        if (l >= 0) ++s.member_start[static_cast<std::size_t>(l) + 1];
+    for (std::size_t g = 0; g < clusters; ++g) s.member_start[g + 1] += s.member_start[g];
+    s.members.resize(s.member_start.back());
+    s.next.assign(s.member_start.begin(), s.member_start.end() - 1);
+    for (std::size_t i = 0; i < label.size(); ++i)
+        if (label[i] >= 0) s.members[s.next[static_cast<std::size_t>(label[i])]++] = static_cast<pcl::index_t>(i);
 }
 
 // The box about the vertical axis along the principal horizontal directions: yaw = ½·atan2(2c_xy, c_xx − c_yy).
-OrientedBox oriented_box(PointsView pts, const pcl::Indices& members, const Vec3& mean) {
+OrientedBox oriented_box(PointsView pts, const Members& members, const Vec3& mean) {
     double cxx = 0.0, cyy = 0.0, cxy = 0.0;
     for (const auto i : members) {
         const double dx = pts(i, 0) - mean[0], dy = pts(i, 1) - mean[1];
@@ -202,7 +184,7 @@ OrientedBox oriented_box(PointsView pts, const pcl::Indices& members, const Vec3
 }
 
 // Count, centroid, axis-aligned and oriented boxes of one group.
-Cluster describe(PointsView pts, const pcl::Indices& members) {
+Cluster describe(PointsView pts, const Members& members) {
     Cluster c;
     c.count = static_cast<std::int32_t>(members.size());
     c.aabb_min = {kInf, kInf, kInf};
@@ -222,36 +204,38 @@ Cluster describe(PointsView pts, const pcl::Indices& members) {
 }
 
 // The ground points in columns 1 m wide, to find those around a cluster in O(nearby).
-ColumnGrid ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground) {
-    std::vector<ColumnGrid::Point> points;
-    for (Eigen::Index i = 0; i < pts.rows(); ++i)
-        if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
-    return ColumnGrid(std::move(points), 1.0);
+void ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground, ColumnGrid& grid) {
+    grid.rebuild(1.0, [&](std::vector<ColumnGrid::Point>& points) {
+        for (Eigen::Index i = 0; i < pts.rows(); ++i)
+            if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+    });
 }
 
 // Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
-double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach) {
+double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach,
+                    std::vector<double>& h) {
     const double x_lo = c.aabb_min[0] - reach, x_hi = c.aabb_max[0] + reach;
     const double y_lo = c.aabb_min[1] - reach, y_hi = c.aabb_max[1] + reach;
-    std::vector<double> h;
+    h.clear();
     ground.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](const ColumnGrid::Point& q) {
         if (q.x >= x_lo && q.x <= x_hi && q.y >= y_lo && q.y <= y_hi) h.push_back(height_above(plane, q.x, q.y, q.z));
     });
     return h.empty() ? 0.0 : median(h.begin(), h.end());
 }
 
-Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const std::vector<std::uint8_t>& ground,
-                        const Plane& plane, const ObstaclesConfig& cfg) {
-    const Groups groups = groups_of(label);
-    Clustering out;
-    out.label = std::move(label);
-    const ColumnGrid ground_grid = ground_columns(pts, ground);
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-        Cluster c = describe(pts, groups[g]);
+// The clusters of out.label described: boxes, local ground, height and bottom.
+void describe_all(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane,
+                  const ObstaclesConfig& cfg, ObstacleScratch& s, Clustering& out) {
+    group_members(out.label, s.kept.size(), s);
+    ground_columns(pts, ground, s.ground_grid);
+    out.clusters.clear();
+    for (std::size_t g = 0; g + 1 < s.member_start.size(); ++g) {
+        const Members members{s.members.data() + s.member_start[g], s.members.data() + s.member_start[g + 1]};
+        Cluster c = describe(pts, members);
         c.id = static_cast<std::int32_t>(g);
-        c.ground_offset = local_ground(ground_grid, plane, c, cfg.ground_search_m);
+        c.ground_offset = local_ground(s.ground_grid, plane, c, cfg.ground_search_m, s.heights);
         double top = -kInf, low = kInf;
-        for (const auto i : groups[g]) {
+        for (const auto i : members) {
             const double h = height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2));
             top = std::max(top, h), low = std::min(low, h);
         }
@@ -259,18 +243,28 @@ Clustering describe_all(PointsView pts, std::vector<std::int32_t> label, const s
         c.bottom = low - c.ground_offset;
         out.clusters.push_back(c);
     }
-    return out;
 }
 
 }  // namespace
 
+ObstacleScratch::ObstacleScratch() = default;
+ObstacleScratch::~ObstacleScratch() = default;
+
+void find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
+                    const ObstaclesConfig& cfg, ObstacleScratch& s, Clustering& out) {
+    s.candidates.clear();
+    for (std::size_t i = 0; i < ground_mask.size(); ++i)
+        if (!ground_mask[i]) s.candidates.push_back(static_cast<pcl::index_t>(i));
+    point_labels(roi.view(), s.candidates, cfg, &roi.input_index, s, out.label);
+    describe_all(roi.view(), ground_mask, plane, cfg, s, out);
+}
+
 Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
                           const ObstaclesConfig& cfg) {
-    pcl::Indices candidates;
-    for (std::size_t i = 0; i < ground_mask.size(); ++i)
-        if (!ground_mask[i]) candidates.push_back(static_cast<pcl::index_t>(i));
-    std::vector<std::int32_t> label = point_labels(roi.view(), candidates, cfg, &roi.input_index);
-    return describe_all(roi.view(), std::move(label), ground_mask, plane, cfg);
+    ObstacleScratch scratch;
+    Clustering out;
+    find_obstacles(roi, ground_mask, plane, cfg, scratch, out);
+    return out;
 }
 
 Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,
@@ -292,24 +286,29 @@ Clustering find_obstacles(PointsView points, const std::vector<std::uint8_t>& gr
 
 pcl::PointCloud<pcl::PointXYZ>::Ptr cluster_representatives(PointsView points, const pcl::Indices& candidates,
                                                             double voxel_m) {
-    return representatives(points, candidates, voxel_m).cloud;
+    ObstacleScratch scratch;
+    representatives(points, candidates, voxel_m, scratch);
+    return scratch.representatives;
 }
 
 std::vector<std::int32_t> cluster_labels(PointsView points, const ObstaclesConfig& cfg) {
-    pcl::Indices finite;
+    ObstacleScratch scratch;
     for (Eigen::Index i = 0; i < points.rows(); ++i)
-        if (points.row(i).allFinite()) finite.push_back(static_cast<pcl::index_t>(i));
-    return point_labels(points, finite, cfg);
+        if (points.row(i).allFinite()) scratch.candidates.push_back(static_cast<pcl::index_t>(i));
+    std::vector<std::int32_t> label;
+    point_labels(points, scratch.candidates, cfg, nullptr, scratch, label);
+    return label;
 }
 
-std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
-                                          const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
-                                          double preview_length_m, const ObstaclesConfig& cfg) {
+void wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane, const Levelling& L,
+                     const WheelPaths& paths, Wheel w, double tire_width, double preview_length_m,
+                     const ObstaclesConfig& cfg, std::vector<PathObstacle>& out) {
     if (clustering.label.size() != static_cast<std::size_t>(points.rows()))
         throw std::invalid_argument("wheel_obstacles: " + std::to_string(clustering.label.size()) + " labels for " +
                                     std::to_string(points.rows()) + " points");
     const double corridor = tire_width + 2.0 * cfg.safety_margin_m;
-    std::vector<PathObstacle> spans(clustering.clusters.size(), PathObstacle{0, kInf, -kInf, -kInf});
+    std::vector<PathObstacle>& spans = out;  // one per cluster, then compacted to those in the path
+    spans.assign(clustering.clusters.size(), PathObstacle{0, kInf, -kInf, -kInf});
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const std::int32_t id = clustering.label[static_cast<std::size_t>(i)];
         if (id < 0) continue;
@@ -324,22 +323,33 @@ std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& c
         span.s_end = std::max(span.s_end, *s);
         span.height = std::max(span.height, height_above(plane, x, y, z));
     }
-    std::vector<PathObstacle> out;
+    std::size_t kept = 0;
     for (std::size_t k = 0; k < spans.size(); ++k) {
         if (spans[k].s_start > spans[k].s_end) continue;  // no point in the corridor
         if (clustering.clusters[k].bottom > cfg.clearance_m) continue;  // overhead: canopy, sign, bridge
         const double height = spans[k].height - clustering.clusters[k].ground_offset;
         if (height < cfg.min_height_m) continue;  // ground the ground fit missed (a rising road, a ramp)
-        out.push_back({static_cast<std::int32_t>(k), spans[k].s_start, spans[k].s_end, height});
+        out[kept++] = {static_cast<std::int32_t>(k), spans[k].s_start, spans[k].s_end, height};
     }
-    std::stable_sort(out.begin(), out.end(), [](const PathObstacle& a, const PathObstacle& b) { return a.s_start < b.s_start; });
+    out.resize(kept);
+    // By s_start, ties by id (the order of the clusters): a stable sort, without its buffer.
+    std::sort(out.begin(), out.end(), [](const PathObstacle& a, const PathObstacle& b) {
+        return std::tie(a.s_start, a.id) < std::tie(b.s_start, b.id);
+    });
+}
+
+std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane,
+                                          const Levelling& L, const WheelPaths& paths, Wheel w, double tire_width,
+                                          double preview_length_m, const ObstaclesConfig& cfg) {
+    std::vector<PathObstacle> out;
+    wheel_obstacles(points, clustering, plane, L, paths, w, tire_width, preview_length_m, cfg, out);
     return out;
 }
 
-std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds,
-                                       double margin_m) {
-    std::vector<std::uint8_t> blocked(bins, 0);
-    if (bins == 0) return blocked;
+void blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds, double margin_m,
+                  std::vector<std::uint8_t>& blocked) {
+    blocked.assign(bins, 0);
+    if (bins == 0) return;
     const double last = static_cast<double>(bins - 1);
     for (const PathObstacle& o : obstacles) {
         if (!(o.s_start <= o.s_end) || !std::isfinite(o.s_start) || !std::isfinite(o.s_end))
@@ -348,6 +358,12 @@ std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacle
         const auto bin = [&](double s) { return static_cast<std::ptrdiff_t>(std::clamp(std::floor(s / ds), 0.0, last)); };
         std::fill(blocked.begin() + bin(o.s_start - margin_m), blocked.begin() + bin(o.s_end + margin_m) + 1, 1);
     }
+}
+
+std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds,
+                                       double margin_m) {
+    std::vector<std::uint8_t> blocked;
+    blocked_bins(obstacles, bins, ds, margin_m, blocked);
     return blocked;
 }
 

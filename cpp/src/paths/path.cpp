@@ -16,10 +16,16 @@ const char* to_string(PathStatus s) {
     return "?";
 }
 
-WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width, const PathConfig& cfg) {
-    if (!std::isfinite(speed_mps)) throw std::invalid_argument("speed must be finite, got " + std::to_string(speed_mps));
+Status check_motion(double speed_mps, double yaw_rate_rps) noexcept {
+    // %f: the text std::to_string gave these messages before.
+    if (!std::isfinite(speed_mps)) return Status::error(StatusCode::InvalidArgument, "speed must be finite, got %f", speed_mps);
     if (!std::isfinite(yaw_rate_rps))
-        throw std::invalid_argument("yaw_rate must be finite, got " + std::to_string(yaw_rate_rps));
+        return Status::error(StatusCode::InvalidArgument, "yaw_rate must be finite, got %f", yaw_rate_rps);
+    return {};
+}
+
+WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width, const PathConfig& cfg) {
+    if (const Status s = check_motion(speed_mps, yaw_rate_rps); !s) throw std::invalid_argument(s.message());
     WheelPaths p;
     p.track_width = track_width;
     if (std::abs(speed_mps) <= cfg.stopped_speed_mps) return p;  // Stopped: no path to preview

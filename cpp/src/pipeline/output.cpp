@@ -148,7 +148,7 @@ std::string result_to_json(const Result& r) {
         {"roughness", {{"left", roughness_json(r.left.roughness)},
                        {"right", roughness_json(r.right.roughness)},
                        {"vehicle", roughness_json(r.vehicle)}}},
-        {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)},
+        {"reason", r.status == FrameStatus::Ok ? json(nullptr) : json(to_string(r.status))},
         {"fusion", fusion_json(r.fusion, r.timing_ms.fusion)},
         {"timing_ms", {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
                        {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},

@@ -2,6 +2,7 @@
 #include "roadpreview/pipeline/pipeline.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -10,26 +11,39 @@
 #include "obstacles/obstacles_pcl.hpp"
 #include "core/roi_cloud.hpp"
 #include "core/stopwatch.hpp"
+#include "profile/profile_scratch.hpp"
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
 
 
-// Why no profile can be built for this frame, or empty when one can. A fused map that holds data stands in
+// Why no profile can be built for this frame, or Ok when one can. A fused map that holds data stands in
 // for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
-std::string blocking_reason(const Result& r, const GroundFit& ground, bool map_has_data) {
-    if (!map_has_data && r.points.finite == 0) return "no finite points";
-    if (!map_has_data && !r.plane) return ground.reason.empty() ? "no ground" : ground.reason;
-    if (r.path.status == PathStatus::Stopped) return "vehicle stopped";
-    return {};
+FrameStatus blocking_status(const Result& r, const GroundFit& ground, bool map_has_data) {
+    if (!map_has_data && r.points.finite == 0) return FrameStatus::NoFinitePoints;
+    if (!map_has_data && !r.plane) return ground.reason == kTiltedGround ? FrameStatus::TiltedGround : FrameStatus::NoGround;
+    if (r.path.status == PathStatus::Stopped) return FrameStatus::VehicleStopped;
+    return FrameStatus::Ok;
 }
 
-void mark_empty(Profile& p, const Config& cfg, const std::string& reason) {
+void mark_declined(Roughness& r, const char* reason) {
+    clear(r);
+    r.reason = reason;
+    r.iri.reason = reason;
+}
+
+// A profile without bins, declined for `reason`; its buffers kept.
+void mark_empty(Profile& p, const Config& cfg, const char* reason) {
+    for (auto* v : {&p.s, &p.z, &p.spread}) v->clear();
+    p.count.clear();
+    p.blocked.clear();
     p.ds = cfg.profile.ds_m;
     p.s0 = 0.5 * cfg.profile.ds_m;
-    p.roughness.reason = reason;
-    p.roughness.iri.reason = reason;
-    if (cfg.obstacles.enabled) p.obstacles.emplace();
+    mark_declined(p.roughness, reason);
+    if (!cfg.obstacles.enabled) p.obstacles.reset();
+    else if (p.obstacles) p.obstacles->clear();
+    else p.obstacles.emplace();
 }
 
 // Per-ROI-point values written to their input rows (`rows`, one per input row, already holding the value for
@@ -45,32 +59,21 @@ void to_input_rows(const RoiCloud& roi, const std::vector<T>& of_roi_point, std:
     }
 }
 
-// Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
-Clustering cluster_frame(const RoiCloud& roi, const GroundFit& ground, const ObstaclesConfig& cfg, Result& r) {
-    Clustering clustering;
-    if (r.plane) clustering = find_obstacles(roi, ground.mask, *r.plane, cfg);
-    if (!clustering.label.empty()) to_input_rows(roi, clustering.label, r.cluster_labels);
-    r.obstacles = clustering.clusters;
-    return clustering;
-}
-
 // The obstacles in each wheel's path and the profile bins they block.
 struct PathCrossings {
     std::vector<PathObstacle> left, right;
     BlockedBins blocked;
 };
 
-PathCrossings cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result& r, const Levelling& L,
-                          const Config& cfg) {
-    PathCrossings out;
+void cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result& r, const Levelling& L,
+                 const Config& cfg, PathCrossings& out) {
     auto cross = [&](Wheel w, std::vector<PathObstacle>& obstacles, std::vector<std::uint8_t>& blocked) {
-        obstacles = wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width,
-                                    cfg.profile.preview_length_m, cfg.obstacles);
-        blocked = blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m);
+        wheel_obstacles(roi.view(), clustering, *r.plane, L, r.path, w, cfg.tire_width, cfg.profile.preview_length_m,
+                        cfg.obstacles, obstacles);
+        blocked_bins(obstacles, bin_count(cfg.profile), cfg.profile.ds_m, cfg.obstacles.safety_margin_m, blocked);
     };
     cross(Wheel::Left, out.left, out.blocked.left);
     cross(Wheel::Right, out.right, out.blocked.right);
-    return out;
 }
 
 }  // namespace
@@ -78,15 +81,39 @@ PathCrossings cross_paths(const RoiCloud& roi, const Clustering& clustering, con
 struct Estimator::Impl {
     Config cfg;
     RigidTransform sensor_to_base;
+    GroundConfig roi_ahead, roi_behind;  // the region of interest driving forward and reversing
     RoiCloud roi;  // reused across frames
     std::int64_t frames = 0;
+    std::size_t bins = 0;  // of a profile: its largest stretch
     std::optional<TemporalFusion> fusion;  // only with fusion.method other than "none"
+    // Per-stage scratch, kept so that a stream of frames allocates nothing once the buffers have grown.
+    GroundScratch ground_scratch;
+    GroundFit ground;
+    ObstacleScratch obstacle_scratch;
+    Clustering clustering;
+    PathCrossings crossings;
+    std::vector<double> local_z;
+    ProfileScratch profile_scratch;
+    RoughnessScratch roughness_scratch;
+
+    void run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+             const FrameMotion& motion, const float* range_variances_m2, Result& r);
+    void start_frame(double speed_mps, double yaw_rate_rps, const std::string& source, const FrameMotion& motion,
+                     Result& r);
+    void find_ground(PointsView points, const float* range_variances_m2, Result& r);
+    void find_obstacles_in(Result& r);
+    void build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances);
+    void rate(Result& r);
 };
 
 Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     validate(cfg);
     impl_->cfg = cfg;
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
+    impl_->roi_ahead = roi_facing(cfg.ground, 1.0);
+    impl_->roi_behind = roi_facing(cfg.ground, -1.0);
+    impl_->bins = bin_count(cfg.profile) + static_cast<std::size_t>(std::ceil(cfg.fusion.behind_m / cfg.profile.ds_m));
+    impl_->roughness_scratch.plan_ffts(impl_->bins);
     if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
 }
 
@@ -112,17 +139,201 @@ void rate_profile(Profile& p, const Config& cfg) {
     p.roughness.iri = wheel_iri(p, p.roughness, cfg.iri);
 }
 
+void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const std::string& source,
+                                  const FrameMotion& motion, Result& r) {
+    r.path = plan_paths(speed_mps, yaw_rate_rps, cfg.track_width, cfg.path);
+    r.frame = frames++;
+    r.source.assign(source);
+    r.speed_mps = speed_mps;
+    r.yaw_rate_rps = yaw_rate_rps;
+    r.ground_method = cfg.ground.method;
+    r.timestamp = motion.timestamp_s;
+    r.extrinsics = effective_extrinsics(cfg);
+    r.mounting_source.assign(cfg.sensor_height || cfg.extrinsics ? "given" : "none");
+    r.yaw_rate_source.clear();
+    r.status = FrameStatus::Ok;
+}
+
+void Estimator::Impl::find_ground(PointsView points, const float* range_variances_m2, Result& r) {
+    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi);  // behind reversing
+    roi_height_variances(range_variances_m2, sensor_to_base, roi);
+    fit_ground(roi, cfg.ground, ground_scratch, ground);
+    r.points = {points.rows(), roi.finite, roi.size(), ground.count};
+    r.plane = ground.plane;
+    r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
+    to_input_rows(roi, ground.mask, r.ground_mask);
+}
+
+// Clusters of the non-ground ROI points (none without a ground plane), labelled per input row.
+void Estimator::Impl::find_obstacles_in(Result& r) {
+    clustering.clusters.clear();
+    clustering.label.clear();
+    if (r.plane) find_obstacles(roi, ground.mask, *r.plane, cfg.obstacles, obstacle_scratch, clustering);
+    if (!clustering.label.empty()) to_input_rows(roi, clustering.label, r.cluster_labels);
+    if (!r.obstacles) r.obstacles.emplace();
+    r.obstacles->assign(clustering.clusters.begin(), clustering.clusters.end());
+}
+
+void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances) {
+    const bool crossed = cfg.obstacles.enabled && r.plane;  // without a plane (profiles from the map): none
+    const BlockedBins* blocked = crossed ? &crossings.blocked : nullptr;
+    if (fusion) {
+        fusion->profiles(r.path, blocked, *r.fusion, r.left, r.right);
+    } else {
+        // Levelling by the local ground model (method.md §3); without it, by the one plane.
+        const bool local = cfg.profile.level && cfg.profile.level_local && r.plane;
+        if (local) local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path,
+                                        profile_scratch, local_z);
+        build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
+                       local ? &local_z : nullptr, height_variances, profile_scratch, r.left, r.right);
+    }
+    if (!cfg.obstacles.enabled) return;
+    for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {
+        if (!p->obstacles) p->obstacles.emplace();
+        if (crossed)
+            p->obstacles->assign(in_path->begin(), in_path->end());
+        else
+            p->obstacles->clear();
+    }
+}
+
+// Room for the longest of the documented reasons (docs/output.md), so that a reason longer than any before does
+// not allocate.
+constexpr std::size_t kReasonCapacity = 64;
+
+// The roughness results' vectors at their largest (a stretch of every bin) and their reasons' room, so that a
+// longer stretch or reason than any before does not grow them; a no-op once they are.
+void reserve_roughness(Roughness& r, std::size_t bins) {
+    for (auto* v : {&r.spectrum.n, &r.spectrum.psd, &r.noise_psd}) v->reserve(bins / 2 + 1);
+    r.octave_centers.reserve(9);  // ISO 8608's octaves 2^−6 … 2^2 cycles/m
+    r.octave_gd.reserve(9);
+    for (std::string* text : {&r.reason, &r.band_limit, &r.iri.reason}) text->reserve(kReasonCapacity);
+}
+
+void Estimator::Impl::rate(Result& r) {
+    for (Profile* p : {&r.left, &r.right}) {
+        analyze_roughness(*p, cfg.roughness, roughness_scratch, p->roughness);
+        wheel_iri(*p, p->roughness, cfg.iri, p->roughness.iri);
+    }
+    vehicle_roughness(r.left, r.right, cfg.roughness, roughness_scratch, r.vehicle);
+    reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);
+    vehicle_iri(r.left.roughness.iri, r.right.roughness.iri, r.vehicle.iri);
+}
+
+void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                          const FrameMotion& motion, const float* range_variances_m2, Result& r) {
+    auto mark = Clock::now();
+    const auto start = mark;
+    r.timing_ms = {};
+    for (Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle}) reserve_roughness(*x, bins);
+    start_frame(speed_mps, yaw_rate_rps, source, motion, r);
+    r.timing_ms.path = ms_since(mark);
+    if (fusion) {
+        if (!r.fusion) r.fusion.emplace();
+        r.fusion->reset.clear();
+        r.fusion->reset.reserve(kReasonCapacity);
+        r.fusion->coverage = r.fusion->frame_coverage = 0.0;
+        fusion->advance(speed_mps, yaw_rate_rps, motion, *r.fusion);
+    } else {
+        r.fusion.reset();
+    }
+    r.timing_ms.fusion = ms_since(mark);
+
+    find_ground(points, range_variances_m2, r);
+    const std::vector<float>* height_variances = roi.height_variance.empty() ? nullptr : &roi.height_variance;
+    r.timing_ms.ground = ms_since(mark);
+
+    r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
+    if (cfg.obstacles.enabled) find_obstacles_in(r);
+    else r.obstacles.reset();
+    r.timing_ms.obstacles = ms_since(mark);
+
+    const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
+    // Stopped: the same view again and again is not new evidence, so the map holds.
+    if (fusion && r.plane && r.path.status != PathStatus::Stopped)
+        fusion->fuse(roi.view(), ground.mask, L, height_variances);
+    r.timing_ms.fusion += ms_since(mark);
+    r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
+    if (r.status != FrameStatus::Ok) {
+        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, to_string(r.status));
+        mark_declined(r.vehicle, to_string(r.status));
+    } else {
+        if (cfg.obstacles.enabled && r.plane) cross_paths(roi, clustering, r, L, cfg, crossings);
+        r.timing_ms.obstacles += ms_since(mark);
+        build_wheel_profiles(r, L, height_variances);
+        r.timing_ms.profile = ms_since(mark);
+        rate(r);
+        r.timing_ms.roughness = ms_since(mark);
+    }
+    r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+const char* to_string(FrameStatus status) noexcept {
+    switch (status) {
+        case FrameStatus::Ok: return "";
+        case FrameStatus::NoFinitePoints: return "no finite points";
+        case FrameStatus::NoGround: return "no ground";
+        case FrameStatus::TiltedGround: return kTiltedGround;
+        case FrameStatus::VehicleStopped: return "vehicle stopped";
+    }
+    return "?";
+}
+
+namespace {
+
+// What process() refuses, as a Status (try_process returns it, process() throws its message).
+Status check_input(PointsView points, double speed_mps, double yaw_rate_rps) noexcept {
+    if (points.rows() > std::numeric_limits<std::int32_t>::max())
+        return Status::error(StatusCode::InvalidArgument, "too many points in one frame: %lld",
+                             static_cast<long long>(points.rows()));
+    return check_motion(speed_mps, yaw_rate_rps);
+}
+
+Status check_frame(const Frame& frame) noexcept {
+    const auto rows = static_cast<std::size_t>(frame.points.rows());
+    if (!frame.range_variances.empty() && frame.range_variances.size() != rows)
+        return Status::error(StatusCode::InvalidArgument, "%s: %zu range variances for %zu points",
+                             frame.source.c_str(), frame.range_variances.size(), rows);
+    return {};
+}
+
+void throw_unless_ok(const Status& s) {
+    if (!s) throw std::invalid_argument(s.message());
+}
+
+const float* range_variances_of(const Frame& frame) {
+    return frame.range_variances.empty() ? nullptr : frame.range_variances.data();
+}
+
+PointsView points_of(const Frame& frame) { return points_view(frame.points.data(), frame.points.rows(), 4); }
+
+// Runs `step`, turning what it throws into a Status: the error path of try_process.
+template <class Step>
+Status without_exceptions(Step&& step) noexcept {
+    try {
+        step();
+        return {};
+    } catch (const std::invalid_argument& e) {
+        return Status::error(StatusCode::InvalidArgument, "%s", e.what());
+    } catch (const std::bad_alloc& e) {
+        return Status::error(StatusCode::OutOfMemory, "%s", e.what());
+    } catch (const std::exception& e) {
+        return Status::error(StatusCode::Internal, "%s", e.what());
+    } catch (...) {
+        return Status::error(StatusCode::Internal, "unknown exception");
+    }
+}
+
+}  // namespace
+
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source) {
     return process(points, speed_mps, yaw_rate_rps, source, FrameMotion{});
 }
 
 Result Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion) {
-    const auto rows = static_cast<std::size_t>(frame.points.rows());
-    if (!frame.range_variances.empty() && frame.range_variances.size() != rows)
-        throw std::invalid_argument(frame.source + ": " + std::to_string(frame.range_variances.size()) +
-                                    " range variances for " + std::to_string(rows) + " points");
-    return process(points_view(frame.points.data(), frame.points.rows(), 4), speed_mps, yaw_rate_rps, frame.source, motion,
-                   frame.range_variances.empty() ? nullptr : frame.range_variances.data());
+    Result r;
+    process(frame, speed_mps, yaw_rate_rps, motion, r);
+    return r;
 }
 
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
@@ -132,83 +343,56 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
 
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                           const FrameMotion& motion, const float* range_variances_m2) {
-    const Config& cfg = impl_->cfg;
-    if (points.rows() > std::numeric_limits<std::int32_t>::max())
-        throw std::invalid_argument("too many points in one frame: " + std::to_string(points.rows()));
-    auto mark = Clock::now();
-    const auto start = mark;
     Result r;
-    r.path = plan_paths(speed_mps, yaw_rate_rps, cfg.track_width, cfg.path);  // validates the motion first
-    r.timing_ms.path = ms_since(mark);
-    r.frame = impl_->frames++;
-    r.source = source;
-    r.speed_mps = speed_mps;
-    r.yaw_rate_rps = yaw_rate_rps;
-    r.ground_method = cfg.ground.method;
-    r.timestamp = motion.timestamp_s;
-    r.extrinsics = effective_extrinsics(cfg);
-    r.mounting_source = cfg.sensor_height || cfg.extrinsics ? "given" : "none";
-    TemporalFusion* fusion = impl_->fusion ? &*impl_->fusion : nullptr;
-    if (fusion) fusion->advance(speed_mps, yaw_rate_rps, motion, r.fusion.emplace());
-    r.timing_ms.fusion = ms_since(mark);
-
-    RoiCloud& roi = impl_->roi;
-    crop_roi(points, impl_->sensor_to_base, roi_facing(cfg.ground, r.path.direction), roi);  // behind when reversing
-    roi_height_variances(range_variances_m2, impl_->sensor_to_base, roi);
-    const std::vector<float>* height_variances = roi.height_variance.empty() ? nullptr : &roi.height_variance;
-    const GroundFit ground = fit_ground(roi, cfg.ground);
-    r.points = {points.rows(), roi.finite, roi.size(), ground.count};
-    r.plane = ground.plane;
-    r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
-    to_input_rows(roi, ground.mask, r.ground_mask);
-    r.timing_ms.ground = ms_since(mark);
-
-    r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
-    Clustering clustering;
-    if (cfg.obstacles.enabled) clustering = cluster_frame(roi, ground, cfg.obstacles, r);
-    r.timing_ms.obstacles = ms_since(mark);
-
-    const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
-    // Stopped: the same view again and again is not new evidence, so the map holds.
-    if (fusion && r.plane && r.path.status != PathStatus::Stopped)
-        fusion->fuse(roi.view(), ground.mask, L, height_variances);
-    r.timing_ms.fusion += ms_since(mark);
-    r.reason = blocking_reason(r, ground, fusion && fusion->frames() > 0);
-    if (!r.reason.empty()) {
-        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.reason);
-        r.vehicle.reason = r.reason;
-        r.vehicle.iri.reason = r.reason;
-        r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-        return r;
-    }
-    std::optional<PathCrossings> crossings;  // none without a plane (profiles from the map): nothing in the way
-    if (cfg.obstacles.enabled && r.plane) crossings = cross_paths(roi, clustering, r, L, cfg);
-    r.timing_ms.obstacles += ms_since(mark);
-
-    const BlockedBins* blocked = crossings ? &crossings->blocked : nullptr;
-    // Levelling by the local ground model (method.md §3); empty: by the one plane.
-    const std::vector<double> local_z = cfg.profile.level && cfg.profile.level_local && r.plane
-                                            ? local_ground_heights(roi.view(), ground.mask, *r.plane,
-                                                                   cfg.profile.level_band_m, r.path)
-                                            : std::vector<double>{};
-    WheelProfiles wheels = fusion ? fusion->profiles(r.path, blocked, *r.fusion)
-                                  : build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
-                                                   local_z.empty() ? nullptr : &local_z, height_variances);
-    r.left = std::move(wheels.left);
-    r.right = std::move(wheels.right);
-    if (cfg.obstacles.enabled) {
-        r.left.obstacles = crossings ? std::move(crossings->left) : std::vector<PathObstacle>{};
-        r.right.obstacles = crossings ? std::move(crossings->right) : std::vector<PathObstacle>{};
-    }
-    r.timing_ms.profile = ms_since(mark);
-
-    for (Profile* p : {&r.left, &r.right}) rate_profile(*p, cfg);
-    r.vehicle = vehicle_roughness(r.left, r.right, cfg.roughness);
-    reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);
-    r.vehicle.iri = vehicle_iri(r.left.roughness.iri, r.right.roughness.iri);
-    r.timing_ms.roughness = ms_since(mark);
-    r.timing_ms.total = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    process(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, r);
     return r;
+}
+
+void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, Result& out) {
+    process(points, speed_mps, yaw_rate_rps, std::string(), FrameMotion{}, nullptr, out);
+}
+
+void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                        const FrameMotion& motion, Result& out) {
+    process(points, speed_mps, yaw_rate_rps, source, motion, nullptr, out);
+}
+
+void Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
+                        Result& out) {
+    throw_unless_ok(check_frame(frame));
+    process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, range_variances_of(frame), out);
+}
+
+void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                        const FrameMotion& motion, const float* range_variances_m2, Result& out) {
+    throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps));
+    impl_->run(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, out);
+}
+
+Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, Result& out) noexcept {
+    static const std::string no_source;
+    return try_process(points, speed_mps, yaw_rate_rps, no_source, FrameMotion{}, nullptr, out);
+}
+
+Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                              const FrameMotion& motion, Result& out) noexcept {
+    return try_process(points, speed_mps, yaw_rate_rps, source, motion, nullptr, out);
+}
+
+Status Estimator::try_process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
+                              Result& out) noexcept {
+    Status s = check_frame(frame);
+    if (!s) return s;
+    return try_process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, range_variances_of(frame),
+                       out);
+}
+
+Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                              const FrameMotion& motion, const float* range_variances_m2, Result& out) noexcept {
+    Status s = check_input(points, speed_mps, yaw_rate_rps);
+    if (!s) return s;
+    return without_exceptions(
+        [&] { impl_->run(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, out); });
 }
 
 }  // namespace roadpreview

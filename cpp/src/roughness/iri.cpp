@@ -10,6 +10,7 @@
 
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/roughness.hpp"
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
@@ -41,51 +42,69 @@ std::size_t moving_average_samples(double ds) {
 
 }  // namespace
 
-std::vector<double> iri_rectified_slope(const double* z, std::size_t count, double ds) {
+namespace {
+
+// Calls visit(|sprung − unsprung slope|) after each step of the moving average (see iri_rectified_slope); false
+// when the profile is no longer than the average.
+template <class Visit>
+bool rectified_slopes(const double* z, std::size_t count, double ds, Visit&& visit) {
     if (!(ds > 0.0)) throw std::invalid_argument("iri: ds must be > 0");
     const std::size_t k = moving_average_samples(ds);
-    if (count <= k) return {};
+    if (count <= k) return false;
     const auto a = std::min(static_cast<std::size_t>(std::lround(kInitLengthM / ds)), count - 1);
     const double initial = (z[a] - z[0]) / (static_cast<double>(a) * ds);
     Vector4 state(initial, 0.0, initial, 0.0);
     Matrix4 st;
     Vector4 pr;
     transition(ds, st, pr);
-    std::vector<double> out(count - k);
     for (std::size_t i = 0; i + k < count; ++i) {
         const double slope = (z[i + k] - z[i]) / (static_cast<double>(k) * ds);  // of the k-sample average
         state = st * state + pr * slope;
-        out[i] = std::abs(state[0] - state[2]);
+        visit(std::abs(state[0] - state[2]));
     }
-    return out;
+    return true;
 }
 
-double iri(const double* z, std::size_t count, double ds) {
-    const std::vector<double> rs = iri_rectified_slope(z, count, ds);
-    if (rs.empty()) throw std::invalid_argument("iri: the profile is shorter than the moving average");
-    double sum = 0.0;
-    for (double v : rs) sum += v;
-    return 1000.0 * sum / static_cast<double>(rs.size());
-}
-
-Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
-    Iri out;
+// profile_iri into `out`.
+void profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg, Iri& out) {
+    clear(out);
     const auto [first, last] = longest_valid_stretch(z);
     if (last == first) {
         out.reason = "no valid profile";
-        return out;
+        return;
     }
     out.length_m = static_cast<double>(last - first - 1) * ds;
     if (out.length_m < cfg.min_length_m - 1e-9 || last - first <= moving_average_samples(ds)) {
         out.reason = "valid stretch too short for IRI";
-        return out;
+        return;
     }
     out.value = iri(z.data() + first, last - first, ds);
+}
+
+}  // namespace
+
+std::vector<double> iri_rectified_slope(const double* z, std::size_t count, double ds) {
+    std::vector<double> out;
+    rectified_slopes(z, count, ds, [&](double v) { out.push_back(v); });
     return out;
 }
 
-Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
-    Iri out = profile_iri(p.z, p.ds, cfg);
+double iri(const double* z, std::size_t count, double ds) {
+    double sum = 0.0;
+    std::size_t steps = 0;
+    if (!rectified_slopes(z, count, ds, [&](double v) { sum += v, ++steps; }))
+        throw std::invalid_argument("iri: the profile is shorter than the moving average");
+    return 1000.0 * sum / static_cast<double>(steps);
+}
+
+Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
+    Iri out;
+    profile_iri(z, ds, cfg, out);
+    return out;
+}
+
+void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, Iri& out) {
+    profile_iri(p.z, p.ds, cfg, out);
     const auto [first, last] = longest_valid_stretch(p.z);
     if (last > first && p.count.size() == p.z.size()) {
         const auto begin = p.count.begin();
@@ -93,23 +112,33 @@ Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
                                           begin + static_cast<std::ptrdiff_t>(last), [](auto c) { return c > 0; });
         out.backed_fraction = static_cast<double>(backed) / static_cast<double>(last - first);
     }
-    if (!out.value) return out;
+    if (!out.value) return;
     if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = kIriTooSparse;
     else if (!wheel.iso_class) out.reason = kIriClassDeclined;
     if (!out.reason.empty()) out.value.reset();
+}
+
+Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
+    Iri out;
+    wheel_iri(p, wheel, cfg, out);
     return out;
 }
 
-Iri vehicle_iri(const Iri& left, const Iri& right) {
-    Iri out;
+void vehicle_iri(const Iri& left, const Iri& right, Iri& out) {
+    clear(out);
     if (left.backed_fraction && right.backed_fraction)
         out.backed_fraction = 0.5 * (*left.backed_fraction + *right.backed_fraction);
     if (!left.value || !right.value) {
         out.reason = !left.reason.empty() ? left.reason : right.reason;
-        return out;
+        return;
     }
     out.value = 0.5 * (*left.value + *right.value);
     out.length_m = std::min(left.length_m, right.length_m);
+}
+
+Iri vehicle_iri(const Iri& left, const Iri& right) {
+    Iri out;
+    vehicle_iri(left, right, out);
     return out;
 }
 

@@ -11,6 +11,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "roadpreview/profile/profile.hpp"
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
@@ -25,12 +26,12 @@ constexpr double kMaxWhittleStep = 1.0;      // in ln G(n0): scoring overshoots 
 // log regression: (π²/6)·(1 + 2·[Li₂(4/9) + Li₂(1/36)]/ζ(2)); likelihood fit: 1 + 2·(4/9 + 1/36).
 constexpr double kLogFitVariance = M_PI * M_PI / 6.0 * 1.6504918528873;
 constexpr double kWhittleVariance = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0);
-const std::string kNoiseUnknown = "noise floor unknown";
-const std::string kNoiseDominates = "noise dominates the band";
+constexpr char kNoiseUnknown[] = "noise floor unknown";
+constexpr char kNoiseDominates[] = "noise dominates the band";
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Removes the least-squares line over the sample index (equivalent to a line in s).
-std::vector<double> detrended(const double* z, std::size_t n) {
+void detrend(const double* z, std::size_t n, std::vector<double>& x) {
     const double mid = 0.5 * static_cast<double>(n - 1);
     double mean = 0.0, sxx = 0.0, sxz = 0.0;
     for (std::size_t j = 0; j < n; ++j) mean += z[j];
@@ -41,9 +42,8 @@ std::vector<double> detrended(const double* z, std::size_t n) {
         sxz += dj * (z[j] - mean);
     }
     const double slope = sxz / sxx;
-    std::vector<double> x(n);
+    x.resize(n);
     for (std::size_t j = 0; j < n; ++j) x[j] = z[j] - mean - slope * (static_cast<double>(j) - mid);
-    return x;
 }
 
 bool is_finite(double v) { return std::isfinite(v); }
@@ -60,14 +60,10 @@ std::pair<std::size_t, std::size_t> longest_run(std::size_t size, Pred pred) {
     return {best_first, best_last};
 }
 
-Roughness declined(std::string reason) {
-    Roughness r;
-    r.reason = std::move(reason);
-    return r;
-}
-
 // ISO 8608 octave bands, centres 2^m cycles/m, m = −6 … 2, limits centre/√2 ≤ n < centre·√2.
 void octave_bands(Roughness& r) {
+    r.octave_centers.clear();
+    r.octave_gd.clear();
     for (int m = -6; m <= 2; ++m) {
         const double centre = std::ldexp(1.0, m), lo = centre / std::sqrt(2.0), hi = centre * std::sqrt(2.0);
         double sum = 0.0;
@@ -96,11 +92,11 @@ LogFit fit_log_line(const std::vector<double>& x, const std::vector<double>& y) 
     return {w2, my - slope * mx, -slope};
 }
 
-}  // namespace
-
-Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
+// displacement_psd into `sp`.
+void displacement_psd(const double* z, std::size_t count, double ds, RoughnessScratch& s, Spectrum& sp) {
     if (count < 2) throw std::invalid_argument("displacement_psd needs at least 2 samples");
-    std::vector<double> x = detrended(z, count);
+    std::vector<double>& x = s.detrended;
+    detrend(z, count, x);
     const double N = static_cast<double>(count);
     double power = 0.0;  // N·U, U = mean of the squared window
     for (std::size_t j = 0; j < count; ++j) {
@@ -108,11 +104,9 @@ Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
         x[j] *= w;
         power += w * w;
     }
-    std::vector<std::complex<double>> X;
-    Eigen::FFT<double> fft;
-    fft.fwd(X, x);
+    std::vector<std::complex<double>>& X = s.transform;
+    s.fft.fwd(X, x);
 
-    Spectrum sp;
     const std::size_t half = count / 2;
     sp.n.resize(half + 1);
     sp.psd.resize(half + 1);
@@ -121,6 +115,33 @@ Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
         sp.n[k] = static_cast<double>(k) / (N * ds);
         sp.psd[k] = (unpaired ? 1.0 : 2.0) * std::norm(X[k]) * ds / power;
     }
+}
+
+}  // namespace
+
+void RoughnessScratch::plan_ffts(std::size_t bins) {
+    const std::size_t ordinates = bins / 2 + 1;
+    for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
+    used.reserve(ordinates);
+    strong.reserve(ordinates);
+    for (auto* v : {&variance, &lag_sum, &window, &support.noise, &support.resolved, &other.noise, &other.resolved})
+        v->reserve(bins);
+    anchors.reserve(bins);
+    interval.reserve(bins);
+    power_by_interval.reserve(bins);
+    Spectrum sp;
+    std::vector<double> z;
+    for (std::size_t n = 2; n <= bins; ++n) {
+        z.assign(n, 0.0);
+        z[0] = 1.0;  // a step, not flat: detrending leaves something to transform
+        displacement_psd(z.data(), n, 1.0, *this, sp);
+    }
+}
+
+Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
+    RoughnessScratch scratch;
+    Spectrum sp;
+    displacement_psd(z, count, ds, scratch, sp);
     return sp;
 }
 
@@ -140,45 +161,48 @@ struct Fit {
     double gd_n0 = 0.0;
     double log_variance = 0.0;  // of ln gd_n0
     double waviness = kNaN, gd_n0_free = kNaN;
-    std::string reason;
+    const char* reason = nullptr;  // why there is no fit
     bool noise_bound = false;  // the noise dominates: gd_n0 is the upper bound of the fit without noise
 };
 
 // The w = 2 log fit and the free-w fit of ln y over the ordinates; x = ln(n/n0).
-LogFit log_fit_over(const Spectrum& sp, const Indices& used, const std::vector<double>* log_y = nullptr) {
-    std::vector<double> x, y;
+LogFit log_fit_over(const Spectrum& sp, const Indices& used, RoughnessScratch& s,
+                    const std::vector<double>* log_y = nullptr) {
+    s.x.clear();
+    s.y.clear();
     for (std::size_t i = 0; i < used.size(); ++i) {
-        x.push_back(std::log(sp.n[used[i]] / kIsoN0));
-        y.push_back(log_y ? (*log_y)[i] : std::log(sp.psd[used[i]]));
+        s.x.push_back(std::log(sp.n[used[i]] / kIsoN0));
+        s.y.push_back(log_y ? (*log_y)[i] : std::log(sp.psd[used[i]]));
     }
-    return fit_log_line(x, y);
+    return fit_log_line(s.x, s.y);
 }
 
-Fit log_fit(const Spectrum& sp, const Indices& used) {
-    const LogFit f = log_fit_over(sp, used);
+Fit log_fit(const Spectrum& sp, const Indices& used, RoughnessScratch& s) {
+    const LogFit f = log_fit_over(sp, used, s);
     return {std::exp(f.ln_g0_w2 + kEulerGamma), kLogFitVariance / static_cast<double>(used.size()), f.waviness,
-            std::exp(f.ln_g0_free + kEulerGamma), {}, false};
+            std::exp(f.ln_g0_free + kEulerGamma), nullptr, false};
 }
 
 // Maximum of the Whittle likelihood of exponential ordinates with E[G_k] = S_k + N_k, S_k = Φ_k·G(n0)(n_k/n0)^−2:
 // Fisher scoring in θ = ln G(n0) from the log-regression estimate, θ ← θ + Σw(G/E − 1)/Σw², w_k = S_k/E[G_k],
 // each step at most ±1.
-// Returns G(n0); `share` gets w_k at the optimum.
+// Returns G(n0); s.share gets w_k at the optimum.
 double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<double>& resolved,
-                   const std::vector<double>* noise, std::vector<double>& share) {
+                   const std::vector<double>* noise, RoughnessScratch& s) {
     const std::size_t m = used.size();
-    std::vector<double> shape(m), floor(m, 0.0);
+    s.shape.resize(m);
+    s.floor.assign(m, 0.0);
     for (std::size_t i = 0; i < m; ++i) {
-        shape[i] = resolved[used[i]] * std::pow(sp.n[used[i]] / kIsoN0, -2.0);
-        if (noise) floor[i] = (*noise)[used[i]];
+        s.shape[i] = resolved[used[i]] * std::pow(sp.n[used[i]] / kIsoN0, -2.0);
+        if (noise) s.floor[i] = (*noise)[used[i]];
     }
-    double theta = std::log(std::max(std::exp(log_fit_over(sp, used).ln_g0_w2 + kEulerGamma), DBL_MIN));
-    share.assign(m, 0.0);
+    double theta = std::log(std::max(std::exp(log_fit_over(sp, used, s).ln_g0_w2 + kEulerGamma), DBL_MIN));
+    s.share.assign(m, 0.0);
     for (int it = 0; it < kWhittleIterations; ++it) {
         double information = 0.0, score = 0.0;
         for (std::size_t i = 0; i < m; ++i) {
-            const double expected = std::exp(theta) * shape[i] + floor[i];
-            const double w = expected > 0.0 ? std::exp(theta) * shape[i] / expected : 0.0;  // flat and noiseless: 0
+            const double expected = std::exp(theta) * s.shape[i] + s.floor[i];
+            const double w = expected > 0.0 ? std::exp(theta) * s.shape[i] / expected : 0.0;  // flat and noiseless: 0
             information += w * w;
             if (w > 0.0) score += w * (sp.psd[used[i]] / expected - 1.0);
         }
@@ -186,8 +210,8 @@ double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<do
         theta += std::clamp(score / information, -kMaxWhittleStep, kMaxWhittleStep);
     }
     for (std::size_t i = 0; i < m; ++i) {
-        const double signal = std::exp(theta) * shape[i];
-        share[i] = signal + floor[i] > 0.0 ? signal / (signal + floor[i]) : 0.0;
+        const double signal = std::exp(theta) * s.shape[i];
+        s.share[i] = signal + s.floor[i] > 0.0 ? signal / (signal + s.floor[i]) : 0.0;
     }
     return std::exp(theta);
 }
@@ -195,75 +219,60 @@ double whittle_fit(const Spectrum& sp, const Indices& used, const std::vector<do
 // docs/noise-aware-roughness.md §4–5: the likelihood fit with the noise PSD while its effective number of
 // signal-dominated ordinates Σw² reaches min_band_points, the free fit on the noise-corrected logs of the
 // ordinates the signal dominates; else the fit without noise bounds the road from above: class A or nothing.
-Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const StretchSupport& support,
-                    const RoughnessConfig& cfg) {
+Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const SupportBuffers& support,
+                    const RoughnessConfig& cfg, RoughnessScratch& s) {
     Fit fit;
-    if (!support.noise) {
+    if (!support.noise_known) {
         fit.reason = kNoiseUnknown;
         return fit;
     }
-    std::vector<double> share;
-    const double gd = whittle_fit(sp, used, support.resolved, &*support.noise, share);
+    const double gd = whittle_fit(sp, used, support.resolved, &support.noise, s);
     double effective = 0.0;
-    for (double w : share) effective += w * w;
+    for (double w : s.share) effective += w * w;
     if (effective >= cfg.min_band_points) {
         fit.gd_n0 = gd, fit.log_variance = kWhittleVariance / effective;
-        Indices strong;
-        std::vector<double> corrected;
+        s.strong.clear();
+        s.corrected.clear();
         for (std::size_t i = 0; i < used.size(); ++i) {
-            if (share[i] < 0.5) continue;
-            strong.push_back(used[i]);
-            corrected.push_back(std::log(sp.psd[used[i]]) - std::log(support.resolved[used[i]] / share[i]));
+            if (s.share[i] < 0.5) continue;
+            s.strong.push_back(used[i]);
+            s.corrected.push_back(std::log(sp.psd[used[i]]) - std::log(support.resolved[used[i]] / s.share[i]));
         }
-        if (strong.size() >= 2) {
-            const LogFit f = log_fit_over(sp, strong, &corrected);
+        if (s.strong.size() >= 2) {
+            const LogFit f = log_fit_over(sp, s.strong, s, &s.corrected);
             fit.waviness = f.waviness, fit.gd_n0_free = std::exp(f.ln_g0_free + kEulerGamma);
         }
         return fit;
     }
     fit.noise_bound = true;
-    fit.gd_n0 = whittle_fit(sp, used, support.resolved, nullptr, share);
+    fit.gd_n0 = whittle_fit(sp, used, support.resolved, nullptr, s);
     if (!std::isfinite(fit.gd_n0) || iso_class(fit.gd_n0) != 'A') {
         fit.reason = kNoiseDominates;
         return fit;
     }
-    const LogFit f = log_fit_over(sp, used);
+    const LogFit f = log_fit_over(sp, used, s);
     fit.log_variance = kWhittleVariance / static_cast<double>(used.size());
     fit.waviness = f.waviness, fit.gd_n0_free = std::exp(f.ln_g0_free + kEulerGamma);
     return fit;
 }
 
-}  // namespace
-
-double class_confidence(double gd_n0_m3, double log_variance) {
-    if (gd_n0_m3 <= 0.0) return 1.0;
-    const int k = static_cast<int>(std::string(kIsoClasses).find(iso_class(gd_n0_m3)));
-    const double sigma = std::sqrt(log_variance);
-    const auto below = [&](double limit) {  // P(true value < limit)
-        return 0.5 * std::erfc((std::log(gd_n0_m3) - std::log(limit)) / (sigma * std::sqrt(2.0)));
-    };
-    const double upper = k < 7 ? below(kClassLimits[k]) : 1.0;
-    const double lower = k > 0 ? below(kClassLimits[k - 1]) : 0.0;
-    return upper - lower;
-}
-
-Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg,
-                            const StretchSupport* support) {
-    Roughness r;
-    r.spectrum = std::move(spectrum);
+// Steps 6–9 of §4 on r.spectrum (already there), into r.
+void classify(Roughness& r, double length_m, double ds, const RoughnessConfig& cfg, const SupportBuffers* support,
+              RoughnessScratch& s) {
     const Spectrum& sp = r.spectrum;
     octave_bands(r);
     const double lo = std::max(cfg.band_min_cpm, cfg.min_cycles / length_m);
     const double nyquist = 0.5 / ds;
     double hi = std::min(cfg.band_max_cpm, nyquist);
     r.band_limit = cfg.band_max_cpm <= nyquist ? "requested" : "nyquist";
-    Indices used;
+    Indices& used = s.used;
+    used.clear();
     for (std::size_t k = 1; k < sp.n.size(); ++k)
         if (sp.n[k] >= lo * (1.0 - kBandEdgeTolerance) && sp.n[k] <= hi * (1.0 + kBandEdgeTolerance)) used.push_back(k);
     if (support) {
         r.backed_fraction = support->backed_fraction;
-        if (support->noise) {
-            r.noise_psd = *support->noise;
+        if (support->noise_known) {
+            r.noise_psd.assign(support->noise.begin(), support->noise.end());
             double sum = 0.0;
             for (std::size_t k : used) sum += r.noise_psd[k];
             if (!used.empty()) r.noise_floor = sum / static_cast<double>(used.size());
@@ -281,13 +290,13 @@ Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const
     }
     if (lo >= hi || static_cast<int>(used.size()) < cfg.min_band_points) {
         r.reason = "too few PSD ordinates in band";
-        return r;
+        return;
     }
-    const Fit fit = noise_aware ? noise_aware_fit(sp, used, *support, cfg) : log_fit(sp, used);
+    const Fit fit = noise_aware ? noise_aware_fit(sp, used, *support, cfg, s) : log_fit(sp, used, s);
     if (fit.noise_bound) r.band_limit = "noise";
-    if (!fit.reason.empty() || !std::isfinite(fit.gd_n0)) {
-        r.reason = fit.reason.empty() ? "fit failed (G_d(n0) not finite)" : fit.reason;
-        return r;
+    if (fit.reason || !std::isfinite(fit.gd_n0)) {
+        r.reason = fit.reason ? fit.reason : "fit failed (G_d(n0) not finite)";
+        return;
     }
     r.band_lo = lo, r.band_hi = hi;
     r.gd_n0 = fit.gd_n0;
@@ -295,6 +304,62 @@ Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const
     r.waviness = fit.waviness;
     r.iso_class = iso_class(r.gd_n0);
     r.confidence = class_confidence(r.gd_n0, fit.log_variance);
+}
+
+SupportBuffers buffers_of(const StretchSupport& support) {
+    SupportBuffers b;
+    b.noise_known = support.noise.has_value();
+    if (support.noise) b.noise = *support.noise;
+    b.resolved = support.resolved;
+    b.backed_fraction = support.backed_fraction;
+    return b;
+}
+
+}  // namespace
+
+void clear(Iri& iri) {
+    iri.value.reset();
+    iri.length_m = 0.0;
+    iri.reason.clear();
+    iri.backed_fraction.reset();
+}
+
+void clear(Roughness& r) {
+    r.iso_class.reset();
+    r.gd_n0 = r.gd_n0_free = r.waviness = 0.0;
+    r.band_lo = r.band_hi = 0.0;
+    r.spectrum.n.clear();
+    r.spectrum.psd.clear();
+    r.octave_centers.clear();
+    r.octave_gd.clear();
+    r.reason.clear();
+    r.confidence = 0.0;
+    r.noise_psd.clear();
+    r.noise_floor.reset();
+    r.backed_fraction.reset();
+    r.band_limit.clear();
+    clear(r.iri);
+}
+
+double class_confidence(double gd_n0_m3, double log_variance) {
+    if (gd_n0_m3 <= 0.0) return 1.0;
+    const int k = static_cast<int>(std::string(kIsoClasses).find(iso_class(gd_n0_m3)));
+    const double sigma = std::sqrt(log_variance);
+    const auto below = [&](double limit) {  // P(true value < limit)
+        return 0.5 * std::erfc((std::log(gd_n0_m3) - std::log(limit)) / (sigma * std::sqrt(2.0)));
+    };
+    const double upper = k < 7 ? below(kClassLimits[k]) : 1.0;
+    const double lower = k > 0 ? below(kClassLimits[k - 1]) : 0.0;
+    return upper - lower;
+}
+
+Roughness classify_spectrum(Spectrum spectrum, double length_m, double ds, const RoughnessConfig& cfg,
+                            const StretchSupport* support) {
+    RoughnessScratch scratch;
+    Roughness r;
+    r.spectrum = std::move(spectrum);
+    const SupportBuffers buffers = support ? buffers_of(*support) : SupportBuffers{};
+    classify(r, length_m, ds, cfg, support ? &buffers : nullptr, scratch);
     return r;
 }
 
@@ -321,21 +386,12 @@ std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<doub
 }
 
 namespace {
-std::string stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
+const char* stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
     if (samples == 0) return "no valid profile";
     if (static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return "valid stretch too short";
-    return {};
-}
-}  // namespace
-
-Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg) {
-    const auto [first, last] = longest_valid_stretch(z);
-    if (auto problem = stretch_problem(last - first, ds, cfg); !problem.empty()) return declined(problem);
-    const double length = static_cast<double>(last - first) * ds;
-    return classify_spectrum(displacement_psd(z.data() + first, last - first, ds), length, ds, cfg);
+    return nullptr;
 }
 
-namespace {
 void require_support(const Profile& p) {
     if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
         throw std::invalid_argument("profile count and spread must have one entry per bin");
@@ -347,50 +403,101 @@ std::pair<std::size_t, std::size_t> common_stretch(const std::vector<double>& z_
     return longest_run(z_left.size(), [&](std::size_t k) { return is_finite(z_left[k]) && is_finite(z_right[k]); });
 }
 
-Spectrum mean_spectrum(const std::vector<double>& z_left, const std::vector<double>& z_right, std::size_t first,
-                       std::size_t last, double ds) {
-    Spectrum mean = displacement_psd(z_left.data() + first, last - first, ds);
-    const Spectrum right = displacement_psd(z_right.data() + first, last - first, ds);
-    for (std::size_t k = 0; k < mean.psd.size(); ++k) mean.psd[k] = 0.5 * (mean.psd[k] + right.psd[k]);
-    return mean;
+// The mean of both wheels' PSDs over bins [first, last), into `mean`.
+void mean_spectrum(const std::vector<double>& z_left, const std::vector<double>& z_right, std::size_t first,
+                   std::size_t last, double ds, RoughnessScratch& s, Spectrum& mean) {
+    displacement_psd(z_left.data() + first, last - first, ds, s, mean);
+    displacement_psd(z_right.data() + first, last - first, ds, s, s.right);
+    for (std::size_t k = 0; k < mean.psd.size(); ++k) mean.psd[k] = 0.5 * (mean.psd[k] + s.right.psd[k]);
+}
+
+// The support of both wheels over bins [first, last): noise and resolved fraction averaged, into s.support.
+void mean_support(const Profile& left, const Profile& right, std::size_t first, std::size_t last,
+                  const std::vector<double>& n, RoughnessScratch& s) {
+    SupportBuffers& support = s.support;
+    const SupportBuffers& other = s.other;
+    stretch_support(left.count, left.spread, first, last, left.ds, n, s, s.support);
+    stretch_support(right.count, right.spread, first, last, right.ds, n, s, s.other);
+    support.noise_known = support.noise_known && other.noise_known;
+    if (support.noise_known)
+        for (std::size_t k = 0; k < support.noise.size(); ++k) support.noise[k] = 0.5 * (support.noise[k] + other.noise[k]);
+    for (std::size_t k = 0; k < support.resolved.size(); ++k) support.resolved[k] = 0.5 * (support.resolved[k] + other.resolved[k]);
+    support.backed_fraction = 0.5 * (support.backed_fraction + other.backed_fraction);
 }
 }  // namespace
 
-Roughness analyze_roughness(const Profile& p, const RoughnessConfig& cfg) {
+Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg) {
+    Roughness r;
+    const auto [first, last] = longest_valid_stretch(z);
+    if (const char* problem = stretch_problem(last - first, ds, cfg)) {
+        r.reason = problem;
+        return r;
+    }
+    RoughnessScratch s;
+    displacement_psd(z.data() + first, last - first, ds, s, r.spectrum);
+    classify(r, static_cast<double>(last - first) * ds, ds, cfg, nullptr, s);
+    return r;
+}
+
+void analyze_roughness(const Profile& p, const RoughnessConfig& cfg, RoughnessScratch& s, Roughness& r) {
     require_support(p);
+    clear(r);
     const auto [first, last] = longest_valid_stretch(p.z);
-    if (auto problem = stretch_problem(last - first, p.ds, cfg); !problem.empty()) return declined(problem);
-    Spectrum sp = displacement_psd(p.z.data() + first, last - first, p.ds);
-    const StretchSupport support = stretch_support(p.count, p.spread, first, last, p.ds, sp.n);
-    return classify_spectrum(std::move(sp), static_cast<double>(last - first) * p.ds, p.ds, cfg, &support);
+    if (const char* problem = stretch_problem(last - first, p.ds, cfg)) {
+        r.reason = problem;
+        return;
+    }
+    displacement_psd(p.z.data() + first, last - first, p.ds, s, r.spectrum);
+    stretch_support(p.count, p.spread, first, last, p.ds, r.spectrum.n, s, s.support);
+    classify(r, static_cast<double>(last - first) * p.ds, p.ds, cfg, &s.support, s);
+}
+
+Roughness analyze_roughness(const Profile& p, const RoughnessConfig& cfg) {
+    RoughnessScratch s;
+    Roughness r;
+    analyze_roughness(p, cfg, s, r);
+    return r;
 }
 
 Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector<double>& z_right, double ds,
                             const RoughnessConfig& cfg) {
-    if (z_left.empty() || z_right.empty()) return declined("no valid profile");
-    const auto [first, last] = common_stretch(z_left, z_right);
-    if (auto problem = stretch_problem(last - first, ds, cfg); !problem.empty()) return declined(problem);
-    return classify_spectrum(mean_spectrum(z_left, z_right, first, last, ds), static_cast<double>(last - first) * ds,
-                             ds, cfg);
+    Roughness r;
+    const auto [first, last] = z_left.empty() || z_right.empty() ? std::pair<std::size_t, std::size_t>{0, 0}
+                                                                  : common_stretch(z_left, z_right);
+    if (const char* problem = stretch_problem(last - first, ds, cfg)) {
+        r.reason = problem;
+        return r;
+    }
+    RoughnessScratch s;
+    mean_spectrum(z_left, z_right, first, last, ds, s, r.spectrum);
+    classify(r, static_cast<double>(last - first) * ds, ds, cfg, nullptr, s);
+    return r;
 }
 
-Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg) {
-    if (left.z.empty() || right.z.empty()) return declined("no valid profile");
+void vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg, RoughnessScratch& s,
+                       Roughness& r) {
+    clear(r);
+    if (left.z.empty() || right.z.empty()) {
+        r.reason = "no valid profile";
+        return;
+    }
     require_support(left);
     require_support(right);
     const auto [first, last] = common_stretch(left.z, right.z);
-    if (auto problem = stretch_problem(last - first, left.ds, cfg); !problem.empty()) return declined(problem);
-    Spectrum sp = mean_spectrum(left.z, right.z, first, last, left.ds);
-    StretchSupport support = stretch_support(left.count, left.spread, first, last, left.ds, sp.n);
-    const StretchSupport other = stretch_support(right.count, right.spread, first, last, right.ds, sp.n);
-    if (support.noise && other.noise) {
-        for (std::size_t k = 0; k < support.noise->size(); ++k) (*support.noise)[k] = 0.5 * ((*support.noise)[k] + (*other.noise)[k]);
-    } else {
-        support.noise.reset();
+    if (const char* problem = stretch_problem(last - first, left.ds, cfg)) {
+        r.reason = problem;
+        return;
     }
-    for (std::size_t k = 0; k < support.resolved.size(); ++k) support.resolved[k] = 0.5 * (support.resolved[k] + other.resolved[k]);
-    support.backed_fraction = 0.5 * (support.backed_fraction + other.backed_fraction);
-    return classify_spectrum(std::move(sp), static_cast<double>(last - first) * left.ds, left.ds, cfg, &support);
+    mean_spectrum(left.z, right.z, first, last, left.ds, s, r.spectrum);
+    mean_support(left, right, first, last, r.spectrum.n, s);
+    classify(r, static_cast<double>(last - first) * left.ds, left.ds, cfg, &s.support, s);
+}
+
+Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg) {
+    RoughnessScratch s;
+    Roughness r;
+    vehicle_roughness(left, right, cfg, s, r);
+    return r;
 }
 
 }  // namespace roadpreview

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
+#include <utility>
+
+#include "roughness/roughness_scratch.hpp"
 
 namespace roadpreview {
 namespace {
@@ -16,14 +18,8 @@ double hann(std::size_t j, std::size_t n) {
     return 0.5 * (1.0 - std::cos(2.0 * M_PI * static_cast<double>(j) / static_cast<double>(n)));
 }
 
-// Bin j's height error as weights on (at most) two backed bins: itself, or its gap's two ends.
-struct Anchors {
-    std::size_t bin[2];
-    double weight[2];
-};
-
-std::vector<Anchors> interpolation_anchors(const std::int32_t* count, std::size_t bins) {
-    std::vector<Anchors> out(bins, Anchors{{0, 0}, {0.0, 0.0}});
+void interpolation_anchors(const std::int32_t* count, std::size_t bins, std::vector<Anchors>& out) {
+    out.assign(bins, Anchors{{0, 0}, {0.0, 0.0}});
     std::size_t previous = bins;  // none yet
     for (std::size_t j = 0; j < bins; ++j) {
         if (count[j] <= 0) continue;
@@ -36,7 +32,6 @@ std::vector<Anchors> interpolation_anchors(const std::int32_t* count, std::size_
         }
         previous = j;
     }
-    return out;
 }
 
 double shared_covariance(const Anchors& a, const Anchors& b, const std::vector<double>& variance) {
@@ -50,97 +45,137 @@ double shared_covariance(const Anchors& a, const Anchors& b, const std::vector<d
 
 double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(M_PI * x) / (M_PI * x); }
 
+// noise_psd into `psd`; false when the bins' noise is unknown.
+bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins, double ds, RoughnessScratch& s,
+               std::vector<double>& psd) {
+    if (!backed_variances(count, spread, bins, std::numeric_limits<double>::infinity(), s.variance)) return false;
+    interpolation_anchors(count, bins, s.anchors);
+    const auto& anchors = s.anchors;
+    // Windowed error covariance summed by lag, R(L) = Σ_j w_j w_{j+L} C(j, j+L). Bins share an error only when
+    // they share a backed bin, so R vanishes beyond a few gaps and E|X_k|² = R(0) + 2 Σ_L R(L) cos(2πLk/N).
+    s.lag_sum.assign(bins, 0.0);
+    s.window.resize(bins);
+    double window_power = 0.0;
+    for (std::size_t j = 0; j < bins; ++j) s.window[j] = hann(j, bins), window_power += s.window[j] * s.window[j];
+    std::size_t max_lag = 0;
+    for (std::size_t j = 0; j < bins; ++j) {
+        const std::size_t reach = anchors[j].weight[1] != 0.0 ? anchors[j].bin[1] : anchors[j].bin[0];
+        for (std::size_t i = j; i < bins && anchors[i].bin[0] <= reach; ++i) {
+            const double c = shared_covariance(anchors[j], anchors[i], s.variance);
+            if (c == 0.0) continue;
+            s.lag_sum[i - j] += s.window[j] * s.window[i] * c;
+            max_lag = std::max(max_lag, i - j);
+        }
+    }
+    const std::size_t half = bins / 2;
+    psd.resize(half + 1);
+    for (std::size_t k = 0; k <= half; ++k) {
+        double power = s.lag_sum[0];
+        for (std::size_t lag = 1; lag <= max_lag; ++lag) {
+            const double turns = static_cast<double>(lag * k % bins) / static_cast<double>(bins);
+            power += 2.0 * s.lag_sum[lag] * std::cos(2.0 * M_PI * turns);
+        }
+        const bool unpaired = k == 0 || 2 * k == bins;
+        psd[k] = (unpaired ? 1.0 : 2.0) * power * ds / window_power;
+    }
+    return true;
+}
+
+void resolved_fraction(const std::int32_t* count, std::size_t bins, double ds, const std::vector<double>& n,
+                       RoughnessScratch& s, std::vector<double>& phi) {
+    // Each bin lies in the interval from a backed bin to the next (ds where there is none); the window's power
+    // is summed per interval length, in bins (ascending lengths, as a map would hold them).
+    s.interval.assign(bins, 1);
+    std::size_t previous = bins;  // none yet
+    for (std::size_t j = 0; j < bins; ++j) {
+        if (count[j] <= 0) continue;
+        if (previous != bins) std::fill(s.interval.begin() + static_cast<std::ptrdiff_t>(previous),
+                                        s.interval.begin() + static_cast<std::ptrdiff_t>(j), j - previous);
+        previous = j;
+    }
+    auto& by_length = s.power_by_interval;
+    by_length.clear();
+    double total = 0.0;
+    for (std::size_t j = 0; j < bins; ++j) {
+        const double w2 = hann(j, bins) * hann(j, bins);
+        const auto at = std::lower_bound(by_length.begin(), by_length.end(), std::pair{s.interval[j], -1.0});
+        if (at == by_length.end() || at->first != s.interval[j])
+            by_length.insert(at, {s.interval[j], w2});
+        else
+            at->second += w2;
+        total += w2;
+    }
+    phi.assign(n.size(), 0.0);
+    for (std::size_t k = 0; k < n.size(); ++k) {
+        for (const auto& [length, power] : by_length) {
+            const double x = n[k] * (static_cast<double>(length) * ds);
+            if (x <= 0.5 * (1.0 + kNyquistTolerance)) phi[k] += std::pow(sinc(x), 4) * power;
+        }
+        phi[k] /= total;
+    }
+}
+
 }  // namespace
 
-std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread,
-                                                    std::size_t bins, double pool_max_spread) {
+bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, double pool_max_spread,
+                      std::vector<double>& v) {
     double squares = 0.0, dof = 0.0;
     for (std::size_t j = 0; j < bins; ++j)
         if (count[j] >= 2 && spread[j] <= pool_max_spread) squares += (count[j] - 1) * spread[j] * spread[j], dof += count[j] - 1;
-    if (dof == 0.0) return std::nullopt;
-    std::vector<double> v(bins, std::numeric_limits<double>::quiet_NaN());
+    if (dof == 0.0) return false;
+    v.assign(bins, std::numeric_limits<double>::quiet_NaN());
     for (std::size_t j = 0; j < bins; ++j) {
         const double n = count[j], s2 = spread[j] * spread[j];
         if (count[j] == 1) v[j] = squares / dof;
         if (count[j] == 2) v[j] = s2 / 2.0;
         if (count[j] >= 3) v[j] = kMedianVarianceFactor * s2 / n;
     }
+    return true;
+}
+
+std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread,
+                                                    std::size_t bins, double pool_max_spread) {
+    std::vector<double> v;
+    if (!backed_variances(count, spread, bins, pool_max_spread, v)) return std::nullopt;
     return v;
 }
 
 std::optional<std::vector<double>> noise_psd(const std::int32_t* count, const double* spread, std::size_t bins,
                                              double ds) {
-    const auto variance = backed_variances(count, spread, bins);
-    if (!variance) return std::nullopt;
-    const std::vector<Anchors> anchors = interpolation_anchors(count, bins);
-    // Windowed error covariance summed by lag, R(L) = Σ_j w_j w_{j+L} C(j, j+L). Bins share an error only when
-    // they share a backed bin, so R vanishes beyond a few gaps and E|X_k|² = R(0) + 2 Σ_L R(L) cos(2πLk/N).
-    std::vector<double> lag_sum(bins, 0.0), window(bins);
-    double window_power = 0.0;
-    for (std::size_t j = 0; j < bins; ++j) window[j] = hann(j, bins), window_power += window[j] * window[j];
-    std::size_t max_lag = 0;
-    for (std::size_t j = 0; j < bins; ++j) {
-        const std::size_t reach = anchors[j].weight[1] != 0.0 ? anchors[j].bin[1] : anchors[j].bin[0];
-        for (std::size_t i = j; i < bins && anchors[i].bin[0] <= reach; ++i) {
-            const double c = shared_covariance(anchors[j], anchors[i], *variance);
-            if (c == 0.0) continue;
-            lag_sum[i - j] += window[j] * window[i] * c;
-            max_lag = std::max(max_lag, i - j);
-        }
-    }
-    const std::size_t half = bins / 2;
-    std::vector<double> psd(half + 1);
-    for (std::size_t k = 0; k <= half; ++k) {
-        double power = lag_sum[0];
-        for (std::size_t lag = 1; lag <= max_lag; ++lag) {
-            const double turns = static_cast<double>(lag * k % bins) / static_cast<double>(bins);
-            power += 2.0 * lag_sum[lag] * std::cos(2.0 * M_PI * turns);
-        }
-        const bool unpaired = k == 0 || 2 * k == bins;
-        psd[k] = (unpaired ? 1.0 : 2.0) * power * ds / window_power;
-    }
+    RoughnessScratch scratch;
+    std::vector<double> psd;
+    if (!noise_psd(count, spread, bins, ds, scratch, psd)) return std::nullopt;
     return psd;
 }
 
 std::vector<double> resolved_fraction(const std::int32_t* count, std::size_t bins, double ds,
                                       const std::vector<double>& n) {
-    // Each bin lies in the interval from a backed bin to the next (ds where there is none); the window's power
-    // is summed per interval length, in bins.
-    std::vector<std::size_t> interval(bins, 1);
-    std::size_t previous = bins;  // none yet
-    for (std::size_t j = 0; j < bins; ++j) {
-        if (count[j] <= 0) continue;
-        if (previous != bins) std::fill(interval.begin() + static_cast<std::ptrdiff_t>(previous),
-                                        interval.begin() + static_cast<std::ptrdiff_t>(j), j - previous);
-        previous = j;
-    }
-    std::map<std::size_t, double> power_by_interval;
-    double total = 0.0;
-    for (std::size_t j = 0; j < bins; ++j) {
-        const double w2 = hann(j, bins) * hann(j, bins);
-        power_by_interval[interval[j]] += w2;
-        total += w2;
-    }
-    std::vector<double> phi(n.size(), 0.0);
-    for (std::size_t k = 0; k < n.size(); ++k) {
-        for (const auto& [length, power] : power_by_interval) {
-            const double x = n[k] * (static_cast<double>(length) * ds);
-            if (x <= 0.5 * (1.0 + kNyquistTolerance)) phi[k] += std::pow(sinc(x), 4) * power;
-        }
-        phi[k] /= total;
-    }
+    RoughnessScratch scratch;
+    std::vector<double> phi;
+    resolved_fraction(count, bins, ds, n, scratch, phi);
     return phi;
+}
+
+void stretch_support(const std::vector<std::int32_t>& count, const std::vector<double>& spread, std::size_t first,
+                     std::size_t last, double ds, const std::vector<double>& n, RoughnessScratch& s,
+                     SupportBuffers& out) {
+    const std::size_t bins = last - first;
+    out.noise_known = noise_psd(count.data() + first, spread.data() + first, bins, ds, s, out.noise);
+    resolved_fraction(count.data() + first, bins, ds, n, s, out.resolved);
+    std::size_t backed = 0;
+    for (std::size_t j = first; j < last; ++j) backed += count[j] > 0 ? 1 : 0;
+    out.backed_fraction = static_cast<double>(backed) / static_cast<double>(bins);
 }
 
 StretchSupport stretch_support(const std::vector<std::int32_t>& count, const std::vector<double>& spread,
                                std::size_t first, std::size_t last, double ds, const std::vector<double>& n) {
-    const std::size_t bins = last - first;
+    RoughnessScratch scratch;
+    SupportBuffers buffers;
+    stretch_support(count, spread, first, last, ds, n, scratch, buffers);
     StretchSupport s;
-    s.noise = noise_psd(count.data() + first, spread.data() + first, bins, ds);
-    s.resolved = resolved_fraction(count.data() + first, bins, ds, n);
-    std::size_t backed = 0;
-    for (std::size_t j = first; j < last; ++j) backed += count[j] > 0 ? 1 : 0;
-    s.backed_fraction = static_cast<double>(backed) / static_cast<double>(bins);
+    if (buffers.noise_known) s.noise = std::move(buffers.noise);
+    s.resolved = std::move(buffers.resolved);
+    s.backed_fraction = buffers.backed_fraction;
     return s;
 }
 

@@ -114,7 +114,7 @@ void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
     last_timestamp_ = r.timestamp;
     last_pose_ = pose;
     if (pose) track_.emplace_back(distance_m_, *pose);
-    if (!r.reason.empty()) return;  // no profiles: the frame only moves the drive on
+    if (r.status != FrameStatus::Ok) return;  // no profiles: the frame only moves the drive on
     stitch(r.left, drive_per_wheel_metre(r.path, Wheel::Left), left_);
     stitch(r.right, drive_per_wheel_metre(r.path, Wheel::Right), right_);
 }

@@ -117,6 +117,9 @@ public:
     /// Both wheels' profiles sampled from the map along the paths, from −fusion.behind_m to the preview length;
     /// `blocked` (bins 0 ≤ s < preview) as in build_profiles. Fills status.coverage and frame_coverage.
     WheelProfiles profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status) const;
+    /// The same into `left` and `right`, reusing their buffers.
+    void profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status, Profile& left,
+                  Profile& right) const;
 
     const ElevationMap& map() const { return map_; }
     /// Frames fused since the last reset (0: the map is empty).
@@ -127,8 +130,15 @@ private:
     /// Removes from the frame's cell medians the plane of their differences to the map and adds the excess
     /// disagreement to the variances (method.md §7); the first time, half of it to the map's cells.
     void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances, std::vector<double>& medians);
-    Profile sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,
-                   std::size_t& ahead, std::size_t& ahead_now) const;
+    void reserve_cells(std::size_t cells);
+    void sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked, std::size_t& ahead,
+                std::size_t& ahead_now, Profile& p) const;
+
+    struct SharedCell {  // a cell of the frame that the map holds too: what align fits
+        std::size_t index;
+        double difference, variance;
+        bool inlier = true;
+    };
 
     Config cfg_;
     ElevationMap map_;
@@ -141,6 +151,13 @@ private:
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
     std::vector<float> variance_;  // this frame's point height variances, by point (reused)
+    // Per cell of the frame (reused): its slot, median, spread, count, variance, and the heights of one cell.
+    std::vector<std::int64_t> touched_;
+    std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_;
+    std::vector<std::int32_t> counts_;
+    std::vector<Eigen::Vector3d> align_v_;  // align's scratch
+    std::vector<SharedCell> shared_;
+    std::vector<double> deviations_;
 };
 
 }  // namespace roadpreview

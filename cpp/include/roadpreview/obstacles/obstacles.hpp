@@ -71,4 +71,11 @@ std::vector<PathObstacle> wheel_obstacles(PointsView points, const Clustering& c
 std::vector<std::uint8_t> blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds,
                                        double margin_m);
 
+/// The same two into `out`, reusing its capacity (the pipeline's real-time path).
+void wheel_obstacles(PointsView points, const Clustering& clustering, const Plane& plane, const Levelling& L,
+                     const WheelPaths& paths, Wheel w, double tire_width, double preview_length_m,
+                     const ObstaclesConfig& cfg, std::vector<PathObstacle>& out);
+void blocked_bins(const std::vector<PathObstacle>& obstacles, std::size_t bins, double ds, double margin_m,
+                  std::vector<std::uint8_t>& out);
+
 }  // namespace roadpreview

@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "roadpreview/core/config.hpp"
+#include "roadpreview/core/status.hpp"
 
 namespace roadpreview {
 
@@ -28,7 +29,10 @@ struct WheelPaths {
     double radius(Wheel w) const { return w == Wheel::Left ? left_radius : right_radius; }
 };
 
-/// Throws std::invalid_argument for non-finite speed or yaw rate.
+/// Non-finite speed or yaw rate: StatusCode::InvalidArgument with the message plan_paths throws.
+Status check_motion(double speed_mps, double yaw_rate_rps) noexcept;
+
+/// Throws std::invalid_argument for non-finite speed or yaw rate (check_motion's message).
 WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width, const PathConfig& cfg);
 
 /// Arc length s ≥ 0 travelled by wheel `w` until it is beside (x, y), if (x, y) lies in that wheel's

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "roadpreview/core/config.hpp"
+#include "roadpreview/core/status.hpp"
 #include "roadpreview/fusion/fusion.hpp"
 #include "roadpreview/ground/ground.hpp"
 #include "roadpreview/io/frame_source.hpp"
@@ -39,6 +40,18 @@ struct TimingMs {
     double total = 0.0;
 };
 
+/// Why a frame has no profiles (Ok: it has them). to_string gives the text of the output line's `reason`.
+enum class FrameStatus {
+    Ok,
+    NoFinitePoints,   ///< "no finite points": empty, or every row has a NaN or infinite coordinate
+    NoGround,         ///< "no ground"
+    TiltedGround,     ///< "no ground within the tilt limit" (kTiltedGround)
+    VehicleStopped,   ///< "vehicle stopped": |speed| at or below path.stopped_speed_mps
+};
+
+/// The documented text ("vehicle stopped", ...); "" for Ok.
+const char* to_string(FrameStatus status) noexcept;
+
 struct Result {
     std::int64_t frame = 0;  ///< 0-based count of process() calls on this estimator
     std::string source;      ///< where the points came from (file name), may be empty
@@ -55,7 +68,7 @@ struct Result {
     std::optional<std::vector<Cluster>> obstacles;  ///< every cluster (base frame); nullopt: clustering is off
     std::vector<std::int32_t> cluster_labels;        ///< one entry per input row: its cluster's id, −1 for none
     TimingMs timing_ms;
-    std::string reason;  ///< why profiles are empty ("vehicle stopped", "no ground", ...); empty otherwise
+    FrameStatus status = FrameStatus::Ok;  ///< why profiles are empty (to_string: the output line's `reason`)
     /// Where the yaw rate came from ("option", "motion", "imu", "default"), set by the caller; when set, the
     /// output line's `path` is an object for every motion status and carries it (docs/output.md).
     std::string yaw_rate_source;
@@ -66,8 +79,13 @@ struct Result {
     std::string mounting_source;
 };
 
-/// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) between frames;
-/// not thread-safe — use one Estimator per thread.
+/// Runs the pipeline. Reuses its ROI buffer (the frame's one copy of the cloud) and every stage's scratch
+/// between frames; not thread-safe — use one Estimator per thread.
+///
+/// Real time: the overloads taking `Result& out` write into `out` and reuse its capacity (vectors are cleared,
+/// not freed), so that a stream of frames into the same `out` allocates nothing once the buffers have grown
+/// (tests/cpp/realtime_test.cpp counts). try_process is the same without exceptions: bad input gives a Status
+/// with the message process() would have thrown, and `out` is then left unspecified.
 class Estimator {
 public:
     explicit Estimator(const Config& cfg = Config{});  ///< throws std::invalid_argument on a bad config
@@ -88,6 +106,24 @@ public:
                    const FrameMotion& motion, const float* range_variances_m2);
     /// A frame of a FrameSource: its points, source and range variances (checked: one per point or none).
     Result process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion = {});
+
+    /// The real-time forms of the above: the result goes into `out`, reusing its buffers.
+    void process(PointsView points, double speed_mps, double yaw_rate_rps, Result& out);
+    void process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                 const FrameMotion& motion, Result& out);
+    void process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                 const FrameMotion& motion, const float* range_variances_m2, Result& out);
+    void process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion, Result& out);
+
+    /// The real-time forms without exceptions: Ok, or the code and message of what process() would have thrown
+    /// (StatusCode::OutOfMemory for std::bad_alloc). Nothing escapes them.
+    Status try_process(PointsView points, double speed_mps, double yaw_rate_rps, Result& out) noexcept;
+    Status try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                       const FrameMotion& motion, Result& out) noexcept;
+    Status try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
+                       const FrameMotion& motion, const float* range_variances_m2, Result& out) noexcept;
+    Status try_process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
+                       Result& out) noexcept;
 
     /// Forgets the fused map, the pose and the clock (the frame counter keeps counting).
     void reset();

@@ -1,0 +1,183 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The real-time API: process(..., Result& out) allocates nothing per frame once warm, and try_process reports
+// errors as a Status with the throwing variant's message. Its own executable: it replaces the global allocator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include <roadpreview/roadpreview.hpp>
+
+#include "scenes.hpp"
+
+#include "counting_allocator.hpp"
+
+namespace rp = roadpreview;
+
+namespace {
+
+const std::string kData = ROADPREVIEW_TEST_DATA;
+
+// The three consecutive KITTI frames, driven again and again: frame k is frame k mod 3, 0.5 m further on.
+std::vector<rp::Frame> kitti_frames() {
+    std::vector<rp::Frame> frames;
+    for (const char* name : {"000000.bin", "000001.bin", "000002.bin"})
+        frames.push_back(rp::read_frame(kData + "/semantickitti/" + name));
+    return frames;
+}
+
+rp::Config kitti_config(rp::FusionMethod fusion) {
+    rp::Config cfg;
+    cfg.sensor_height = 1.73;
+    cfg.fusion.method = fusion;
+    return cfg;
+}
+
+rp::FrameMotion motion_at(int k) {
+    rp::FrameMotion m;
+    m.timestamp_s = 0.1 * k;
+    return m;
+}
+
+// Allocations of each of frames [first, last) after `first` warm-up frames, the same Result reused throughout.
+std::vector<long> frame_allocations(const std::vector<rp::Frame>& frames, const rp::Config& cfg, int first, int last) {
+    rp::Estimator est(cfg);
+    rp::Result out;
+    std::vector<long> counts;
+    for (int k = 0; k < last; ++k) {
+        const rp::Frame& f = frames[static_cast<std::size_t>(k) % frames.size()];
+        const rp::FrameMotion motion = motion_at(k);
+        on_frame(k);
+        const long n = allocations_in([&] { est.process(f, 5.0, 0.02, motion, out); });
+        if (k >= first) counts.push_back(n);
+    }
+    return counts;
+}
+
+void expect_no_allocations(const std::vector<long>& counts, int first) {
+    for (std::size_t k = 0; k < counts.size(); ++k) EXPECT_EQ(counts[k], 0) << "frame " << k + first;
+}
+
+// A simulated road 1.73 m below the sensor: waves, a box on the left wheel's path, some NaN rows.
+rp::Frame simulated_frame() {
+    scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 60000, 0.5, 45.0, 11.0);
+    for (Eigen::Index i = 0; i < road.rows(); ++i) road(i, 2) += 0.02f * std::sin(1.5f * road(i, 0));
+    const scenes::Cloud pts = scenes::concat(road, scenes::box(20.0, 0.8, 1.0, 1.0, 0.5, -1.73));
+    rp::Frame f;
+    f.source = "simulated";
+    f.points.resize(pts.rows(), 4);
+    f.points << pts, Eigen::MatrixXf::Zero(pts.rows(), 1);
+    for (Eigen::Index i = 0; i < pts.rows(); i += 997) f.points(i, 1) = std::numeric_limits<float>::quiet_NaN();
+    return f;
+}
+
+}  // namespace
+
+TEST(Realtime, KittiFramesAllocateNothingOnceWarmWithKalmanFusionAndObstacles) {
+    expect_no_allocations(frame_allocations(kitti_frames(), kitti_config(rp::FusionMethod::Kalman), 5, 20), 5);
+}
+
+TEST(Realtime, KittiFramesAllocateNothingOnceWarmWithTheDefaultPipeline) {  // zones, obstacles on, no fusion
+    expect_no_allocations(frame_allocations(kitti_frames(), kitti_config(rp::FusionMethod::None), 5, 20), 5);
+}
+
+TEST(Realtime, SimulatedFrameAllocatesNothingOnceWarmWithEmaFusion) {
+    expect_no_allocations(frame_allocations({simulated_frame()}, kitti_config(rp::FusionMethod::Ema), 5, 12), 5);
+}
+
+// A Result reused across frames (and across frames that have no profiles) holds exactly what a fresh one would.
+TEST(Realtime, AReusedResultEqualsAFreshOne) {
+    const std::vector<rp::Frame> kitti = kitti_frames();
+    for (const auto fusion : {rp::FusionMethod::None, rp::FusionMethod::Kalman}) {
+        rp::Estimator reusing(kitti_config(fusion)), fresh(kitti_config(fusion));
+        rp::Result out;
+        const rp::Frame empty;  // no points: no profiles, then profiles again into the same Result
+        const rp::Frame* sequence[] = {&kitti[0], &kitti[1], &empty, &kitti[2], &kitti[0]};
+        double speed_mps = 5.0;
+        for (int k = 0; k < 5; ++k) {
+            if (k == 3) speed_mps = 0.0;  // stopped: the other kind of frame without profiles
+            if (k == 4) speed_mps = 5.0;
+            reusing.process(*sequence[k], speed_mps, 0.02, motion_at(k), out);
+            const rp::Result expected = fresh.process(*sequence[k], speed_mps, 0.02, motion_at(k));
+            out.timing_ms = expected.timing_ms;  // the clock differs
+            EXPECT_EQ(rp::result_to_json(out), rp::result_to_json(expected)) << "frame " << k;
+            EXPECT_EQ(out.cluster_labels, expected.cluster_labels) << "frame " << k;
+        }
+    }
+}
+
+// try_process reports bad input as a Status with the text process() throws, and writes nothing then.
+TEST(Realtime, TryProcessGivesTheThrowingVariantsMessage) {
+    rp::Estimator est(kitti_config(rp::FusionMethod::Kalman));
+    const rp::Frame f = kitti_frames()[0];
+    const rp::PointsView view = rp::points_view(f.points.data(), f.points.rows(), 4);
+    rp::Result out;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (const auto& [speed_mps, yaw_rate_rps] : {std::pair{nan, 0.0}, std::pair{5.0, std::numeric_limits<double>::infinity()}}) {
+        std::string thrown;
+        try {
+            est.process(view, speed_mps, yaw_rate_rps, out);
+        } catch (const std::invalid_argument& e) {
+            thrown = e.what();
+        }
+        ASSERT_FALSE(thrown.empty());
+        const rp::Status status = est.try_process(view, speed_mps, yaw_rate_rps, out);
+        EXPECT_FALSE(status.ok());
+        EXPECT_EQ(status.code(), rp::StatusCode::InvalidArgument);
+        EXPECT_EQ(std::string(status.message()), thrown);
+    }
+    rp::Frame lying = f;  // range variances for half the points
+    lying.range_variances.assign(static_cast<std::size_t>(f.points.rows() / 2), 0.01f);
+    std::string thrown;
+    try {
+        est.process(lying, 5.0, 0.0, {}, out);
+    } catch (const std::invalid_argument& e) {
+        thrown = e.what();
+    }
+    const rp::Status status = est.try_process(lying, 5.0, 0.0, {}, out);
+    EXPECT_EQ(status.code(), rp::StatusCode::InvalidArgument);
+    EXPECT_EQ(std::string(status.message()), thrown);
+    EXPECT_NE(thrown.find("range variances for"), std::string::npos) << thrown;
+}
+
+// NaN points, an empty cloud and a stopped vehicle are ordinary frames: Ok, with the frame status process() gives.
+TEST(Realtime, TryProcessGivesOrdinaryFramesTheirFrameStatus) {
+    rp::Estimator throwing(kitti_config(rp::FusionMethod::None)), not_throwing(kitti_config(rp::FusionMethod::None));
+    const scenes::Cloud nans = scenes::Cloud::Constant(100, 3, std::numeric_limits<float>::quiet_NaN());
+    const scenes::Cloud empty(0, 3);
+    const scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 20000, 1.0, 40.0, 9.0);
+    const auto view = [](const scenes::Cloud& c) { return rp::points_view(c.data(), c.rows(), 3); };
+    const std::tuple<const scenes::Cloud*, double, rp::FrameStatus> cases[] = {
+        {&nans, 5.0, rp::FrameStatus::NoFinitePoints},
+        {&empty, 5.0, rp::FrameStatus::NoFinitePoints},
+        {&road, 0.0, rp::FrameStatus::VehicleStopped},
+        {&road, 5.0, rp::FrameStatus::Ok},
+    };
+    rp::Result out;
+    for (const auto& [cloud, speed_mps, expected] : cases) {
+        const rp::Status status = not_throwing.try_process(view(*cloud), speed_mps, 0.0, out);
+        EXPECT_TRUE(status.ok()) << status.message();
+        EXPECT_EQ(status.message(), std::string());
+        EXPECT_EQ(out.status, expected) << rp::to_string(expected);
+        EXPECT_EQ(throwing.process(view(*cloud), speed_mps, 0.0).status, expected);
+    }
+    EXPECT_STREQ(rp::to_string(rp::FrameStatus::VehicleStopped), "vehicle stopped");
+    EXPECT_STREQ(rp::to_string(rp::FrameStatus::TiltedGround), rp::kTiltedGround);
+}
+
+// The error path itself allocates nothing: the message goes into the Status's own buffer.
+TEST(Realtime, TryProcessRefusesBadMotionWithoutAllocating) {
+    rp::Estimator est(kitti_config(rp::FusionMethod::None));
+    const scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 2000);
+    rp::Result out;
+    rp::Status status;
+    const long n = allocations_in([&] {
+        status = est.try_process(rp::points_view(road.data(), road.rows(), 3), std::nan(""), 0.0, out);
+    });
+    EXPECT_EQ(n, 0);
+    EXPECT_STREQ(status.message(), "speed must be finite, got nan");
+}
