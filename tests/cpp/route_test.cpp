@@ -141,9 +141,9 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
     EXPECT_EQ(a.frames, b.frames);
 
     rp::Result stopped;
-    stopped.reason = "vehicle stopped";
+    stopped.status = rp::FrameStatus::VehicleStopped;
     const rp::Result back = rp::route_input_from_json(rp::result_to_json(stopped));
-    EXPECT_EQ(back.reason, "vehicle stopped");
+    EXPECT_EQ(back.status, rp::FrameStatus::VehicleStopped);
     EXPECT_TRUE(back.left.z.empty());
     try {
         rp::route_input_from_json("{\"source\": \"a.bin\"}", "part-0.parquet row 3");
@@ -153,4 +153,6 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
                   std::string::npos) << e.what();
     }
     EXPECT_THROW(rp::route_input_from_json("not json", "x"), std::invalid_argument);
+    EXPECT_THROW(rp::route_input_from_json(R"({"motion": {"speed": 5}, "reason": "gremlins"})", "x"),
+                 std::invalid_argument);
 }

@@ -58,6 +58,15 @@ Profile profile_from(const json& p, const std::string& where) {
     return out;
 }
 
+// The status whose text (to_string) the line's `reason` holds.
+FrameStatus frame_status(const json& reason, const std::string& where) {
+    const std::string text = reason.get<std::string>();
+    for (const FrameStatus s : {FrameStatus::NoFinitePoints, FrameStatus::NoGround, FrameStatus::TiltedGround,
+                                FrameStatus::VehicleStopped})
+        if (text == to_string(s)) return s;
+    fail(where, "unknown reason \"" + text + "\"");
+}
+
 }  // namespace
 
 Result route_input_from_json(const std::string& line, const std::string& where) {
@@ -71,8 +80,8 @@ Result route_input_from_json(const std::string& line, const std::string& where) 
     if (const json* source = optional_member(j, "source"); source && source->is_string()) r.source = source->get<std::string>();
     if (const json* t = optional_member(j, "timestamp")) r.timestamp = number_or_nan(*t, where + " timestamp");
     r.speed_mps = number_or_nan(member(member(j, "motion", where), "speed", where), where + " motion.speed");
-    if (const json* reason = optional_member(j, "reason"); reason && reason->is_string()) r.reason = reason->get<std::string>();
-    if (!r.reason.empty()) return r;  // no profiles: the frame only moves the drive on
+    if (const json* reason = optional_member(j, "reason"); reason && reason->is_string()) r.status = frame_status(*reason, where);
+    if (r.status != FrameStatus::Ok) return r;  // no profiles: the frame only moves the drive on
     const json* path = optional_member(j, "path");
     if (path && optional_member(*path, "icr_y")) {
         r.path.status = PathStatus::Arc;
