@@ -73,6 +73,10 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     std::string bad_size = header;
     bad_size.replace(bad_size.find("SIZE 4 4 4"), 10, "SIZE 4 3 4");
     expect_error(written("size.pcd", bad_size + std::string(24, '\0')), "TYPE 'F' and SIZE 3");
+    // A control character in a header line: PCL read past the fields (a crash under ASan; found by fuzzing).
+    std::string control = header;
+    control.replace(control.find("FIELDS x"), 8, std::string("FIELDS x\x14\0", 10));
+    expect_error(written("control.pcd", control + std::string(24, '\0')), "holds a control character");
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {

@@ -3,6 +3,7 @@
 // turns an unparsable ASCII value into 0, so the header and the data are checked against the file first.
 #include "io/cloud_files.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -59,6 +60,13 @@ bool is_header_keyword(const std::string& word) {
     return kKeywords.count(word) > 0;
 }
 
+bool holds_control_character(const std::string& line) {
+    return std::any_of(line.begin(), line.end(), [](char c) {
+        const auto u = static_cast<unsigned char>(c);
+        return (u < 0x20 && c != '\t' && c != '\r') || u == 0x7f;
+    });
+}
+
 // TYPE gives one of I, U, F per field with a size PCL knows for it (PCL throws its own exceptions otherwise).
 void check_types(const std::string& path, const std::vector<std::string>& types,
                  const std::vector<std::uint64_t>& sizes) {
@@ -92,6 +100,8 @@ PcdHeader scan_header(const std::string& path) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
         const auto w = words(line);
         if (w.empty() || w[0][0] == '#') continue;
+        if (holds_control_character(line))  // PCL reads such a header out of bounds (found by fuzzing)
+            fail_file(path, "PCD header: line '" + w[0] + " …' holds a control character (the header is text)");
         if (!is_header_keyword(w[0]))
             fail_file(path, "PCD header: unknown line '" + line.substr(0, 80) + "' before DATA");
         if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
