@@ -179,17 +179,24 @@ def test_truth_profiles_follow_the_wheel_paths(yaw_rate):
             assert peak == pytest.approx(12.05)
 
 
-def test_pipeline_reads_a_simulated_frame_with_the_lidars_extrinsics():
+@pytest.mark.parametrize("process", ["native", "reference"])
+def test_pipeline_reads_a_simulated_frame_with_the_lidars_extrinsics(process):
     lidar = sim.os1_128(range_noise_m=0.0, pitch_deg=1.5)
     scene = sim.Scene(sim.Road(bumps=(sim.SpeedBump(x_m=9.0, height_m=0.05, length_m=1.0),)))
     frame = sim.drive(scene, lidar, 10.0, frames=1)[0]
-    result = rp.reference.process(frame.points, 10.0, 0.0, rp.Config(extrinsics=lidar.extrinsics()))
+    cfg = rp.Config(extrinsics=lidar.extrinsics())
+    if process == "native":
+        result = rp.Estimator(cfg).process(frame.points, 10.0, 0.0)
+    else:
+        result = rp.reference.process(frame.points, 10.0, 0.0, cfg)
     np.testing.assert_allclose(result.plane, [0, 0, 1, 0], atol=2e-3)  # the bump tilts the fit a little
     truth = sim.truth_profiles(scene, frame.pose, 10.0, 0.0)
-    backed = result.left.count > 0
+    backed = np.asarray(result.left.count) > 0
     assert backed.sum() > 30
-    error = result.left.z[backed] - truth["left"][backed]
-    assert np.abs(error - np.median(error)).max() < 0.01
+    error = np.asarray(result.left.z)[backed] - truth["left"][backed]
+    # The bump at the end of the 0–10 m band stays out of its plane (method.md §3): 4.9 mm; 13 mm without the 3σ
+    # window of the band fit's refits.
+    assert np.abs(error - np.median(error)).max() < 0.007
 
 
 def test_beam_calibration_errors_tilt_each_ring_by_its_own_angle():

@@ -209,9 +209,13 @@ def test_real_kitti_pair_agrees_with_its_lidar_scan():
         both = (np.asarray(a.count) > 0) & (np.asarray(b.count) > 0) & (s >= BANDS_M[0][0]) & (s < 15)
         assert both.sum() >= 15  # the LiDAR's rings back about one bin in three there
         diff = np.asarray(a.z)[both] - np.asarray(b.z)[both]
-        # 5–15 m: within 5 cm RMS of the LiDAR (measured 2.0 / 3.8 cm; 11–12 cm while the zone root leaned through
+        # 5–15 m: within 2.5 cm RMS of the LiDAR (measured 1.3 / 1.2 cm; 11–12 cm while the zone root leaned through
         # a parked car and the local heights carried each sensor's frame-plane offset, docs/method.md §1, §3)
-        assert np.sqrt(np.mean(diff ** 2)) < 0.05
+        assert np.sqrt(np.mean(diff ** 2)) < 0.025
+        # The LiDAR profile of this paved street is flat to 0–40 m (measured within 1.8 cm; +15–20 cm at 20–22 m
+        # while spurious returns 6.7 m below the road tilted its band plane, method.md §3)
+        measured = np.asarray(b.count) > 0
+        assert np.abs(np.asarray(b.z)[measured]).max() < 0.04
 
 
 # ------------------------------------------------------------------------------------------- CLI

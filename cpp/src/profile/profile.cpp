@@ -55,6 +55,118 @@ void clear_bins(Profile& p) {
     p.blocked.clear();
 }
 
+// Each ground point's band ⌊r / band_m⌋ (−1 off the ground); the corridor points (those the planes are fitted to)
+// grouped by band: band k's are corridor[band_start[k] .. band_start[k + 1]), with the range they span.
+void assign_bands(PointsView points, const std::vector<std::uint8_t>& mask, double band_m, const WheelPaths& paths,
+                  ProfileScratch& s) {
+    s.band.assign(mask.size(), -1);
+    s.range.assign(mask.size(), 0.0);
+    std::int64_t bands = 0;
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const auto at = static_cast<std::size_t>(i);
+        if (!mask[at]) continue;
+        s.range[at] = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
+        s.band[at] = static_cast<std::int64_t>(std::min(s.range[at] / band_m, 1e6));
+        bands = std::max(bands, s.band[at] + 1);
+    }
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    const auto n = static_cast<std::size_t>(bands);
+    s.nearest.assign(n, kInf);
+    s.farthest.assign(n, -kInf);
+    s.band_start.assign(n + 1, 0);
+    const auto in_corridor = [&](Eigen::Index i) {
+        return s.band[static_cast<std::size_t>(i)] >= 0 &&
+               distance_from_path(paths, points(i, 0), points(i, 1)) <= kLevelCorridorHalfWidthM;
+    };
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        if (!in_corridor(i)) continue;
+        const auto at = static_cast<std::size_t>(i);
+        const auto k = static_cast<std::size_t>(s.band[at]);
+        ++s.band_start[k + 1];
+        s.nearest[k] = std::min(s.nearest[k], s.range[at]);
+        s.farthest[k] = std::max(s.farthest[k], s.range[at]);
+    }
+    for (std::size_t k = 0; k < n; ++k) s.band_start[k + 1] += s.band_start[k];
+    s.corridor.resize(s.band_start[n]);
+    s.band_next.assign(s.band_start.begin(), s.band_start.end() - 1);
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (in_corridor(i)) s.corridor[s.band_next[static_cast<std::size_t>(s.band[static_cast<std::size_t>(i)])]++] = i;
+}
+
+// The refits' window about band k's plane: the median residual m and the half-width w of the points within
+// kLevelKeepM of the plane, w = max(kLevelKeepSigmas robust standard deviations (1.4826·MAD), kLevelKeepMinM).
+std::pair<double, double> keep_window(PointsView points, std::size_t k, ProfileScratch& s) {
+    s.offsets.clear();
+    for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
+        const Eigen::Index i = s.corridor[j];
+        const double h = height_above(s.plane[k], points(i, 0), points(i, 1), points(i, 2));
+        if (std::abs(h) <= kLevelKeepM) s.offsets.push_back(h);
+    }
+    if (s.offsets.empty()) return {0.0, kLevelKeepMinM};
+    const double m = median(s.offsets.begin(), s.offsets.end());
+    for (double& h : s.offsets) h = std::abs(h - m);
+    const double mad = median(s.offsets.begin(), s.offsets.end());
+    return {m, std::max(kLevelKeepSigmas * 1.4826 * mad, kLevelKeepMinM)};
+}
+
+// Band k's plane from its corridor points: their PCA plane, refitted kLevelRefits times to the points within
+// kLevelKeepM of the last fit and within its keep_window. False (plane untouched) when the first fit is degenerate.
+bool fit_band_plane(PointsView points, std::size_t k, ProfileScratch& s) {
+    for (int fit = 0; fit <= kLevelRefits; ++fit) {
+        const auto [centre, half_width] = fit > 0 ? keep_window(points, k, s) : std::pair{0.0, 0.0};
+        Moments m;
+        for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
+            const Eigen::Index i = s.corridor[j];
+            if (fit > 0) {
+                const double h = height_above(s.plane[k], points(i, 0), points(i, 1), points(i, 2));
+                if (std::abs(h) > kLevelKeepM || std::abs(h - centre) > half_width) continue;
+            }
+            m.add(points.row(i).cast<double>().transpose());
+        }
+        const auto f = plane_fit(m);
+        if (!f) return fit > 0;  // a failed refit keeps the last fit
+        s.plane[k] = f->plane;
+    }
+    return true;
+}
+
+// Each band's plane where its corridor points span enough range to tell a grade (fit_band_plane); `fitted` marks
+// those bands, the others keep the frame plane for now.
+void fit_band_planes(PointsView points, const Plane& frame, double band_m, ProfileScratch& s) {
+    const std::size_t bands = s.nearest.size();
+    s.plane.assign(bands, frame);
+    s.fitted.assign(bands, 0);
+    for (std::size_t k = 0; k < bands; ++k)
+        if (s.farthest[k] - s.nearest[k] >= kLevelMinSpan * band_m) s.fitted[k] = fit_band_plane(points, k, s);
+}
+
+// The fitted band nearest to band k (the nearer one on a tie); nullptr when no band is fitted.
+const Plane* nearest_fitted(std::size_t k, const ProfileScratch& s) {
+    const std::size_t bands = s.fitted.size();
+    for (std::size_t d = 1; d < bands; ++d) {
+        if (k >= d && s.fitted[k - d]) return &s.plane[k - d];
+        if (k + d < bands && s.fitted[k + d]) return &s.plane[k + d];
+    }
+    return nullptr;
+}
+
+// A band with corridor points that could not be fitted (too short a span, or degenerate): the normal of the nearest
+// fitted band (the frame plane's if none) through the median of its corridor points — the frame plane itself may
+// lie decimetres off the road that far ahead.
+void place_short_bands(PointsView points, const Plane& frame, ProfileScratch& s) {
+    for (std::size_t k = 0; k < s.fitted.size(); ++k) {
+        if (s.fitted[k] || s.band_start[k] == s.band_start[k + 1]) continue;  // fitted, or no corridor points
+        const Plane* like = nearest_fitted(k, s);
+        const Plane& n = like ? *like : frame;
+        s.offsets.clear();
+        for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
+            const Eigen::Index i = s.corridor[j];
+            s.offsets.push_back(n[0] * points(i, 0) + n[1] * points(i, 1) + n[2] * points(i, 2));
+        }
+        s.plane[k] = Plane{n[0], n[1], n[2], -median(s.offsets.begin(), s.offsets.end())};
+    }
+}
+
 }  // namespace
 
 Levelling levelling_for(const Plane* plane) {
@@ -74,32 +186,9 @@ double distance_from_path(const WheelPaths& paths, double x, double y) {
 
 void local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,
                           const WheelPaths& paths, ProfileScratch& s, std::vector<double>& z) {
-    s.band.assign(mask.size(), -1);
-    s.range.assign(mask.size(), 0.0);
-    std::int64_t bands = 0;
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto at = static_cast<std::size_t>(i);
-        if (!mask[at]) continue;
-        s.range[at] = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
-        s.band[at] = static_cast<std::int64_t>(std::min(s.range[at] / band_m, 1e6));
-        bands = std::max(bands, s.band[at] + 1);
-    }
-    s.moments.assign(static_cast<std::size_t>(bands), Moments{});
-    constexpr double kInf = std::numeric_limits<double>::infinity();
-    s.nearest.assign(s.moments.size(), kInf);
-    s.farthest.assign(s.moments.size(), -kInf);
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto at = static_cast<std::size_t>(i);
-        if (s.band[at] < 0 || distance_from_path(paths, points(i, 0), points(i, 1)) > kLevelCorridorHalfWidthM) continue;
-        const auto k = static_cast<std::size_t>(s.band[at]);
-        s.moments[k].add(points.row(i).cast<double>().transpose());
-        s.nearest[k] = std::min(s.nearest[k], s.range[at]);
-        s.farthest[k] = std::max(s.farthest[k], s.range[at]);
-    }
-    s.plane.assign(s.moments.size(), frame);
-    for (std::size_t k = 0; k < s.moments.size(); ++k)
-        if (s.farthest[k] - s.nearest[k] >= kLevelMinSpan * band_m)  // a short patch cannot tell a grade
-            if (const auto fit = plane_fit(s.moments[k])) s.plane[k] = fit->plane;
+    assign_bands(points, mask, band_m, paths, s);
+    fit_band_planes(points, frame, band_m, s);
+    place_short_bands(points, frame, s);
     z.assign(mask.size(), kNaN);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const auto k = s.band[static_cast<std::size_t>(i)];

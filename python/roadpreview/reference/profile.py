@@ -111,8 +111,12 @@ def fill_gaps(z, ds: float, max_gap_m: float, blocked=None) -> np.ndarray:
     return z
 
 
-LEVEL_CORRIDOR_HALF_WIDTH_M = 4.0  # both wheels and a margin, not the kerbs and pavements beside the road
+LEVEL_CORRIDOR_HALF_WIDTH_M = 1.5  # the wheel tracks (track ≤ 2 m) and a margin, not the pavements and cars beside
 LEVEL_MIN_SPAN = 0.5  # of the band: the corridor points must span this much range to tell a grade
+LEVEL_KEEP_M = 0.2  # refits keep the corridor points this close to the last plane, either side,
+LEVEL_KEEP_SIGMAS = 3.0  # and this many robust standard deviations of their heights above it
+LEVEL_KEEP_MIN_M = 0.005  # (at least this much) from the median of those heights
+LEVEL_REFITS = 2
 
 
 def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
@@ -123,26 +127,60 @@ def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
     return np.abs(np.hypot(xy[:, 0], xy[:, 1] - path["icr_y"]) - abs(path["icr_y"]))
 
 
+def _band_plane(xyz: np.ndarray) -> np.ndarray:
+    """PCA plane of a band's corridor points, refitted to those near it: spurious returns far below the road are
+    ground to the paper's rule, which drops only points above, and a bump is relief, not the ground's grade.
+    Raises DegenerateFit."""
+    from .ground import DegenerateFit, fit_plane, height_above
+
+    plane = fit_plane(xyz)
+    for _ in range(LEVEL_REFITS):
+        h = height_above(xyz, plane)
+        near = np.abs(h) <= LEVEL_KEEP_M
+        if near.any():
+            centre = np.median(h[near])
+            sigma = 1.4826 * np.median(np.abs(h[near] - centre))  # robust standard deviation
+            near &= np.abs(h - centre) <= max(LEVEL_KEEP_SIGMAS * sigma, LEVEL_KEEP_MIN_M)
+        try:
+            plane = fit_plane(xyz[near])
+        except DegenerateFit:
+            break  # too few points, or collinear ones, are left: the last fit stands
+    return plane
+
+
 def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None) -> np.ndarray:
-    """Each ground point's height above the plane of the ground points in its band ⌊r / level_band_m⌋ of horizontal
-    distance r that lie within 4 m of the vehicle's path (straight ahead without ``path``; the frame plane where
-    they span less than half the band in range or their fit is degenerate) (method.md §3)."""
-    from .ground import DegenerateFit, fit_plane, height_above  # the profile builds on the ground stage's fit
+    """Each ground point's height above its band's plane (method.md §3). Bands are ⌊r / level_band_m⌋ of
+    horizontal distance r; a band's plane is fitted to its ground points within 1.5 m of the vehicle's path
+    (straight ahead without ``path``) when they span at least half the band in range, and refitted twice to
+    those within 0.2 m of the last fit and 3 robust standard deviations of their median height above it; a band
+    whose points span less (or whose fit is degenerate) gets the normal of the nearest fitted band (the frame
+    plane's if there is none) through the median of its points; a band without corridor points, the frame
+    plane."""
+    from .ground import DegenerateFit, height_above  # the profile builds on the ground stage's fit
 
     xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
+    frame = np.asarray(plane, dtype=np.float64)
     band = np.floor(np.hypot(xyz[:, 0], xyz[:, 1]) / cfg.profile.level_band_m)
     near = distance_from_path(xyz[:, :2], path or {"status": "straight"}) <= LEVEL_CORRIDOR_HALF_WIDTH_M
+    planes, short = {}, {}
+    for k in np.unique(band[near]):
+        corridor = xyz[(band == k) & near]
+        r = np.hypot(corridor[:, 0], corridor[:, 1])
+        if np.ptp(r) >= LEVEL_MIN_SPAN * cfg.profile.level_band_m:  # else a short patch: it cannot tell a grade
+            try:
+                planes[k] = _band_plane(corridor)
+                continue
+            except DegenerateFit:
+                pass
+        short[k] = corridor
+    fitted = sorted(planes)
+    for k, corridor in short.items():
+        normal = planes[min(fitted, key=lambda j: (abs(j - k), j))][:3] if fitted else frame[:3]
+        planes[k] = np.append(normal, -np.median(corridor @ normal))
     z = np.empty(len(xyz))
     for k in np.unique(band):
         mine = band == k
-        r = np.hypot(xyz[mine & near, 0], xyz[mine & near, 1])
-        local = np.asarray(plane, dtype=np.float64)
-        if len(r) and r.max() - r.min() >= LEVEL_MIN_SPAN * cfg.profile.level_band_m:  # a short patch: no grade
-            try:
-                local = fit_plane(xyz[mine & near])
-            except DegenerateFit:
-                pass
-        z[mine] = height_above(xyz[mine], local)
+        z[mine] = height_above(xyz[mine], planes.get(k, frame))
     return z
 
 

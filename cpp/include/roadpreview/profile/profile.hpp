@@ -42,20 +42,31 @@ struct Levelling {
 Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 
 /// Half-width of the corridor about the vehicle's path whose ground points the local planes are fitted to (m):
-/// both wheels and a margin, not the kerbs and pavements beside the road (docs/method.md §3).
-constexpr double kLevelCorridorHalfWidthM = 4.0;
+/// the wheel tracks of a car or truck (track ≤ 2 m) and a margin, not the kerbs, pavements and parked cars beside
+/// the road (docs/method.md §3).
+constexpr double kLevelCorridorHalfWidthM = 1.5;
 /// A band's plane is fitted only when its corridor points span at least this fraction of the band in range.
 constexpr double kLevelMinSpan = 0.5;
+/// A band's plane is refitted kLevelRefits times to the corridor points within kLevelKeepM of the last fit (either
+/// side: a few spurious returns metres below the road tilted a plane by 3.9 %) and within kLevelKeepSigmas robust
+/// standard deviations (at least kLevelKeepMinM) of their median height above it (a bump is not the ground's
+/// grade) (docs/method.md §3).
+constexpr double kLevelKeepM = 0.2;
+constexpr double kLevelKeepSigmas = 3.0;
+constexpr double kLevelKeepMinM = 0.005;
+constexpr int kLevelRefits = 2;
 
 /// Distance of a base-frame point (x, y) from the path of the vehicle's centre: |y| on a straight path, the
 /// distance from its circle about the ICR on an arc.
 double distance_from_path(const WheelPaths& paths, double x, double y);
 
-/// Levelling by the local ground model (docs/method.md §3): each ground point's height above the PCA plane of
-/// the ground points in its band k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²) that lie within
-/// kLevelCorridorHalfWidthM of the vehicle's path (the frame plane where they span less than kLevelMinSpan of the
-/// band in range, or their fit is degenerate): the road reads about 0 whatever the frame plane's offset. One entry
-/// per point, NaN off the ground.
+/// Levelling by the local ground model (docs/method.md §3): each ground point's height above its band's plane.
+/// Bands are k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²). A band's plane is the PCA plane of its ground
+/// points within kLevelCorridorHalfWidthM of the vehicle's path, refitted to those near it (kLevelKeepM,
+/// kLevelKeepSigmas), when they span at least kLevelMinSpan of the band in range; otherwise (or for a degenerate
+/// fit) the normal of the nearest fitted band (the frame plane's if none) through their median; the frame plane for
+/// a band without corridor points. The road reads about 0 whatever the frame plane's offset. One entry per point,
+/// NaN off the ground.
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
                                          double band_m, const WheelPaths& paths);
 
