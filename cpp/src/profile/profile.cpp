@@ -65,7 +65,8 @@ void assign_bands(PointsView points, const std::vector<std::uint8_t>& mask, doub
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const auto at = static_cast<std::size_t>(i);
         if (!mask[at]) continue;
-        s.range[at] = std::hypot(static_cast<double>(points(i, 0)), static_cast<double>(points(i, 1)));
+        const double x = points(i, 0), y = points(i, 1);
+        s.range[at] = std::sqrt(x * x + y * y);  // not std::hypot: metres, far from overflow, and hypot is slower
         s.band[at] = static_cast<std::int64_t>(std::min(s.range[at] / band_m, 1e6));
         bands = std::max(bands, s.band[at] + 1);
     }
@@ -74,13 +75,12 @@ void assign_bands(PointsView points, const std::vector<std::uint8_t>& mask, doub
     s.nearest.assign(n, kInf);
     s.farthest.assign(n, -kInf);
     s.band_start.assign(n + 1, 0);
-    const auto in_corridor = [&](Eigen::Index i) {
-        return s.band[static_cast<std::size_t>(i)] >= 0 &&
-               distance_from_path(paths, points(i, 0), points(i, 1)) <= kLevelCorridorHalfWidthM;
-    };
+    s.in_corridor.assign(mask.size(), 0);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        if (!in_corridor(i)) continue;
         const auto at = static_cast<std::size_t>(i);
+        if (s.band[at] < 0 || distance_from_path(paths, points(i, 0), points(i, 1)) > kLevelCorridorHalfWidthM)
+            continue;
+        s.in_corridor[at] = 1;
         const auto k = static_cast<std::size_t>(s.band[at]);
         ++s.band_start[k + 1];
         s.nearest[k] = std::min(s.nearest[k], s.range[at]);
@@ -89,8 +89,10 @@ void assign_bands(PointsView points, const std::vector<std::uint8_t>& mask, doub
     for (std::size_t k = 0; k < n; ++k) s.band_start[k + 1] += s.band_start[k];
     s.corridor.resize(s.band_start[n]);
     s.band_next.assign(s.band_start.begin(), s.band_start.end() - 1);
-    for (Eigen::Index i = 0; i < points.rows(); ++i)
-        if (in_corridor(i)) s.corridor[s.band_next[static_cast<std::size_t>(s.band[static_cast<std::size_t>(i)])]++] = i;
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        const auto at = static_cast<std::size_t>(i);
+        if (s.in_corridor[at]) s.corridor[s.band_next[static_cast<std::size_t>(s.band[at])]++] = i;
+    }
 }
 
 // The refits' window about band k's plane: the median residual m and the half-width w of the points within
@@ -181,7 +183,8 @@ Levelling levelling_for(const Plane* plane) {
 
 double distance_from_path(const WheelPaths& paths, double x, double y) {
     if (paths.status != PathStatus::Arc) return std::abs(y);
-    return std::abs(std::hypot(x, y - paths.icr_y) - std::abs(paths.icr_y));
+    const double dy = y - paths.icr_y;
+    return std::abs(std::sqrt(x * x + dy * dy) - std::abs(paths.icr_y));  // sqrt: see the ranges above
 }
 
 void local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,

@@ -26,7 +26,7 @@ struct ProfileScratch {
     std::vector<std::int64_t> band;
     std::vector<Eigen::Index> corridor;  // corridor points grouped by band, band k's from band_start[k]
     std::vector<std::size_t> band_start, band_next;
-    std::vector<std::uint8_t> fitted;
+    std::vector<std::uint8_t> in_corridor, fitted;
     std::vector<double> range, nearest, farthest, offsets;
     std::vector<Moments> moments;
     std::vector<Plane> plane;
