@@ -127,6 +127,70 @@ TEST(CloudFiles, PlyVertexCountIsCheckedAgainstTheFile) {
     EXPECT_FLOAT_EQ(f.points(1, 2), 6.f);
 }
 
+std::string ply(const std::string& format, const std::string& elements) {
+    return "ply\n" + format + elements + "end_header\n";
+}
+
+const std::string kVertices2 = "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n";
+
+TEST(CloudFiles, DuplicatedOrGarbledPlyHeaderLinesAreErrorsNotPclCrashes) {
+    const std::string ascii = "format ascii 1.0\n", data = "1 2 3\n4 5 6\n";
+    // The fuzz finding: two vertex elements, one of 0 vertices; PCL bound a reference into an empty cloud.
+    const std::string empty_vertex = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
+    expect_error(written("twice.ply", ply(ascii, empty_vertex + kVertices2) + data),
+                 "line 7 'element vertex 2': element 'vertex' is declared twice");
+    expect_error(written("twice_b.ply", ply(ascii, kVertices2 + empty_vertex) + data),
+                 "line 7 'element vertex 0': element 'vertex' is declared twice");
+    EXPECT_EQ(rp::read_frame(written("fine.ply", ply(ascii, kVertices2) + data)).points.rows(), 2);
+    // The format line: missing, garbled, twice.
+    expect_error(written("no_format.ply", ply("", kVertices2) + data), "PLY header: no format line");
+    expect_error(written("short_format.ply", ply("format ascii\n", kVertices2) + data),
+                 "line 2 'format ascii': expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+    expect_error(written("binary.ply", ply("format binary 1.0\n", kVertices2) + data), "unknown format 'binary'");
+    expect_error(written("version.ply", ply("format ascii 2.0\n", kVertices2) + data), "unsupported version '2.0'");
+    expect_error(written("two_formats.ply", ply(ascii + ascii, kVertices2) + data), "line 3 'format ascii 1.0': a second");
+    // Counts that are negative, not numbers, or beyond PCL's 32 bits.
+    for (const std::string count : {"-2", "2x", "0x10", "4294967296", "+2"}) {
+        std::string elements = kVertices2;
+        elements.replace(elements.find(" 2\n"), 2, " " + count);
+        expect_error(written("count.ply", ply(ascii, elements) + data),
+                     "'element vertex " + count + "': the count must be a whole number from 0 to 4294967295");
+    }
+    // A control character in a header line (as the PCD finding), an unknown line, a property without element.
+    expect_error(written("control.ply", ply(ascii, kVertices2 + std::string("property float i\x14\0\n", 19)) + data),
+                 "line 7 'property …' holds a control character");
+    expect_error(written("unknown.ply", ply(ascii, "elemnt vertex 2\n" + kVertices2) + data),
+                 "line 3 'elemnt vertex 2': not a header line");
+    expect_error(written("orphan.ply", ply(ascii, "property float x\n" + kVertices2) + data), "a property before any element");
+    expect_error(written("same_property.ply", ply(ascii, kVertices2 + "property float x\n") + data),
+                 "property 'x' of element 'vertex' is declared twice");
+    expect_error(written("list.ply", ply(ascii, kVertices2 + "property list float int i\n") + data),
+                 "a list length must be uchar, ushort or uint, got 'float'");
+}
+
+TEST(CloudFiles, PlyCountsAndDimensionsAreCheckedAgainstTheFile) {
+    const std::string binary = "format binary_little_endian 1.0\n", data(24, '\0');
+    // Every element's entries must fit in the file, not only the vertices' (PCL reserves by a range_grid count).
+    expect_error(written("grid.ply", ply(binary, kVertices2 + "element range_grid 4000000000\n"
+                                                              "property list uchar int vertex_indices\n") + data),
+                 "declares 4000000000 'range_grid' entries but the file holds 24 bytes of data (at least 1 per entry, "
+                 "after the elements before it)");
+    expect_error(written("empty_element.ply", ply(binary, "element junk 4000000000\n" + kVertices2) + data),
+                 "element 'junk' has 4000000000 entries but no properties");
+    // obj_info num_cols × num_rows replaces the vertex count as the size PCL allocates.
+    expect_error(written("dims.ply", ply(binary, "obj_info num_cols 100000\nobj_info num_rows 100000\n" + kVertices2) + data),
+                 "obj_info num_cols × num_rows = 100000 × 100000 but the file holds 2 vertices");
+    expect_error(written("dims_minus.ply", ply(binary, "obj_info num_cols -1\n" + kVertices2) + data),
+                 "line 3 'obj_info num_cols -1': num_cols must be a whole number from 0 to 2147483647");
+    // As PCL writes them (obj_info dimensions, an empty face element), and with no vertices: an empty frame.
+    const rp::Frame pcl_written = rp::read_frame(written(
+        "pcl.ply", ply(binary, "comment PCL generated\nobj_info num_cols 2\nobj_info num_rows 1\n" + kVertices2 +
+                                   "element face 0\nproperty list uchar int vertex_indices\n") + data));
+    EXPECT_EQ(pcl_written.points.rows(), 2);
+    const std::string none = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
+    EXPECT_EQ(rp::read_frame(written("none.ply", ply(binary, none))).points.rows(), 0);
+}
+
 TEST(CloudFiles, SequenceBreaks) {
     std::int64_t step = 0;
     const auto check = [&](const std::string& a, const std::string& b) { return rp::sequence_break(a, b, step); };
