@@ -179,7 +179,21 @@ TEST(CloudFiles, PlyCountsAndDimensionsAreCheckedAgainstTheFile) {
                  "element 'junk' has 4000000000 entries but no properties");
     // obj_info num_cols × num_rows replaces the vertex count as the size PCL allocates.
     expect_error(written("dims.ply", ply(binary, "obj_info num_cols 100000\nobj_info num_rows 100000\n" + kVertices2) + data),
-                 "obj_info num_cols × num_rows = 100000 × 100000 but the file holds 2 vertices");
+                 "the cloud is 100000 × 100000 points (obj_info num_cols × num_rows, else the vertex count) but the "
+                 "file holds 2 vertices");
+    // After the vertex element obj_info still sets the width (PCL then allocates 2000000000 × 1 vertices).
+    expect_error(written("dims_after.ply", ply(binary, kVertices2 + "obj_info num_cols 2000000000\n") + data),
+                 "the cloud is 2000000000 × 1 points");
+    // More vertices than the width × height PCL allocates (with a range grid of as many entries): PCL's build
+    // with assertions aborted on the vertex past the end (a fuzz finding).
+    const std::string grid = "element range_grid 1\nproperty list uchar int vertex_indices\n";
+    expect_error(written("grid_short.ply", ply(binary, "obj_info num_cols 1\nobj_info num_rows 1\n" + kVertices2 + grid) +
+                                              data + std::string("\1\0\0\0\0", 5)),
+                 "the cloud is 1 × 1 points (obj_info num_cols × num_rows, else the vertex count) but the file holds "
+                 "2 vertices and 1 range_grid entries");
+    // Lists in vertices: PCL sizes every vertex by the first one's lists and aborted on a longer one.
+    expect_error(written("vertex_list.ply", ply(binary, kVertices2 + "property list uchar float extra\n") + data),
+                 "line 7 'property list uchar float extra': list properties of vertices are not supported");
     expect_error(written("dims_minus.ply", ply(binary, "obj_info num_cols -1\n" + kVertices2) + data),
                  "line 3 'obj_info num_cols -1': num_cols must be a whole number from 0 to 2147483647");
     // As PCL writes them (obj_info dimensions, an empty face element), and with no vertices: an empty frame.
@@ -187,6 +201,11 @@ TEST(CloudFiles, PlyCountsAndDimensionsAreCheckedAgainstTheFile) {
         "pcl.ply", ply(binary, "comment PCL generated\nobj_info num_cols 2\nobj_info num_rows 1\n" + kVertices2 +
                                    "element face 0\nproperty list uchar int vertex_indices\n") + data));
     EXPECT_EQ(pcl_written.points.rows(), 2);
+    const std::string grid2 = "element range_grid 2\nproperty list uchar int vertex_indices\n";
+    const rp::Frame organized = rp::read_frame(written(
+        "organized.ply", ply(binary, "obj_info num_cols 1\nobj_info num_rows 2\n" + kVertices2 + grid2) + data +
+                             std::string("\1\1\0\0\0\1\0\0\0\0", 10)));
+    EXPECT_EQ(organized.points.rows(), 2);
     const std::string none = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
     EXPECT_EQ(rp::read_frame(written("none.ply", ply(binary, none))).points.rows(), 0);
 }

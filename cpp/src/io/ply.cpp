@@ -1,13 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY clouds (ascii, binary little and big endian) through PCL's PLY reader. The header is checked line by line
-// first: PCL takes element counts and obj_info dimensions on trust (it sizes its buffers from them, and two
-// vertex elements, one of 0, left it binding a reference into an empty cloud: a fuzz finding).
+// first: PCL takes element counts and obj_info dimensions on trust (it sizes its buffers from them) and, built
+// with assertions as Debian ships it, aborts on a vertex that does not fit its buffer (fuzz findings).
 #include "io/cloud_files.hpp"
 
 #include <fstream>
 #include <limits>
 #include <map>
-#include <optional>
 #include <set>
 #include <vector>
 
@@ -32,7 +31,9 @@ struct PlyElement {
 struct PlyHeader {
     std::string format;  // ascii, binary_little_endian or binary_big_endian
     std::vector<PlyElement> elements;
-    std::optional<std::uint64_t> columns, rows;  // obj_info num_cols, num_rows
+    // The cloud's width and height as PCL sets them: obj_info num_cols and num_rows, unless the vertex element
+    // comes while either is 0 (then its count × 1). PCL allocates width × height vertices.
+    std::uint64_t width = 0, height = 0;
     std::uint64_t data_start = 0;
 
     const PlyElement* element(const std::string& name) const {
@@ -82,6 +83,7 @@ void read_element(const Line& line, const std::vector<std::string>& w, PlyHeader
     const auto count = whole_number(w[2], kMaxCount);
     if (!count) line.fail("the count must be a whole number from 0 to " + std::to_string(kMaxCount));
     h.elements.push_back({w[1], *count, 0, 0, {}});
+    if (w[1] == "vertex" && (h.width == 0 || h.height == 0)) h.width = *count, h.height = 1;
 }
 
 void read_property(const Line& line, const std::vector<std::string>& w, PlyHeader& h) {
@@ -90,6 +92,8 @@ void read_property(const Line& line, const std::vector<std::string>& w, PlyHeade
     const bool list = w.size() > 1 && w[1] == "list";
     if (w.size() != (list ? 5u : 3u)) line.fail("expected 'property TYPE NAME' or 'property list UINT TYPE NAME'");
     if (list && !is_list_length_type(w[2])) line.fail("a list length must be uchar, ushort or uint, got '" + w[2] + "'");
+    if (list && e.name == "vertex")  // PCL sizes every vertex by the first one's lists and aborts on a longer one
+        line.fail("list properties of vertices are not supported");
     const std::string& type = w[w.size() - 2];
     if (type_bytes(type) == 0) line.fail("unknown property type '" + type + "'");
     if (!e.properties.insert(w.back()).second)
@@ -103,7 +107,7 @@ void read_obj_info(const Line& line, const std::vector<std::string>& w, PlyHeade
     if (w.size() < 2 || (w[1] != "num_cols" && w[1] != "num_rows")) return;
     const auto v = w.size() == 3 ? whole_number(w[2], kMaxDimension) : std::nullopt;
     if (!v) line.fail(w[1] + " must be a whole number from 0 to " + std::to_string(kMaxDimension));
-    (w[1] == "num_cols" ? h.columns : h.rows) = *v;
+    (w[1] == "num_cols" ? h.width : h.height) = *v;
 }
 
 PlyHeader scan_header(const std::string& path) {
@@ -155,15 +159,15 @@ void check_against_file(const std::string& path, const PlyHeader& h) {
                                 std::to_string(bytes) + " per " + (&e == vertex ? "vertex" : "entry") +
                                 (needed > e.count * bytes ? ", after the elements before it" : "") + ")");
     }
-    // With both dimensions PCL sizes the cloud by them instead of the vertex count (0 defers to the count).
-    if (h.columns.value_or(0) > 0 && h.rows.value_or(0) > 0) {
-        const PlyElement* grid = h.element("range_grid");
-        const std::uint64_t points = grid ? grid->count : vertex->count;
-        if (*h.columns * *h.rows != points)
-            fail_file(path, "PLY header: obj_info num_cols × num_rows = " + std::to_string(*h.columns) + " × " +
-                                std::to_string(*h.rows) + " but the file holds " + std::to_string(points) +
-                                (grid ? " range_grid entries" : " vertices"));
-    }
+    // PCL allocates width × height vertices (obj_info can set them), writes the vertices into them, and then,
+    // with a range grid, gives one point per grid entry.
+    const PlyElement* grid = h.element("range_grid");
+    const std::uint64_t points = grid ? grid->count : vertex->count;
+    if (h.width * h.height != points || vertex->count > points)
+        fail_file(path, "PLY header: the cloud is " + std::to_string(h.width) + " × " + std::to_string(h.height) +
+                            " points (obj_info num_cols × num_rows, else the vertex count) but the file holds " +
+                            std::to_string(vertex->count) + " vertices" +
+                            (grid ? " and " + std::to_string(grid->count) + " range_grid entries" : ""));
 }
 
 }  // namespace
