@@ -77,6 +77,12 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     std::string control = header;
     control.replace(control.find("FIELDS x"), 8, std::string("FIELDS x\x14\0", 10));
     expect_error(written("control.pcd", control + std::string(24, '\0')), "holds a control character");
+    // PCL reads on past DATA while lines look like header lines: binary data beginning "COLUMNS…" redefined the
+    // fields and PCL read out of bounds (an ASan SEGV; found by fuzzing). A comment-like start is harmless.
+    expect_error(written("columns.pcd", header + "COLUMNS~\x97SB\n" + std::string(11, '\0')),
+                 "the bytes after the DATA line begin like a 'COLUMNS' line");
+    expect_error(written("points.pcd", header + "#\nPOINTS 9\n" + std::string(12, '\0')), "begin like a 'POINTS' line");
+    EXPECT_EQ(rp::read_frame(written("hash.pcd", header + "#\n" + std::string(22, '\0'))).points.rows(), 2);
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {

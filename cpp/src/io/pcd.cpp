@@ -153,7 +153,29 @@ void check_ascii(const std::string& path, const PcdHeader& h) {
                             (lines > h.points ? "more" : std::to_string(lines)) + " lines");
 }
 
+// PCL's header reader does not stop at DATA: it goes on through lines that begin like a comment or VERSION and
+// takes a line that begins like another keyword ("COLUMNS…", "POINTS…", prefixes are enough) as header, so the
+// first bytes of binary data can redefine the fields it then reads the data by (found by fuzzing).
+void check_after_data(const std::string& path, const PcdHeader& h) {
+    static const char* const kRedefining[] = {"FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH",
+                                              "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(h.data_start));
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty()) continue;
+        const auto w = header_words(line);
+        if (w.empty()) return;
+        if (w[0][0] == '#' || w[0].rfind("VERSION", 0) == 0) continue;
+        for (const char* keyword : kRedefining)
+            if (w[0].rfind(keyword, 0) == 0)
+                fail_file(path, std::string("PCD data: the bytes after the DATA line begin like a '") + keyword +
+                                    "' line, which PCL would read as part of the header");
+        return;
+    }
+}
+
 void check_against_file(const std::string& path, const PcdHeader& h) {
+    check_after_data(path, h);
     const std::uint64_t size = file_size(path);
     const std::uint64_t available = size > h.data_start ? size - h.data_start : 0;
     if (h.data == "ascii") return check_ascii(path, h);
