@@ -117,6 +117,11 @@ def ply_seeds(data_dir):
     with_face = header("ascii").replace(b"end_header", b"element face 1\nproperty list uchar int vertex_indices\n"
                                                        b"end_header")
     yield "face", with_face + b"".join(b"%.4f %.4f %.4f %.4f\n" % r for r in rows) + b"3 0 1 2\n"
+    # As PCL writes an organized cloud: obj_info dimensions (PCL sizes the cloud by them) and a range grid.
+    organized = header("binary_little_endian").replace(
+        b"element vertex", b"obj_info num_cols 8\nobj_info num_rows 8\nelement vertex").replace(
+        b"end_header", b"element range_grid 64\nproperty list uchar int vertex_indices\nend_header")
+    yield "range_grid", organized + kitti + b"".join(struct.pack("<Bi", 1, i) for i in range(len(rows)))
 
 
 def beams_seeds():

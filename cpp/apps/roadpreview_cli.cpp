@@ -166,7 +166,7 @@ struct RunSummary {
     void add(const rp::Result& r) {
         ++classes[class_of(r.vehicle)];
         for (const rp::Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle})
-            if (!x->iso_class) ++declined[x->reason.empty() ? "no reason given" : x->reason];
+            if (!x->iso_class) ++declined[*rp::to_string(x->reason) ? rp::to_string(x->reason) : "no reason given"];
         if (r.vehicle.iri.value) iri_m_per_km.push_back(*r.vehicle.iri.value);
         ms.push_back(r.timing_ms.total);
     }

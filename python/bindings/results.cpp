@@ -46,6 +46,9 @@ py::object records_or_none(const std::optional<std::vector<Record>>& items, py::
 
 py::object optional_value(const std::optional<double>& v) { return optional_number(v.has_value(), v.value_or(0.0)); }
 
+// A reason's text (the C++ result holds an enum), None for none ("").
+py::object text_or_none(const char* text) { return *text ? py::object(py::str(text)) : py::object(py::none()); }
+
 // Short one-line descriptions for the interactive prompt: what a user checks first.
 std::string printed(const char* format, double v) {
     char buf[64];
@@ -54,14 +57,15 @@ std::string printed(const char* format, double v) {
 }
 
 std::string iri_text(const rp::Iri& i) {
-    if (!i.value) return "None (" + i.reason + ")";
+    if (!i.value) return std::string("None (") + rp::to_string(i.reason) + ")";
     return printed("%.2f", *i.value) + " m/km over " + printed("%.1f", i.length_m) + " m";
 }
 
 std::string iri_repr(const rp::Iri& i) { return "<roadpreview.Iri " + iri_text(i) + ">"; }
 
 std::string roughness_repr(const rp::Roughness& r) {
-    if (!r.iso_class) return "<roadpreview.Roughness no class: " + r.reason + "; IRI " + iri_text(r.iri) + ">";
+    if (!r.iso_class)
+        return std::string("<roadpreview.Roughness no class: ") + rp::to_string(r.reason) + "; IRI " + iri_text(r.iri) + ">";
     return "<roadpreview.Roughness class " + std::string(1, *r.iso_class) + ", G_d(n0) " + printed("%.3g", r.gd_n0) +
            " m³, confidence " + printed("%.2f", r.confidence) + ", band " + printed("%.2f", r.band_lo) + "–" +
            printed("%.2f", r.band_hi) + " cycles/m; IRI " + iri_text(r.iri) + ">";
@@ -114,9 +118,7 @@ void bind_results(py::module_& m) {
         .def_readonly("length", &rp::Iri::length_m, "m, the stretch it covers")
         .def_property_readonly("backed_fraction", [](const rp::Iri& i) { return optional_value(i.backed_fraction); },
                                "bins of the stretch that hold points (the rest interpolated), or None when unknown")
-        .def_property_readonly("reason", [](const rp::Iri& i) -> py::object {
-            return i.reason.empty() ? py::object(py::none()) : py::object(py::str(i.reason));
-        })
+        .def_property_readonly("reason", [](const rp::Iri& i) { return text_or_none(rp::to_string(i.reason)); })
         .def("__repr__", &iri_repr);
 
     py::class_<rp::Roughness>(m, "Roughness", "ISO 8608 roughness of one profile (or of the vehicle)")
@@ -139,9 +141,7 @@ void bind_results(py::module_& m) {
                                "one-sided displacement PSD G_d(n), m³")
         .def_property_readonly("octave_centers", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().octave_centers, self); })
         .def_property_readonly("octave_gd", [](py::object self) { return view_of(self.cast<const rp::Roughness&>().octave_gd, self); })
-        .def_property_readonly("reason", [](const rp::Roughness& r) -> py::object {
-            return r.reason.empty() ? py::object(py::none()) : py::object(py::str(r.reason));
-        })
+        .def_property_readonly("reason", [](const rp::Roughness& r) { return text_or_none(rp::to_string(r.reason)); })
         .def_property_readonly("confidence", [](const rp::Roughness& r) { return optional_number(r.iso_class.has_value(), r.confidence); },
                                "probability that the class is right, given the fit's spread")
         .def_property_readonly("noise_psd", [](py::object self) -> py::object {
@@ -152,9 +152,8 @@ void bind_results(py::module_& m) {
                                "m³, mean of noise_psd over the analysis band")
         .def_property_readonly("backed_fraction", [](const rp::Roughness& r) { return optional_value(r.backed_fraction); },
                                "fraction of the stretch's bins that hold points")
-        .def_property_readonly("band_limit", [](const rp::Roughness& r) -> py::object {
-            return r.band_limit.empty() ? py::object(py::none()) : py::object(py::str(r.band_limit));
-        }, "what set the band's upper edge: requested, nyquist, sampling or noise")
+        .def_property_readonly("band_limit", [](const rp::Roughness& r) { return text_or_none(rp::to_string(r.band_limit)); },
+                               "what set the band's upper edge: requested, nyquist, sampling, noise or wheels")
         .def_readonly("iri", &rp::Roughness::iri)
         .def("__repr__", &roughness_repr);
 

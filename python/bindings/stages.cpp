@@ -129,8 +129,12 @@ void bind_stages(py::module_& m) {
         rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile, nullptr,
                                                  local_z.empty() ? nullptr : &local_z);
         for (rp::Profile* p : {&w.left, &w.right}) {
-            if (paths.status == rp::PathStatus::Stopped) p->roughness.reason = p->roughness.iri.reason = "vehicle stopped";
-            else rp::rate_profile(*p, cfg);
+            if (paths.status == rp::PathStatus::Stopped) {
+                p->roughness.reason = rp::RoughnessReason::VehicleStopped;
+                p->roughness.iri.reason = rp::IriReason::VehicleStopped;
+            } else {
+                rp::rate_profile(*p, cfg);
+            }
         }
         return py::make_tuple(std::move(w.left), std::move(w.right));
     }, "Profiles of both wheels, with their roughness and IRI, from ground points given in the base frame");

@@ -77,6 +77,12 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     std::string control = header;
     control.replace(control.find("FIELDS x"), 8, std::string("FIELDS x\x14\0", 10));
     expect_error(written("control.pcd", control + std::string(24, '\0')), "holds a control character");
+    // PCL reads on past DATA while lines look like header lines: binary data beginning "COLUMNS…" redefined the
+    // fields and PCL read out of bounds (an ASan SEGV; found by fuzzing). A comment-like start is harmless.
+    expect_error(written("columns.pcd", header + "COLUMNS~\x97SB\n" + std::string(11, '\0')),
+                 "the bytes after the DATA line begin like a 'COLUMNS' line");
+    expect_error(written("points.pcd", header + "#\nPOINTS 9\n" + std::string(12, '\0')), "begin like a 'POINTS' line");
+    EXPECT_EQ(rp::read_frame(written("hash.pcd", header + "#\n" + std::string(22, '\0'))).points.rows(), 2);
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {
@@ -125,6 +131,89 @@ TEST(CloudFiles, PlyVertexCountIsCheckedAgainstTheFile) {
                                                           "1 2 3\n4 5 6\n"));
     ASSERT_EQ(f.points.rows(), 2);
     EXPECT_FLOAT_EQ(f.points(1, 2), 6.f);
+}
+
+std::string ply(const std::string& format, const std::string& elements) {
+    return "ply\n" + format + elements + "end_header\n";
+}
+
+const std::string kVertices2 = "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n";
+
+TEST(CloudFiles, DuplicatedOrGarbledPlyHeaderLinesAreErrorsNotPclCrashes) {
+    const std::string ascii = "format ascii 1.0\n", data = "1 2 3\n4 5 6\n";
+    // The fuzz finding: two vertex elements, one of 0 vertices; PCL bound a reference into an empty cloud.
+    const std::string empty_vertex = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
+    expect_error(written("twice.ply", ply(ascii, empty_vertex + kVertices2) + data),
+                 "line 7 'element vertex 2': element 'vertex' is declared twice");
+    expect_error(written("twice_b.ply", ply(ascii, kVertices2 + empty_vertex) + data),
+                 "line 7 'element vertex 0': element 'vertex' is declared twice");
+    EXPECT_EQ(rp::read_frame(written("fine.ply", ply(ascii, kVertices2) + data)).points.rows(), 2);
+    // The format line: missing, garbled, twice.
+    expect_error(written("no_format.ply", ply("", kVertices2) + data), "PLY header: no format line");
+    expect_error(written("short_format.ply", ply("format ascii\n", kVertices2) + data),
+                 "line 2 'format ascii': expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+    expect_error(written("binary.ply", ply("format binary 1.0\n", kVertices2) + data), "unknown format 'binary'");
+    expect_error(written("version.ply", ply("format ascii 2.0\n", kVertices2) + data), "unsupported version '2.0'");
+    expect_error(written("two_formats.ply", ply(ascii + ascii, kVertices2) + data), "line 3 'format ascii 1.0': a second");
+    // Counts that are negative, not numbers, or beyond PCL's 32 bits.
+    for (const std::string count : {"-2", "2x", "0x10", "4294967296", "+2"}) {
+        std::string elements = kVertices2;
+        elements.replace(elements.find(" 2\n"), 2, " " + count);
+        expect_error(written("count.ply", ply(ascii, elements) + data),
+                     "'element vertex " + count + "': the count must be a whole number from 0 to 4294967295");
+    }
+    // A control character in a header line (as the PCD finding), an unknown line, a property without element.
+    expect_error(written("control.ply", ply(ascii, kVertices2 + std::string("property float i\x14\0\n", 19)) + data),
+                 "line 7 'property …' holds a control character");
+    expect_error(written("unknown.ply", ply(ascii, "elemnt vertex 2\n" + kVertices2) + data),
+                 "line 3 'elemnt vertex 2': not a header line");
+    expect_error(written("orphan.ply", ply(ascii, "property float x\n" + kVertices2) + data), "a property before any element");
+    expect_error(written("same_property.ply", ply(ascii, kVertices2 + "property float x\n") + data),
+                 "property 'x' of element 'vertex' is declared twice");
+    expect_error(written("list.ply", ply(ascii, kVertices2 + "property list float int i\n") + data),
+                 "a list length must be uchar, ushort or uint, got 'float'");
+}
+
+TEST(CloudFiles, PlyCountsAndDimensionsAreCheckedAgainstTheFile) {
+    const std::string binary = "format binary_little_endian 1.0\n", data(24, '\0');
+    // Every element's entries must fit in the file, not only the vertices' (PCL reserves by a range_grid count).
+    expect_error(written("grid.ply", ply(binary, kVertices2 + "element range_grid 4000000000\n"
+                                                              "property list uchar int vertex_indices\n") + data),
+                 "declares 4000000000 'range_grid' entries but the file holds 24 bytes of data (at least 1 per entry, "
+                 "after the elements before it)");
+    expect_error(written("empty_element.ply", ply(binary, "element junk 4000000000\n" + kVertices2) + data),
+                 "element 'junk' has 4000000000 entries but no properties");
+    // obj_info num_cols × num_rows replaces the vertex count as the size PCL allocates.
+    expect_error(written("dims.ply", ply(binary, "obj_info num_cols 100000\nobj_info num_rows 100000\n" + kVertices2) + data),
+                 "the cloud is 100000 × 100000 points (obj_info num_cols × num_rows, else the vertex count) but the "
+                 "file holds 2 vertices");
+    // After the vertex element obj_info still sets the width (PCL then allocates 2000000000 × 1 vertices).
+    expect_error(written("dims_after.ply", ply(binary, kVertices2 + "obj_info num_cols 2000000000\n") + data),
+                 "the cloud is 2000000000 × 1 points");
+    // More vertices than the width × height PCL allocates (with a range grid of as many entries): PCL's build
+    // with assertions aborted on the vertex past the end (a fuzz finding).
+    const std::string grid = "element range_grid 1\nproperty list uchar int vertex_indices\n";
+    expect_error(written("grid_short.ply", ply(binary, "obj_info num_cols 1\nobj_info num_rows 1\n" + kVertices2 + grid) +
+                                              data + std::string("\1\0\0\0\0", 5)),
+                 "the cloud is 1 × 1 points (obj_info num_cols × num_rows, else the vertex count) but the file holds "
+                 "2 vertices and 1 range_grid entries");
+    // Lists in vertices: PCL sizes every vertex by the first one's lists and aborted on a longer one.
+    expect_error(written("vertex_list.ply", ply(binary, kVertices2 + "property list uchar float extra\n") + data),
+                 "line 7 'property list uchar float extra': list properties of vertices are not supported");
+    expect_error(written("dims_minus.ply", ply(binary, "obj_info num_cols -1\n" + kVertices2) + data),
+                 "line 3 'obj_info num_cols -1': num_cols must be a whole number from 0 to 2147483647");
+    // As PCL writes them (obj_info dimensions, an empty face element), and with no vertices: an empty frame.
+    const rp::Frame pcl_written = rp::read_frame(written(
+        "pcl.ply", ply(binary, "comment PCL generated\nobj_info num_cols 2\nobj_info num_rows 1\n" + kVertices2 +
+                                   "element face 0\nproperty list uchar int vertex_indices\n") + data));
+    EXPECT_EQ(pcl_written.points.rows(), 2);
+    const std::string grid2 = "element range_grid 2\nproperty list uchar int vertex_indices\n";
+    const rp::Frame organized = rp::read_frame(written(
+        "organized.ply", ply(binary, "obj_info num_cols 1\nobj_info num_rows 2\n" + kVertices2 + grid2) + data +
+                             std::string("\1\1\0\0\0\1\0\0\0\0", 10)));
+    EXPECT_EQ(organized.points.rows(), 2);
+    const std::string none = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
+    EXPECT_EQ(rp::read_frame(written("none.ply", ply(binary, none))).points.rows(), 0);
 }
 
 TEST(CloudFiles, SequenceBreaks) {

@@ -94,15 +94,15 @@ TEST(Iri, ProfileIriTakesTheLongestStretchOrDeclines) {
     rp::IriConfig cfg;
     rp::Iri short_one = rp::profile_iri(z, kDs, cfg);
     EXPECT_FALSE(short_one.value);
-    EXPECT_EQ(short_one.reason, "valid stretch too short for IRI");
+    EXPECT_STREQ(rp::to_string(short_one.reason), "valid stretch too short for IRI");
     for (int k = 200; k < 260; ++k) z[k] = 0.01 * std::sin(0.3 * k);  // 15.9 m
     const rp::Iri iri = rp::profile_iri(z, kDs, cfg);
-    ASSERT_TRUE(iri.value) << iri.reason;
+    ASSERT_TRUE(iri.value) << rp::to_string(iri.reason);
     EXPECT_DOUBLE_EQ(*iri.value, rp::iri(z.data() + 100, 160, kDs));
     EXPECT_NEAR(iri.length_m, 15.9, 1e-9);
     const rp::Iri mean = rp::vehicle_iri(iri, rp::profile_iri(std::vector<double>(400, 0.0), kDs, cfg));
     EXPECT_DOUBLE_EQ(*mean.value, 0.5 * *iri.value);
-    EXPECT_EQ(rp::vehicle_iri(iri, short_one).reason, short_one.reason);
+    EXPECT_EQ(rp::vehicle_iri(iri, short_one).reason, rp::IriReason::StretchTooShort);
 }
 
 namespace {
@@ -116,7 +116,7 @@ rp::Profile sine_profile(int backed_every, bool classified) {
         p.count.push_back(k % backed_every == 0 ? 3 : 0);
     }
     if (classified) p.roughness.iso_class = 'C';
-    else p.roughness.reason = "noise dominates the band";
+    else p.roughness.reason = rp::RoughnessReason::NoiseDominates;
     return p;
 }
 
@@ -126,21 +126,21 @@ TEST(Iri, WheelIriReportsItsBackingAndDeclinesWhereItCannotBeTrusted) {
     rp::IriConfig cfg;
     const rp::Profile dense = sine_profile(1, true);
     const rp::Iri trusted = rp::wheel_iri(dense, dense.roughness, cfg);
-    ASSERT_TRUE(trusted.value) << trusted.reason;
+    ASSERT_TRUE(trusted.value) << rp::to_string(trusted.reason);
     EXPECT_DOUBLE_EQ(*trusted.value, rp::iri(dense.z.data(), dense.z.size(), kDs));
     EXPECT_DOUBLE_EQ(*trusted.backed_fraction, 1.0);
 
     const rp::Profile sparse = sine_profile(5, true);  // four bins in five interpolated
     const rp::Iri thin = rp::wheel_iri(sparse, sparse.roughness, cfg);
     EXPECT_FALSE(thin.value);
-    EXPECT_EQ(thin.reason, rp::kIriTooSparse);
+    EXPECT_STREQ(rp::to_string(thin.reason), "too few bins with points for IRI");
     EXPECT_NEAR(*thin.backed_fraction, 40.0 / 200.0, 1e-12);
     EXPECT_NEAR(thin.length_m, 19.9, 1e-9);
 
     const rp::Profile declined = sine_profile(1, false);
     const rp::Iri no_class = rp::wheel_iri(declined, declined.roughness, cfg);
     EXPECT_FALSE(no_class.value);
-    EXPECT_EQ(no_class.reason, rp::kIriClassDeclined);
+    EXPECT_STREQ(rp::to_string(no_class.reason), "roughness class declined");
 
     const rp::Iri mean = rp::vehicle_iri(trusted, thin);
     EXPECT_FALSE(mean.value);

@@ -38,8 +38,8 @@ TEST(Pipeline, SceneGivesGroundProfilesAndClasses) {
     EXPECT_NEAR((*r.plane)[3], 0.0, 1e-3);  // the ground is at z = 0 of the base frame
     for (Eigen::Index i = 60000; i < pts.rows(); ++i) ASSERT_EQ(r.ground_mask[i], 0) << "box point " << i;
     EXPECT_EQ(r.left.z.size(), 400u);
-    EXPECT_TRUE(r.left.roughness.iso_class) << r.left.roughness.reason;
-    EXPECT_TRUE(r.vehicle.iso_class) << r.vehicle.reason;
+    EXPECT_TRUE(r.left.roughness.iso_class) << rp::to_string(r.left.roughness.reason);
+    EXPECT_TRUE(r.vehicle.iso_class) << rp::to_string(r.vehicle.reason);
     EXPECT_EQ(r.status, rp::FrameStatus::Ok);
     EXPECT_GT(r.timing_ms.total, 0.0);
 }
@@ -72,7 +72,7 @@ TEST(Pipeline, EmptyAndAllNanCloudsGiveReasonsNotCrashes) {
     EXPECT_EQ(empty.status, rp::FrameStatus::NoFinitePoints);
     EXPECT_FALSE(empty.plane);
     EXPECT_TRUE(empty.left.z.empty());
-    EXPECT_EQ(empty.vehicle.reason, "no finite points");
+    EXPECT_STREQ(rp::to_string(empty.vehicle.reason), "no finite points");
     const scenes::Cloud nans = scenes::Cloud::Constant(100, 3, std::numeric_limits<float>::quiet_NaN());
     EXPECT_EQ(est.process(nans, 5.0, 0.0).status, rp::FrameStatus::NoFinitePoints);
     const scenes::Cloud far = scenes::plane(0, 0, -1.8, 500, 60.0, 80.0);  // nothing in the ROI
@@ -86,7 +86,42 @@ TEST(Pipeline, StoppedVehicleKeepsTheGroundButHasNoProfiles) {
     EXPECT_GT(r.points.ground, 0);
     EXPECT_EQ(r.status, rp::FrameStatus::VehicleStopped);
     EXPECT_TRUE(r.left.z.empty());
-    EXPECT_EQ(r.left.roughness.reason, "vehicle stopped");
+    EXPECT_STREQ(rp::to_string(r.left.roughness.reason), "vehicle stopped");
+}
+
+// The C++ result holds enums; their texts are the output's strings, byte for byte (docs/output.md).
+TEST(Pipeline, RoughnessAndIriReasonsGiveTheDocumentedTexts) {
+    using R = rp::RoughnessReason;
+    using I = rp::IriReason;
+    using B = rp::BandLimit;
+    const std::pair<R, const char*> roughness[] = {
+        {R::None, ""}, {R::NoValidProfile, "no valid profile"}, {R::StretchTooShort, "valid stretch too short"},
+        {R::TooFewOrdinates, "too few PSD ordinates in band"}, {R::NoiseUnknown, "noise floor unknown"},
+        {R::NoiseDominates, "noise dominates the band"}, {R::FitFailed, "fit failed (G_d(n0) not finite)"},
+        {R::BothWheelsDeclined, "both wheels declined"}, {R::NoFinitePoints, "no finite points"},
+        {R::NoGround, "no ground"}, {R::TiltedGround, rp::kTiltedGround}, {R::VehicleStopped, "vehicle stopped"}};
+    for (const auto& [reason, text] : roughness) EXPECT_STREQ(rp::to_string(reason), text);
+    const std::pair<I, const char*> iri[] = {
+        {I::None, ""}, {I::NoValidProfile, "no valid profile"}, {I::StretchTooShort, "valid stretch too short for IRI"},
+        {I::TooSparse, "too few bins with points for IRI"}, {I::ClassDeclined, "roughness class declined"},
+        {I::SegmentNotCovered, "segment not covered by one valid stretch"}, {I::NoFinitePoints, "no finite points"},
+        {I::NoGround, "no ground"}, {I::TiltedGround, rp::kTiltedGround}, {I::VehicleStopped, "vehicle stopped"}};
+    for (const auto& [reason, text] : iri) EXPECT_STREQ(rp::to_string(reason), text);
+    const std::pair<B, const char*> limits[] = {{B::None, ""},         {B::Requested, "requested"}, {B::Nyquist, "nyquist"},
+                                                {B::Sampling, "sampling"}, {B::Noise, "noise"},         {B::Wheels, "wheels"}};
+    for (const auto& [limit, text] : limits) EXPECT_STREQ(rp::to_string(limit), text);
+    // A frame without profiles declines roughness and IRI with its status's text.
+    rp::Estimator est(kitti_like());
+    for (const rp::Result& r : {est.process(scenes::Cloud(0, 3), 5.0, 0.0),
+                                est.process(scenes::plane(0, 0, -1.8, 500, 60.0, 80.0), 5.0, 0.0),
+                                est.process(road_scene(), 0.0, 0.1)}) {
+        ASSERT_NE(r.status, rp::FrameStatus::Ok);
+        for (const rp::Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle}) {
+            EXPECT_STREQ(rp::to_string(x->reason), rp::to_string(r.status));
+            EXPECT_STREQ(rp::to_string(x->iri.reason), rp::to_string(r.status));
+            EXPECT_EQ(x->band_limit, B::None);
+        }
+    }
 }
 
 TEST(Pipeline, BadMotionOrConfigThrows) {
@@ -106,7 +141,7 @@ TEST(Pipeline, EmptyCorridorsAreMissingNotZero) {
     ASSERT_TRUE(r.plane);
     EXPECT_EQ(std::count(r.left.count.begin(), r.left.count.end(), 0), 400);
     EXPECT_TRUE(std::all_of(r.left.z.begin(), r.left.z.end(), [](double z) { return std::isnan(z); }));
-    EXPECT_EQ(r.left.roughness.reason, "no valid profile");
+    EXPECT_STREQ(rp::to_string(r.left.roughness.reason), "no valid profile");
     EXPECT_TRUE(r.right.roughness.iso_class);
     EXPECT_FALSE(r.vehicle.iso_class);
 }

@@ -5,7 +5,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "roadpreview/io/frame_source.hpp"
 
@@ -32,5 +34,15 @@ Frame read_cloud(const std::string& path, const char* kind, const std::function<
 
 /// Size of a file in bytes; throws naming the file when it cannot be read.
 std::uint64_t file_size(const std::string& path);
+
+/// The whitespace-separated words of a header line.
+std::vector<std::string> header_words(const std::string& line);
+
+/// A header line holding a control character other than tab and carriage return: PCL's readers read such
+/// headers out of bounds (found by fuzzing), so both PCD and PLY headers refuse them.
+bool holds_control_character(const std::string& line);
+
+/// `text` as a decimal whole number up to `max`: digits only (no sign, exponent or fraction); nullopt else.
+std::optional<std::uint64_t> whole_number(const std::string& text, std::uint64_t max);
 
 }  // namespace roadpreview

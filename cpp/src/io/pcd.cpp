@@ -3,14 +3,12 @@
 // turns an unparsable ASCII value into 0, so the header and the data are checked against the file first.
 #include "io/cloud_files.hpp"
 
-#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <vector>
 
 #include <pcl/common/io.h>
@@ -35,21 +33,11 @@ struct PcdHeader {
     std::uint64_t data_start = 0;   // byte offset of the data
 };
 
-std::vector<std::string> words(const std::string& line) {
-    std::istringstream in(line);
-    std::vector<std::string> out;
-    for (std::string w; in >> w;) out.push_back(w);
-    return out;
-}
-
 // A header count: decimal digits only, below 2^32 as PCL stores it (no sign, exponent or fraction).
 std::uint64_t header_count(const std::string& path, const std::string& key, const std::string& text) {
-    const bool digits = !text.empty() && text.size() <= 10 &&
-                        text.find_first_not_of("0123456789") == std::string::npos;
-    const std::uint64_t v = digits ? std::stoull(text) : std::numeric_limits<std::uint64_t>::max();
-    if (v > std::numeric_limits<std::uint32_t>::max())
-        fail_file(path, "PCD header " + key + " must be a whole number from 0 to 4294967295, got '" + text + "'");
-    return v;
+    const auto v = whole_number(text, std::numeric_limits<std::uint32_t>::max());
+    if (!v) fail_file(path, "PCD header " + key + " must be a whole number from 0 to 4294967295, got '" + text + "'");
+    return *v;
 }
 
 // PCL 1.13 stops reading a header at the first line it does not know and then dereferences a null pointer
@@ -58,13 +46,6 @@ bool is_header_keyword(const std::string& word) {
     static const std::set<std::string> kKeywords = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
                                                     "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
     return kKeywords.count(word) > 0;
-}
-
-bool holds_control_character(const std::string& line) {
-    return std::any_of(line.begin(), line.end(), [](char c) {
-        const auto u = static_cast<unsigned char>(c);
-        return (u < 0x20 && c != '\t' && c != '\r') || u == 0x7f;
-    });
 }
 
 // TYPE gives one of I, U, F per field with a size PCL knows for it (PCL throws its own exceptions otherwise).
@@ -98,7 +79,7 @@ PcdHeader scan_header(const std::string& path) {
     std::size_t fields = 0;
     for (std::string line; std::getline(in, line);) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
-        const auto w = words(line);
+        const auto w = header_words(line);
         if (w.empty() || w[0][0] == '#') continue;
         if (holds_control_character(line))  // PCL reads such a header out of bounds (found by fuzzing)
             fail_file(path, "PCD header: line '" + w[0] + " …' holds a control character (the header is text)");
@@ -158,7 +139,7 @@ void check_ascii(const std::string& path, const PcdHeader& h) {
     std::uint64_t lines = 0, line_number = 0;
     for (std::string line; std::getline(in, line);) {
         ++line_number;
-        const auto w = words(line);
+        const auto w = header_words(line);
         if (w.empty()) continue;
         bool ok = w.size() == h.values;
         for (std::size_t i = 0; ok && i < w.size(); ++i) ok = is_number(w[i]);
@@ -172,7 +153,29 @@ void check_ascii(const std::string& path, const PcdHeader& h) {
                             (lines > h.points ? "more" : std::to_string(lines)) + " lines");
 }
 
+// PCL's header reader does not stop at DATA: it goes on through lines that begin like a comment or VERSION and
+// takes a line that begins like another keyword ("COLUMNS…", "POINTS…", prefixes are enough) as header, so the
+// first bytes of binary data can redefine the fields it then reads the data by (found by fuzzing).
+void check_after_data(const std::string& path, const PcdHeader& h) {
+    static const char* const kRedefining[] = {"FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH",
+                                              "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(h.data_start));
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty()) continue;
+        const auto w = header_words(line);
+        if (w.empty()) return;
+        if (w[0][0] == '#' || w[0].rfind("VERSION", 0) == 0) continue;
+        for (const char* keyword : kRedefining)
+            if (w[0].rfind(keyword, 0) == 0)
+                fail_file(path, std::string("PCD data: the bytes after the DATA line begin like a '") + keyword +
+                                    "' line, which PCL would read as part of the header");
+        return;
+    }
+}
+
 void check_against_file(const std::string& path, const PcdHeader& h) {
+    check_after_data(path, h);
     const std::uint64_t size = file_size(path);
     const std::uint64_t available = size > h.data_start ? size - h.data_start : 0;
     if (h.data == "ascii") return check_ascii(path, h);
@@ -210,12 +213,16 @@ Frame read_cloud(const std::string& path, const char* kind, const std::function<
     for (const char* axis : {"x", "y", "z"})
         if (pcl::getFieldIndex(blob, axis) < 0) fail_file(path, std::string("the cloud has no '") + axis + "' field");
     const std::size_t expected = static_cast<std::size_t>(blob.width) * blob.height * blob.point_step;
-    if (blob.data.size() < expected) fail_file(path, "the cloud's data is shorter than its header declares");
+    if (blob.data.size() != expected)  // a PLY camera element or range grid can set other dimensions
+        fail_file(path, "the cloud's data (" + std::to_string(blob.data.size()) + " bytes) is not the " +
+                            std::to_string(blob.width) + " × " + std::to_string(blob.height) + " points of " +
+                            std::to_string(blob.point_step) + " bytes its header declares");
+    Frame f;
+    f.source = path;
+    if (expected == 0) return f;  // PCL's conversion would bind a reference to the first of no points
     pcl::PointCloud<pcl::PointXYZI> cloud;
     pcl::fromPCLPointCloud2(blob, cloud);
     const bool has_intensity = pcl::getFieldIndex(blob, "intensity") >= 0;
-    Frame f;
-    f.source = path;
     f.points.resize(static_cast<Eigen::Index>(cloud.size()), 4);
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto& p = cloud[i];

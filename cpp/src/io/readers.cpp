@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 namespace roadpreview {
@@ -24,6 +25,28 @@ std::uint64_t file_size(const std::string& path) {
     const auto size = fs::file_size(path, ec);
     if (ec) fail_file(path, "cannot read file (" + ec.message() + ")");
     return size;
+}
+
+std::vector<std::string> header_words(const std::string& line) {
+    std::istringstream in(line);
+    std::vector<std::string> out;
+    for (std::string w; in >> w;) out.push_back(w);
+    return out;
+}
+
+bool holds_control_character(const std::string& line) {
+    return std::any_of(line.begin(), line.end(), [](char c) {
+        const auto u = static_cast<unsigned char>(c);
+        return (u < 0x20 && c != '\t' && c != '\r') || u == 0x7f;
+    });
+}
+
+std::optional<std::uint64_t> whole_number(const std::string& text, std::uint64_t max) {
+    if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos)
+        return std::nullopt;
+    const std::uint64_t v = std::stoull(text);
+    if (v > max) return std::nullopt;
+    return v;
 }
 
 Frame read_raw_float32(const std::string& path, int columns) {

@@ -66,9 +66,12 @@ json profile_json(const Profile& p) {
 
 json optional_number(const std::optional<double>& v) { return v ? number(*v) : json(nullptr); }
 
+// A reason's text, null for none ("").
+json text_or_null(const char* text) { return *text ? json(text) : json(nullptr); }
+
 json iri_json(const Iri& i) {
     return {{"value", optional_number(i.value)}, {"length", i.length_m},
-            {"reason", i.reason.empty() ? json(nullptr) : json(i.reason)},
+            {"reason", text_or_null(to_string(i.reason))},
             {"backed_fraction", optional_number(i.backed_fraction)}};
 }
 
@@ -85,9 +88,9 @@ json roughness_json(const Roughness& r) {
             {"n", numbers(r.spectrum.n)},
             {"psd", numbers(r.spectrum.psd)},
             {"octave_bands", octaves},
-            {"reason", r.reason.empty() ? json(nullptr) : json(r.reason)},
+            {"reason", text_or_null(to_string(r.reason))},
             {"confidence", fitted ? number(r.confidence) : json(nullptr)},
-            {"band_limit", r.band_limit.empty() ? json(nullptr) : json(r.band_limit)},
+            {"band_limit", text_or_null(to_string(r.band_limit))},
             {"backed_fraction", optional_number(r.backed_fraction)},
             {"noise_floor", optional_number(r.noise_floor)},
             {"noise_psd", numbers(r.noise_psd)},

@@ -27,20 +27,27 @@ FrameStatus blocking_status(const Result& r, const GroundFit& ground, bool map_h
     return FrameStatus::Ok;
 }
 
-void mark_declined(Roughness& r, const char* reason) {
+// Roughness and IRI declined for the frame's status, with its text.
+void mark_declined(Roughness& r, FrameStatus status) {
     clear(r);
-    r.reason = reason;
-    r.iri.reason = reason;
+    const auto set = [&](RoughnessReason roughness, IriReason iri) { r.reason = roughness, r.iri.reason = iri; };
+    switch (status) {
+        case FrameStatus::Ok: break;
+        case FrameStatus::NoFinitePoints: set(RoughnessReason::NoFinitePoints, IriReason::NoFinitePoints); break;
+        case FrameStatus::NoGround: set(RoughnessReason::NoGround, IriReason::NoGround); break;
+        case FrameStatus::TiltedGround: set(RoughnessReason::TiltedGround, IriReason::TiltedGround); break;
+        case FrameStatus::VehicleStopped: set(RoughnessReason::VehicleStopped, IriReason::VehicleStopped); break;
+    }
 }
 
-// A profile without bins, declined for `reason`; its buffers kept.
-void mark_empty(Profile& p, const Config& cfg, const char* reason) {
+// A profile without bins, declined for the frame's `status`; its buffers kept.
+void mark_empty(Profile& p, const Config& cfg, FrameStatus status) {
     for (auto* v : {&p.s, &p.z, &p.spread}) v->clear();
     p.count.clear();
     p.blocked.clear();
     p.ds = cfg.profile.ds_m;
     p.s0 = 0.5 * cfg.profile.ds_m;
-    mark_declined(p.roughness, reason);
+    mark_declined(p.roughness, status);
     if (!cfg.obstacles.enabled) p.obstacles.reset();
     else if (p.obstacles) p.obstacles->clear();
     else p.obstacles.emplace();
@@ -197,17 +204,15 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
     }
 }
 
-// Room for the longest of the documented reasons (docs/output.md), so that a reason longer than any before does
-// not allocate.
+// Room for the longest fusion reset text (docs/output.md), so that a text longer than any before does not allocate.
 constexpr std::size_t kReasonCapacity = 64;
 
-// The roughness results' vectors at their largest (a stretch of every bin) and their reasons' room, so that a
-// longer stretch or reason than any before does not grow them; a no-op once they are.
+// The roughness results' vectors at their largest (a stretch of every bin), so that a longer stretch than any
+// before does not grow them; a no-op once they are.
 void reserve_roughness(Roughness& r, std::size_t bins) {
     for (auto* v : {&r.spectrum.n, &r.spectrum.psd, &r.noise_psd}) v->reserve(bins / 2 + 1);
     r.octave_centers.reserve(9);  // ISO 8608's octaves 2^−6 … 2^2 cycles/m
     r.octave_gd.reserve(9);
-    for (std::string* text : {&r.reason, &r.band_limit, &r.iri.reason}) text->reserve(kReasonCapacity);
 }
 
 void Estimator::Impl::rate(Result& r) {
@@ -255,8 +260,8 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     r.timing_ms.fusion += ms_since(mark);
     r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
     if (r.status != FrameStatus::Ok) {
-        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, to_string(r.status));
-        mark_declined(r.vehicle, to_string(r.status));
+        for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.status);
+        mark_declined(r.vehicle, r.status);
     } else {
         if (cfg.obstacles.enabled && r.plane) cross_paths(roi, clustering, r, L, cfg, crossings);
         r.timing_ms.obstacles += ms_since(mark);

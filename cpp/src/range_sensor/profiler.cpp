@@ -37,7 +37,7 @@ double sample_std(const std::vector<double>& v) {
 // plain fit of §4 (its reason names the fallback).
 Roughness wheel_roughness(const Profile& p, const RangeProfilerConfig& cfg) {
     Roughness r = analyze_roughness(p, cfg.roughness);
-    if (r.reason == "noise floor unknown") {
+    if (r.reason == RoughnessReason::NoiseUnknown) {
         RoughnessConfig plain = cfg.roughness;
         plain.noise_aware = false;
         r = analyze_roughness(p.z, p.ds, plain);
@@ -126,7 +126,7 @@ RangeWindow RangeProfiler::close_window() {
     w.left.roughness = wheel_roughness(w.left, cfg_);
     w.right.roughness = wheel_roughness(w.right, cfg_);
     w.vehicle = vehicle_roughness(w.left, w.right, cfg_.roughness);
-    if (w.vehicle.reason == "noise floor unknown") {
+    if (w.vehicle.reason == RoughnessReason::NoiseUnknown) {
         RoughnessConfig plain = cfg_.roughness;
         plain.noise_aware = false;
         w.vehicle = vehicle_roughness(w.left.z, w.right.z, cfg_.ds_m, plain);

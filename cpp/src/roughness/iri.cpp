@@ -70,18 +70,34 @@ void profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg, 
     clear(out);
     const auto [first, last] = longest_valid_stretch(z);
     if (last == first) {
-        out.reason = "no valid profile";
+        out.reason = IriReason::NoValidProfile;
         return;
     }
     out.length_m = static_cast<double>(last - first - 1) * ds;
     if (out.length_m < cfg.min_length_m - 1e-9 || last - first <= moving_average_samples(ds)) {
-        out.reason = "valid stretch too short for IRI";
+        out.reason = IriReason::StretchTooShort;
         return;
     }
     out.value = iri(z.data() + first, last - first, ds);
 }
 
 }  // namespace
+
+const char* to_string(IriReason reason) noexcept {
+    switch (reason) {
+        case IriReason::None: return "";
+        case IriReason::NoValidProfile: return "no valid profile";
+        case IriReason::StretchTooShort: return "valid stretch too short for IRI";
+        case IriReason::TooSparse: return "too few bins with points for IRI";
+        case IriReason::ClassDeclined: return "roughness class declined";
+        case IriReason::SegmentNotCovered: return "segment not covered by one valid stretch";
+        case IriReason::NoFinitePoints: return "no finite points";
+        case IriReason::NoGround: return "no ground";
+        case IriReason::TiltedGround: return "no ground within the tilt limit";
+        case IriReason::VehicleStopped: return "vehicle stopped";
+    }
+    return "?";
+}
 
 std::vector<double> iri_rectified_slope(const double* z, std::size_t count, double ds) {
     std::vector<double> out;
@@ -113,9 +129,9 @@ void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, I
         out.backed_fraction = static_cast<double>(backed) / static_cast<double>(last - first);
     }
     if (!out.value) return;
-    if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = kIriTooSparse;
-    else if (!wheel.iso_class) out.reason = kIriClassDeclined;
-    if (!out.reason.empty()) out.value.reset();
+    if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = IriReason::TooSparse;
+    else if (!wheel.iso_class) out.reason = IriReason::ClassDeclined;
+    if (out.reason != IriReason::None) out.value.reset();
 }
 
 Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
@@ -129,7 +145,7 @@ void vehicle_iri(const Iri& left, const Iri& right, Iri& out) {
     if (left.backed_fraction && right.backed_fraction)
         out.backed_fraction = 0.5 * (*left.backed_fraction + *right.backed_fraction);
     if (!left.value || !right.value) {
-        out.reason = !left.reason.empty() ? left.reason : right.reason;
+        out.reason = left.reason != IriReason::None ? left.reason : right.reason;
         return;
     }
     out.value = 0.5 * (*left.value + *right.value);

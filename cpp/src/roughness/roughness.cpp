@@ -26,8 +26,6 @@ constexpr double kMaxWhittleStep = 1.0;      // in ln G(n0): scoring overshoots 
 // log regression: (π²/6)·(1 + 2·[Li₂(4/9) + Li₂(1/36)]/ζ(2)); likelihood fit: 1 + 2·(4/9 + 1/36).
 constexpr double kLogFitVariance = M_PI * M_PI / 6.0 * 1.6504918528873;
 constexpr double kWhittleVariance = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0);
-constexpr char kNoiseUnknown[] = "noise floor unknown";
-constexpr char kNoiseDominates[] = "noise dominates the band";
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Removes the least-squares line over the sample index (equivalent to a line in s).
@@ -153,6 +151,36 @@ char iso_class(double gd_n0_m3) {
     return kIsoClasses[k];
 }
 
+const char* to_string(RoughnessReason reason) noexcept {
+    switch (reason) {
+        case RoughnessReason::None: return "";
+        case RoughnessReason::NoValidProfile: return "no valid profile";
+        case RoughnessReason::StretchTooShort: return "valid stretch too short";
+        case RoughnessReason::TooFewOrdinates: return "too few PSD ordinates in band";
+        case RoughnessReason::NoiseUnknown: return "noise floor unknown";
+        case RoughnessReason::NoiseDominates: return "noise dominates the band";
+        case RoughnessReason::FitFailed: return "fit failed (G_d(n0) not finite)";
+        case RoughnessReason::BothWheelsDeclined: return "both wheels declined";
+        case RoughnessReason::NoFinitePoints: return "no finite points";
+        case RoughnessReason::NoGround: return "no ground";
+        case RoughnessReason::TiltedGround: return "no ground within the tilt limit";
+        case RoughnessReason::VehicleStopped: return "vehicle stopped";
+    }
+    return "?";
+}
+
+const char* to_string(BandLimit limit) noexcept {
+    switch (limit) {
+        case BandLimit::None: return "";
+        case BandLimit::Requested: return "requested";
+        case BandLimit::Nyquist: return "nyquist";
+        case BandLimit::Sampling: return "sampling";
+        case BandLimit::Noise: return "noise";
+        case BandLimit::Wheels: return "wheels";
+    }
+    return "?";
+}
+
 namespace {
 
 using Indices = std::vector<std::size_t>;
@@ -161,7 +189,7 @@ struct Fit {
     double gd_n0 = 0.0;
     double log_variance = 0.0;  // of ln gd_n0
     double waviness = kNaN, gd_n0_free = kNaN;
-    const char* reason = nullptr;  // why there is no fit
+    RoughnessReason reason = RoughnessReason::None;  // why there is no fit
     bool noise_bound = false;  // the noise dominates: gd_n0 is the upper bound of the fit without noise
 };
 
@@ -180,7 +208,7 @@ LogFit log_fit_over(const Spectrum& sp, const Indices& used, RoughnessScratch& s
 Fit log_fit(const Spectrum& sp, const Indices& used, RoughnessScratch& s) {
     const LogFit f = log_fit_over(sp, used, s);
     return {std::exp(f.ln_g0_w2 + kEulerGamma), kLogFitVariance / static_cast<double>(used.size()), f.waviness,
-            std::exp(f.ln_g0_free + kEulerGamma), nullptr, false};
+            std::exp(f.ln_g0_free + kEulerGamma), RoughnessReason::None, false};
 }
 
 // Maximum of the Whittle likelihood of exponential ordinates with E[G_k] = S_k + N_k, S_k = Φ_k·G(n0)(n_k/n0)^−2:
@@ -223,7 +251,7 @@ Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const SupportBuffer
                     const RoughnessConfig& cfg, RoughnessScratch& s) {
     Fit fit;
     if (!support.noise_known) {
-        fit.reason = kNoiseUnknown;
+        fit.reason = RoughnessReason::NoiseUnknown;
         return fit;
     }
     const double gd = whittle_fit(sp, used, support.resolved, &support.noise, s);
@@ -247,7 +275,7 @@ Fit noise_aware_fit(const Spectrum& sp, const Indices& used, const SupportBuffer
     fit.noise_bound = true;
     fit.gd_n0 = whittle_fit(sp, used, support.resolved, nullptr, s);
     if (!std::isfinite(fit.gd_n0) || iso_class(fit.gd_n0) != 'A') {
-        fit.reason = kNoiseDominates;
+        fit.reason = RoughnessReason::NoiseDominates;
         return fit;
     }
     const LogFit f = log_fit_over(sp, used, s);
@@ -264,7 +292,7 @@ void classify(Roughness& r, double length_m, double ds, const RoughnessConfig& c
     const double lo = std::max(cfg.band_min_cpm, cfg.min_cycles / length_m);
     const double nyquist = 0.5 / ds;
     double hi = std::min(cfg.band_max_cpm, nyquist);
-    r.band_limit = cfg.band_max_cpm <= nyquist ? "requested" : "nyquist";
+    r.band_limit = cfg.band_max_cpm <= nyquist ? BandLimit::Requested : BandLimit::Nyquist;
     Indices& used = s.used;
     used.clear();
     for (std::size_t k = 1; k < sp.n.size(); ++k)
@@ -285,17 +313,17 @@ void classify(Roughness& r, double length_m, double ds, const RoughnessConfig& c
         if (keep < used.size()) {
             hi = keep > 0 ? sp.n[used[keep - 1]] : lo;
             used.resize(keep);
-            r.band_limit = "sampling";
+            r.band_limit = BandLimit::Sampling;
         }
     }
     if (lo >= hi || static_cast<int>(used.size()) < cfg.min_band_points) {
-        r.reason = "too few PSD ordinates in band";
+        r.reason = RoughnessReason::TooFewOrdinates;
         return;
     }
     const Fit fit = noise_aware ? noise_aware_fit(sp, used, *support, cfg, s) : log_fit(sp, used, s);
-    if (fit.noise_bound) r.band_limit = "noise";
-    if (fit.reason || !std::isfinite(fit.gd_n0)) {
-        r.reason = fit.reason ? fit.reason : "fit failed (G_d(n0) not finite)";
+    if (fit.noise_bound) r.band_limit = BandLimit::Noise;
+    if (fit.reason != RoughnessReason::None || !std::isfinite(fit.gd_n0)) {
+        r.reason = fit.reason != RoughnessReason::None ? fit.reason : RoughnessReason::FitFailed;
         return;
     }
     r.band_lo = lo, r.band_hi = hi;
@@ -320,7 +348,7 @@ SupportBuffers buffers_of(const StretchSupport& support) {
 void clear(Iri& iri) {
     iri.value.reset();
     iri.length_m = 0.0;
-    iri.reason.clear();
+    iri.reason = IriReason::None;
     iri.backed_fraction.reset();
 }
 
@@ -332,12 +360,12 @@ void clear(Roughness& r) {
     r.spectrum.psd.clear();
     r.octave_centers.clear();
     r.octave_gd.clear();
-    r.reason.clear();
+    r.reason = RoughnessReason::None;
     r.confidence = 0.0;
     r.noise_psd.clear();
     r.noise_floor.reset();
     r.backed_fraction.reset();
-    r.band_limit.clear();
+    r.band_limit = BandLimit::None;
     clear(r.iri);
 }
 
@@ -367,7 +395,7 @@ void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughnes
     if (!left.iso_class && !right.iso_class) {
         vehicle.iso_class.reset();
         vehicle.band_lo = vehicle.band_hi = 0.0;
-        vehicle.reason = "both wheels declined";
+        vehicle.reason = RoughnessReason::BothWheelsDeclined;
         return;
     }
     if (vehicle.iso_class || !left.iso_class || !right.iso_class) return;  // one wheel alone: the fit decides
@@ -377,8 +405,8 @@ void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughnes
     vehicle.confidence = std::min(left.confidence, right.confidence);
     vehicle.band_lo = std::min(left.band_lo, right.band_lo);
     vehicle.band_hi = std::max(left.band_hi, right.band_hi);
-    vehicle.band_limit = "wheels";
-    vehicle.reason.clear();
+    vehicle.band_limit = BandLimit::Wheels;
+    vehicle.reason = RoughnessReason::None;
 }
 
 std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<double>& z) {
@@ -386,10 +414,10 @@ std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<doub
 }
 
 namespace {
-const char* stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
-    if (samples == 0) return "no valid profile";
-    if (static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return "valid stretch too short";
-    return nullptr;
+RoughnessReason stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
+    if (samples == 0) return RoughnessReason::NoValidProfile;
+    if (static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return RoughnessReason::StretchTooShort;
+    return RoughnessReason::None;
 }
 
 void require_support(const Profile& p) {
@@ -429,7 +457,7 @@ void mean_support(const Profile& left, const Profile& right, std::size_t first, 
 Roughness analyze_roughness(const std::vector<double>& z, double ds, const RoughnessConfig& cfg) {
     Roughness r;
     const auto [first, last] = longest_valid_stretch(z);
-    if (const char* problem = stretch_problem(last - first, ds, cfg)) {
+    if (const RoughnessReason problem = stretch_problem(last - first, ds, cfg); problem != RoughnessReason::None) {
         r.reason = problem;
         return r;
     }
@@ -443,7 +471,7 @@ void analyze_roughness(const Profile& p, const RoughnessConfig& cfg, RoughnessSc
     require_support(p);
     clear(r);
     const auto [first, last] = longest_valid_stretch(p.z);
-    if (const char* problem = stretch_problem(last - first, p.ds, cfg)) {
+    if (const RoughnessReason problem = stretch_problem(last - first, p.ds, cfg); problem != RoughnessReason::None) {
         r.reason = problem;
         return;
     }
@@ -464,7 +492,7 @@ Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector
     Roughness r;
     const auto [first, last] = z_left.empty() || z_right.empty() ? std::pair<std::size_t, std::size_t>{0, 0}
                                                                   : common_stretch(z_left, z_right);
-    if (const char* problem = stretch_problem(last - first, ds, cfg)) {
+    if (const RoughnessReason problem = stretch_problem(last - first, ds, cfg); problem != RoughnessReason::None) {
         r.reason = problem;
         return r;
     }
@@ -478,13 +506,13 @@ void vehicle_roughness(const Profile& left, const Profile& right, const Roughnes
                        Roughness& r) {
     clear(r);
     if (left.z.empty() || right.z.empty()) {
-        r.reason = "no valid profile";
+        r.reason = RoughnessReason::NoValidProfile;
         return;
     }
     require_support(left);
     require_support(right);
     const auto [first, last] = common_stretch(left.z, right.z);
-    if (const char* problem = stretch_problem(last - first, left.ds, cfg)) {
+    if (const RoughnessReason problem = stretch_problem(last - first, left.ds, cfg); problem != RoughnessReason::None) {
         r.reason = problem;
         return;
     }

@@ -53,13 +53,13 @@ Iri segment_iri(const std::vector<double>& slope_by_bin, std::size_t j0, std::si
     double sum = 0.0;
     for (std::size_t j = j0; j < j1; ++j) {
         if (j >= slope_by_bin.size() || !std::isfinite(slope_by_bin[j])) {
-            out.reason = "segment not covered by one valid stretch";
+            out.reason = IriReason::SegmentNotCovered;
             return out;
         }
         sum += slope_by_bin[j];
     }
     if (j1 <= j0) {
-        out.reason = "no valid profile";
+        out.reason = IriReason::NoValidProfile;
         return out;
     }
     out.value = 1000.0 * sum / static_cast<double>(j1 - j0);

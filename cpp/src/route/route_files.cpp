@@ -55,8 +55,8 @@ void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segm
         for (const auto* w : sides) out << ',' << field("%.6g", gd_n0_of(w->roughness));
         for (const auto* w : sides) out << ',' << field("%.4f", w->iri.value);
         for (const auto* w : sides) out << ',' << field("%.4f", w->backed_fraction);
-        for (const auto* w : sides) out << ',' << text(w->roughness.iso_class ? "" : w->roughness.reason);
-        for (const auto* w : sides) out << ',' << text(w->iri.reason);
+        for (const auto* w : sides) out << ',' << text(w->roughness.iso_class ? "" : to_string(w->roughness.reason));
+        for (const auto* w : sides) out << ',' << text(to_string(w->iri.reason));
         out << '\n';
     }
     if (!out) throw std::runtime_error("segments CSV: write failed");

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <optional>
-#include <string>
 #include <vector>
 
 #include "roadpreview/core/config.hpp"
@@ -14,15 +13,30 @@ namespace roadpreview {
 struct Profile;
 struct Roughness;
 
+/// Why a profile has no IRI (None: it has one). to_string gives the text of the output's `reason`.
+enum class IriReason {
+    None,
+    NoValidProfile,     ///< "no valid profile"
+    StretchTooShort,    ///< "valid stretch too short for IRI"
+    TooSparse,          ///< "too few bins with points for IRI": below IriConfig::min_backed_fraction
+    ClassDeclined,      ///< "roughness class declined": the same profile has no ISO 8608 class
+    SegmentNotCovered,  ///< "segment not covered by one valid stretch" (a route segment)
+    // The frame's FrameStatus, with its text: the frame has no profiles.
+    NoFinitePoints,  ///< "no finite points"
+    NoGround,        ///< "no ground"
+    TiltedGround,    ///< "no ground within the tilt limit"
+    VehicleStopped,  ///< "vehicle stopped"
+};
+
+/// The documented text ("valid stretch too short for IRI", ...); "" for None.
+const char* to_string(IriReason reason) noexcept;
+
 struct Iri {
     std::optional<double> value;  ///< m/km; nullopt with a reason
     double length_m = 0.0;        ///< length of the stretch it covers
-    std::string reason;           ///< empty when there is a value
+    IriReason reason = IriReason::None;     ///< None when there is a value
     std::optional<double> backed_fraction;  ///< bins of the stretch that hold points; nullopt: unknown
 };
-
-inline constexpr char kIriTooSparse[] = "too few bins with points for IRI";
-inline constexpr char kIriClassDeclined[] = "roughness class declined";
 
 /// |sprung − unsprung slope| (m/m) of the golden car after each step of the 250 mm moving average of an
 /// all-finite profile sampled every ds m (count − k values for a k-sample average); the car starts with
@@ -37,7 +51,7 @@ Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg);
 
 /// A wheel's IRI as the pipeline reports it (docs/method.md §6): profile_iri over the longest valid stretch,
 /// with the share of its bins that hold points; null when that share is below cfg.min_backed_fraction
-/// (kIriTooSparse) or when `wheel`, the roughness of the same profile, has no class (kIriClassDeclined).
+/// (IriReason::TooSparse) or when `wheel`, the roughness of the same profile, has no class (ClassDeclined).
 Iri wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg);
 
 /// Mean of both wheels' IRI (the mean roughness index) when both have one; its backed fraction is their mean.

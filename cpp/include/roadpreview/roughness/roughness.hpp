@@ -4,7 +4,6 @@
 #pragma once
 
 #include <optional>
-#include <string>
 #include <vector>
 
 #include "roadpreview/core/config.hpp"
@@ -28,6 +27,38 @@ struct Spectrum {
 /// Parseval: Σ psd·Δn = mean((x·w)²) / mean(w²) for the detrended profile x.
 Spectrum displacement_psd(const double* z, std::size_t count, double ds);
 
+/// Why a profile (or the vehicle) has no ISO 8608 class (None: it has one). to_string gives the text of the
+/// output's `reason`.
+enum class RoughnessReason {
+    None,
+    NoValidProfile,      ///< "no valid profile"
+    StretchTooShort,     ///< "valid stretch too short"
+    TooFewOrdinates,     ///< "too few PSD ordinates in band"
+    NoiseUnknown,        ///< "noise floor unknown": noise-aware, but no bin has the points to measure it
+    NoiseDominates,      ///< "noise dominates the band"
+    FitFailed,           ///< "fit failed (G_d(n0) not finite)"
+    BothWheelsDeclined,  ///< "both wheels declined" (the vehicle)
+    // The frame's FrameStatus, with its text: the frame has no profiles.
+    NoFinitePoints,  ///< "no finite points"
+    NoGround,        ///< "no ground"
+    TiltedGround,    ///< "no ground within the tilt limit"
+    VehicleStopped,  ///< "vehicle stopped"
+};
+
+/// What set the upper edge of the band the fit used (None: no band). to_string gives the output's `band_limit`.
+enum class BandLimit {
+    None,
+    Requested,  ///< "requested": RoughnessConfig::band_max_cpm
+    Nyquist,    ///< "nyquist": of the bins
+    Sampling,   ///< "sampling": the points' spacing stops resolving the road (noise-aware)
+    Noise,      ///< "noise": the noise dominates (no class, or class A from the noise bound)
+    Wheels,     ///< "wheels": the vehicle's class from the mean of the wheels' (reconcile_vehicle)
+};
+
+/// The documented texts ("noise dominates the band", "nyquist", ...); "" for None.
+const char* to_string(RoughnessReason reason) noexcept;
+const char* to_string(BandLimit limit) noexcept;
+
 struct Roughness {
     std::optional<char> iso_class;  ///< 'A'..'H'; nullopt when the data do not support a class
     double gd_n0 = 0.0;             ///< m³, G_d(n0) of the w = 2 fit
@@ -37,12 +68,12 @@ struct Roughness {
     Spectrum spectrum;
     std::vector<double> octave_centers;   ///< cycles/m
     std::vector<double> octave_gd;        ///< m³, mean G_d in each ISO 8608 octave band
-    std::string reason;                   ///< empty when classified
+    RoughnessReason reason = RoughnessReason::None;  ///< None when classified
     double confidence = 0.0;              ///< probability that the class is right, given the fit's spread
     std::vector<double> noise_psd;        ///< m³, expected PSD of the bin errors on the grid n; empty: unknown
     std::optional<double> noise_floor;    ///< m³, mean of noise_psd over the analysis band
     std::optional<double> backed_fraction;  ///< bins of the stretch that hold points; nullopt: unknown
-    std::string band_limit;               ///< what set the band's upper edge: requested, nyquist, sampling, noise
+    BandLimit band_limit = BandLimit::None;  ///< what set the band's upper edge
     Iri iri;                              ///< International Roughness Index of the same profile (§6)
 };
 
@@ -68,8 +99,8 @@ Roughness vehicle_roughness(const std::vector<double>& z_left, const std::vector
 Roughness vehicle_roughness(const Profile& left, const Profile& right, const RoughnessConfig& cfg);
 
 /// The vehicle's class never contradicts both wheels (docs/method.md §4, "Vehicle"): with both wheels declined
-/// it is declined ("both wheels declined"); with both classified and the common stretch declined, G_d(n0) is
-/// the mean of the wheels' (band_limit "wheels"); with one wheel classified its own fit stands.
+/// it is declined (BothWheelsDeclined); with both classified and the common stretch declined, G_d(n0) is
+/// the mean of the wheels' (BandLimit::Wheels); with one wheel classified its own fit stands.
 void reconcile_vehicle(Roughness& vehicle, const Roughness& left, const Roughness& right);
 
 /// Probability that the true G_d(n0) lies in iso_class(gd_n0) for a normal error of ln G_d(n0) of this variance.
