@@ -28,7 +28,6 @@ struct ProfileScratch {
     std::vector<std::size_t> band_start, band_next;
     std::vector<std::uint8_t> in_corridor, fitted;
     std::vector<double> range, nearest, farthest, offsets;
-    std::vector<Moments> moments;
     std::vector<Plane> plane;
 };
 
