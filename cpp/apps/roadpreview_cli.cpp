@@ -166,7 +166,8 @@ struct RunSummary {
     void add(const rp::Result& r) {
         ++classes[class_of(r.vehicle)];
         for (const rp::Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle})
-            if (!x->iso_class) ++declined[*rp::to_string(x->reason) ? rp::to_string(x->reason) : "no reason given"];
+            if (!x->iso_class)
+                ++declined[x->reason == rp::RoughnessReason::None ? "no reason given" : rp::to_string(x->reason)];
         if (r.vehicle.iri.value) iri_m_per_km.push_back(*r.vehicle.iri.value);
         ms.push_back(r.timing_ms.total);
     }

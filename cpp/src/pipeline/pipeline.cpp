@@ -276,10 +276,11 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
 const char* to_string(FrameStatus status) noexcept {
     switch (status) {
         case FrameStatus::Ok: return "";
-        case FrameStatus::NoFinitePoints: return "no finite points";
-        case FrameStatus::NoGround: return "no ground";
-        case FrameStatus::TiltedGround: return kTiltedGround;
-        case FrameStatus::VehicleStopped: return "vehicle stopped";
+        // One text per status: the one its profiles' roughness reason gives (mark_declined).
+        case FrameStatus::NoFinitePoints: return to_string(RoughnessReason::NoFinitePoints);
+        case FrameStatus::NoGround: return to_string(RoughnessReason::NoGround);
+        case FrameStatus::TiltedGround: return to_string(RoughnessReason::TiltedGround);
+        case FrameStatus::VehicleStopped: return to_string(RoughnessReason::VehicleStopped);
     }
     return "?";
 }

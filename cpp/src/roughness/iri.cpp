@@ -91,10 +91,11 @@ const char* to_string(IriReason reason) noexcept {
         case IriReason::TooSparse: return "too few bins with points for IRI";
         case IriReason::ClassDeclined: return "roughness class declined";
         case IriReason::SegmentNotCovered: return "segment not covered by one valid stretch";
-        case IriReason::NoFinitePoints: return "no finite points";
-        case IriReason::NoGround: return "no ground";
-        case IriReason::TiltedGround: return "no ground within the tilt limit";
-        case IriReason::VehicleStopped: return "vehicle stopped";
+        // The frame's status: one text, the roughness reason's.
+        case IriReason::NoFinitePoints: return to_string(RoughnessReason::NoFinitePoints);
+        case IriReason::NoGround: return to_string(RoughnessReason::NoGround);
+        case IriReason::TiltedGround: return to_string(RoughnessReason::TiltedGround);
+        case IriReason::VehicleStopped: return to_string(RoughnessReason::VehicleStopped);
     }
     return "?";
 }

@@ -163,7 +163,7 @@ const char* to_string(RoughnessReason reason) noexcept {
         case RoughnessReason::BothWheelsDeclined: return "both wheels declined";
         case RoughnessReason::NoFinitePoints: return "no finite points";
         case RoughnessReason::NoGround: return "no ground";
-        case RoughnessReason::TiltedGround: return "no ground within the tilt limit";
+        case RoughnessReason::TiltedGround: return kTiltedGround;
         case RoughnessReason::VehicleStopped: return "vehicle stopped";
     }
     return "?";
