@@ -18,8 +18,10 @@ Printed (Markdown, progress on stderr):
   * what one frame resolves per range: bins backed by points, spacing of the points, the highest frequency
     that spacing resolves, and the profile error, per sensor; and the bins the fused map backs there.
   * repeatability (docs/method.md §9), a measure that needs no truth: the same stretch of road seen by the first
-    frame 14–24 m ahead and by the last 5–15 m ahead, frame by frame; and on every real recording with poses
-    (the OS1-128 pcap, KITTI seq 00 frames 0–5 from the shared data), with their fused classes frame by frame.
+    frame 14–24 m ahead and by the last 5–15 m ahead, frame by frame, beside what a noise-free sensor with the
+    same rings allows; the same stretch in the last frames of two passes over the class C–D roads; and on every
+    real recording with poses (the OS1-128 pcap, KITTI seq 00 frames 0–5 from the shared data), with their fused
+    classes frame by frame.
 Definitions are in bench/README.md. Usage: ``python bench/accuracy.py [--quick] [--jobs N] [--match TEXT]``.
 """
 
@@ -33,6 +35,7 @@ import platform
 import sys
 import time
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -56,6 +59,9 @@ BUMP_RANGE_M = (5.0, 12.0)  # frames whose bump lies this far ahead score its he
 BEAM_ERROR_DEG = 0.03  # per-beam elevation error of the calibration scenarios
 RANGE_BUCKETS_M = ((4, 8), (8, 12), (12, 16), (16, 25), (25, 40))
 NEAR_M = (5.0, 15.0)  # repeatability: the stretch as the last frame sees it; the first saw it further ahead
+REPEATED_CLASSES = "CD"  # roads driven twice for the repeated-pass repeatability
+SECOND_PASS_S = 0.037  # the second pass's frames lie 0.37 m further along the path: its rings fall elsewhere
+WHEELS = ("left", "right")
 ROI_X_M, ROI_Y_ABS_M = (1.0, 40.0), 10.0
 SCENE_BOXES = (
     sim.Box(10.0, 14.5, 2.4, 4.2, 1.5),  # parked car, left
@@ -162,7 +168,7 @@ def measure(res, frame: sim.Frame, truth: dict, scenario: Scenario) -> dict:
               "band": res.vehicle.band, "ms": res.timing_ms["total"],
               "ground": ground_counts(frame, np.asarray(res.ground_mask)), "rms": [], "rms_all": [],
               "bump": [], "ranges": [], "coverage": []}
-    for wheel in ("left", "right"):
+    for wheel in WHEELS:
         profile, truth_z = getattr(res, wheel), truth[wheel]
         s, z, count = np.asarray(profile.s), np.asarray(profile.z), np.asarray(profile.count)
         record["rms"].append(detrended_rms(s[count > 0], (z - truth_z)[count > 0]))
@@ -183,16 +189,42 @@ def run(scenario: Scenario) -> dict:
                                      calibration_seed=scenario.seed)
     frames = sim.drive(scene, lidar, SPEED_MPS, scenario.yaw_rate, scenario.frames, seed=scenario.seed)
     truths = [sim.truth_profiles(scene, f.pose, SPEED_MPS, scenario.yaw_rate) for f in frames]
-    out = {"scenario": scenario}
+    second = repeated_pass(scenario, scene, lidar)
+    cfg = rp.Config(extrinsics=lidar.extrinsics())
+    travel = {w: wheel_travel(SPEED_MPS * (frames[-1].time_s - frames[0].time_s), scenario.yaw_rate, w, cfg)
+              for w in WHEELS}
+    out = {"scenario": scenario, "rings": ring_repeatability(scenario, scene, lidar, frames, travel)}
     for method in FUSION:
         est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method}))
         results = [est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s) for f in frames]
         out[method] = [measure(res, f, truth, scenario) for res, f, truth in zip(results, frames, truths)]
-        travelled = SPEED_MPS * (frames[-1].time_s - frames[0].time_s)
-        out[method][0]["repeatability"] = [
-            frame_repeatability(getattr(results[0], w), getattr(results[-1], w),
-                                wheel_travel(travelled, scenario.yaw_rate, w, est.config)) for w in ("left", "right")]
+        out[method][0]["repeatability"] = [frame_repeatability(getattr(results[0], w), getattr(results[-1], w),
+                                                               travel[w]) for w in WHEELS]
+        if second:
+            est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method}))
+            again = [est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s) for f in second][-1]
+            out[method][0]["passes"] = [
+                pass_repeatability(getattr(results[-1], w), getattr(again, w), travel[w],
+                                   wheel_travel(SPEED_MPS * second[-1].time_s, scenario.yaw_rate, w, cfg))
+                for w in WHEELS]
     return out
+
+
+def repeated_pass(scenario: Scenario, scene: sim.Scene, lidar: sim.Lidar) -> list:
+    """A second drive over a class C–D road of the classes group (new noise, frames SECOND_PASS_S later along the
+    same path, so the rings fall elsewhere), as profiler certification repeats runs; [] for other scenarios."""
+    if scenario.group != "classes" or scenario.iso_class not in REPEATED_CLASSES:
+        return []
+    return sim.drive(scene, lidar, SPEED_MPS, scenario.yaw_rate, scenario.frames, seed=scenario.seed + 1000,
+                     start_s=SECOND_PASS_S)
+
+
+def ring_repeatability(scenario: Scenario, scene: sim.Scene, lidar: sim.Lidar, frames: list, travel: dict) -> list:
+    """frame_repeatability of what a noise-free sensor with this beam table gives the first and last frame
+    (sim.ring_profiles: the exact relief where the rings cross the wheel paths): the bound the ring spacing sets."""
+    first, last = (sim.ring_profiles(scene, lidar, f.pose, SPEED_MPS, scenario.yaw_rate) for f in (frames[0], frames[-1]))
+    return [frame_repeatability(SimpleNamespace(s=first["s"], z=first[w]), SimpleNamespace(s=last["s"], z=last[w]),
+                                travel[w]) for w in WHEELS]
 
 
 def wheel_travel(travelled_m: float, yaw_rate: float, wheel: str, cfg) -> float:
@@ -206,9 +238,15 @@ def wheel_travel(travelled_m: float, yaw_rate: float, wheel: str, cfg) -> float:
 
 def frame_repeatability(first, last, travelled_m: float) -> rp.Repeatability:
     """The stretch the last frame's profile holds NEAR_M ahead, against the first frame's view of it."""
+    return pass_repeatability(last, first, travelled_m, 0.0)
+
+
+def pass_repeatability(profile, other, travelled_m: float, other_travelled_m: float) -> rp.Repeatability:
+    """The stretch `profile` holds NEAR_M ahead, its wheel having rolled travelled_m along the path since t = 0,
+    against `other`'s view of it from other_travelled_m."""
     grid = np.arange(*NEAR_M, 0.1) + 0.05 + travelled_m
-    return rp.repeatability(rp.world_profile(first.s, first.z, 0.0, grid),
-                            rp.world_profile(last.s, last.z, travelled_m, grid), 0.1)
+    return rp.repeatability(rp.world_profile(other.s, other.z, other_travelled_m, grid),
+                            rp.world_profile(profile.s, profile.z, travelled_m, grid), 0.1)
 
 
 # ------------------------------------------------------------------------------------------------ summary
@@ -351,24 +389,58 @@ def print_ranges(results: list[dict]) -> None:
                     f"bins backed, {FUSION[-1]} map after the sequence"], rows) + "\n")
 
 
+def correlations(reps: list) -> str:
+    """'median (min), n/N' of the correlations of those repeatabilities that have one."""
+    values = [x.correlation for x in reps if x.correlation is not None]
+    return f"{np.median(values):.3f} ({np.min(values):.3f}), {len(values)}/{len(reps)}" if values else f"–, 0/{len(reps)}"
+
+
+def median_rms_cm(reps: list) -> str:
+    rms = [x.rms_m for x in reps if x.rms_m is not None]
+    return f"{np.median(rms) * 100:.2f}" if rms else "–"
+
+
+def wheel_correlations(reps: list) -> str:
+    return " / ".join("–" if x.correlation is None else f"{x.correlation:.3f}" for x in reps)
+
+
 def print_repeatability(results: list[dict]) -> None:
     rows = []
     for sensor in SENSORS:
-        for group, classes in (("classes C–D", "CD"), ("classes A–F", CLASSES)):
+        for group, classes in (("classes C–D", REPEATED_CLASSES), ("classes A–F", CLASSES)):
             picked = [r for r in results if r["scenario"].sensor == sensor and r["scenario"].group == "classes"
                       and r["scenario"].iso_class in classes]
             for method in FUSION:
-                reps = [x for r in picked for x in r[method][0]["repeatability"]]
-                values = [x.correlation for x in reps if x.correlation is not None]
-                rms = [x.rms_m for x in reps if x.rms_m is not None]
-                if reps:
-                    rows.append([sensor, group, method, f"{len(values)}/{len(reps)}",
-                                 f"{np.median(values):.3f}" if values else "–",
-                                 f"{np.min(values):.3f}" if values else "–",
-                                 f"{np.median(rms) * 100:.2f}" if rms else "–"])
+                pairs = [(x, ring) for r in picked for x, ring in zip(r[method][0]["repeatability"], r["rings"])]
+                if pairs:
+                    rings_compared = [ring for x, ring in pairs if x.correlation is not None]
+                    rows.append([sensor, group, method, correlations([x for x, _ in pairs]),
+                                 median_rms_cm([x for x, _ in pairs]), correlations([ring for _, ring in pairs]),
+                                 correlations(rings_compared) if rings_compared else "–"])
     print(f"## Repeatability: {NEAR_M[0]:g}–{NEAR_M[1]:g} m ahead in the last frame vs the first frame's view\n")
-    print(md_table(["sensor", "roads", "fusion", "wheels compared", "correlation median", "correlation min",
-                    "RMS difference cm (median)"], rows) + "\n")
+    print("Correlation of the IRI-filtered profiles: median (min), wheels with a common stretch of 5 m / wheels. "
+          "'Perfect rings': the same for a noise-free sensor with this beam table (sim.ring_profiles: the exact "
+          "relief where the rings cross the wheel paths, linear in between), what the ring spacing allows; over "
+          "all wheels, and over the wheels the pipeline compared.\n")
+    print(md_table(["sensor", "roads", "fusion", "correlation", "RMS difference cm (median)",
+                    "perfect rings: all wheels", "perfect rings: wheels compared"], rows) + "\n")
+    passes = [r for r in results if "passes" in r[FUSION[0]][0]]
+    if not passes:
+        return
+    print(f"## Repeatability of repeated passes: {NEAR_M[0]:g}–{NEAR_M[1]:g} m ahead in the last frame of two "
+          f"drives over the same road\n")
+    print(f"The second drive's frames lie {SPEED_MPS * SECOND_PASS_S:g} m further along the path, its noise drawn "
+          "anew (profiler certification's repeated runs, AASHTO R 56). Correlation left / right.\n")
+    rows = [[r["scenario"].sensor, r["scenario"].name] + [wheel_correlations(r[m][0]["passes"]) for m in FUSION]
+            + [median_rms_cm(r[FUSION[-1]][0]["passes"])] for r in passes]
+    for sensor in SENSORS:
+        picked = [r for r in passes if r["scenario"].sensor == sensor]
+        if picked:
+            rows.append([f"**{sensor}**", "median (min), compared"]
+                        + [correlations([x for r in picked for x in r[m][0]["passes"]]) for m in FUSION]
+                        + [median_rms_cm([x for r in picked for x in r[FUSION[-1]][0]["passes"]])])
+    print(md_table(["sensor", "road"] + [f"correlation, {m}" for m in FUSION]
+                   + [f"RMS difference cm, {FUSION[-1]} (median)"], rows) + "\n")
 
 
 def run_in_pool(work, items: list, jobs: int, describe) -> list:

@@ -30,8 +30,13 @@ def test_accuracy_quick_prints_the_accuracy_and_range_tables():
     # too sparse: no class, frame by frame or fused
     assert re.search(r"\| class C, straight \| VLP-16 \| declined \| – \| ··· \| declined \| – \| ··· \|", out)
     # repeatability of the simulated class C road (a correlation in [-1, 1]) and the real OS1-128 recording
-    rep = re.search(r"\| OS1-128 \| classes C–D \| none \| 2/2 \| (-?\d\.\d{3}) \| (-?\d\.\d{3}) \| \d+\.\d\d \|",
-                    out)
+    rep = re.search(r"\| OS1-128 \| classes C–D \| none \| (-?\d\.\d{3}) \((-?\d\.\d{3})\), 2/2 \| \d+\.\d\d \| "
+                    r"(\d\.\d{3}) \(\d\.\d{3}\), 2/2 \| \d\.\d{3} \(\d\.\d{3}\), 2/2 \|", out)
     assert rep and -1.0 <= float(rep.group(2)) <= float(rep.group(1)) <= 1.0, out
+    assert 0.8 < float(rep.group(3)) <= 1.0  # a noise-free OS1-128 whose frames are 2 m apart
+    # two drives over the class C road: their fused maps repeat (issue 10's bar: 0.90)
+    passes = re.search(r"\| OS1-128 \| class C, straight \| -?\d\.\d{3} / -?\d\.\d{3} \| (\d\.\d{3}) / (\d\.\d{3}) \| "
+                       r"\d+\.\d\d \|", out)
+    assert passes and min(float(passes.group(1)), float(passes.group(2))) >= 0.9, out
     assert re.search(r"\| OS1-128 pcap \(3 frames\) \| 2 \| [A-H] / ", out), out  # classes frame by frame
     assert re.search(r"\| OS1-128 pcap \(3 frames\) \| left \| 0\.50 \| -?\d\.\d{3} \|", out), out

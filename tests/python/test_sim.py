@@ -139,6 +139,18 @@ def test_trajectory_follows_the_circle_about_the_centre_of_rotation():
     assert [p.x_m for p in straight] == pytest.approx([0.0, -0.3, -0.6]) and all(p.y_m == 0 for p in straight)
 
 
+def test_a_later_start_continues_the_same_path():
+    poses = sim.trajectory(10.0, 0.2, frames=4, rate_hz=10.0)
+    later = sim.trajectory(10.0, 0.2, frames=3, rate_hz=10.0, start_s=0.1)
+    for a, b in zip(poses[1:], later):
+        assert (b.x_m, b.y_m, b.yaw_rad) == pytest.approx((a.x_m, a.y_m, a.yaw_rad))
+    frames = sim.drive(sim.Scene(sim.Road()), sim.vlp_16(), 10.0, frames=2, start_s=0.037)
+    assert [f.time_s for f in frames] == pytest.approx([0.037, 0.137])
+    assert frames[0].pose.x_m == pytest.approx(0.37)
+    with pytest.raises(ValueError, match="start_s"):
+        sim.trajectory(10.0, 0.0, frames=2, start_s=float("nan"))
+
+
 def test_frames_see_a_static_box_where_it_stands():
     box = sim.Box(15.0, 16.0, 3.0, 4.0, 1.0)
     scene = sim.Scene(sim.Road(), (box,))
@@ -177,6 +189,30 @@ def test_truth_profiles_follow_the_wheel_paths(yaw_rate):
         assert x_path[np.argmax(truth[wheel])] == pytest.approx(12.05, abs=0.06)
         if yaw_rate == 0:
             assert peak == pytest.approx(12.05)
+
+
+def test_ring_profiles_sample_the_relief_where_the_rings_cross_the_wheel_path():
+    lidar = sim.os1_128(height_m=1.8)
+    ground_range = 1.8 / np.tan(-np.radians(np.asarray(lidar.elevations_deg)))
+    crossings = np.sort(np.sqrt(ground_range[ground_range > 0.8] ** 2 - 0.8**2))  # straight, wheel 0.8 m aside
+    gap = int(np.argmax(np.diff(crossings) * (crossings[:-1] > 25.0) * (crossings[1:] < 40.0)))
+    between = 0.5 * (crossings[gap] + crossings[gap + 1])  # midway between two rings 25–40 m ahead
+    assert crossings[gap + 1] - crossings[gap] > 1.5
+    bumps = (sim.SpeedBump(x_m=between, height_m=0.06, length_m=0.4), sim.SpeedBump(x_m=8.0, height_m=0.06,
+                                                                                      length_m=1.0))
+    scene = sim.Scene(sim.Road(bumps=bumps))
+    rings = sim.ring_profiles(scene, lidar, sim.Pose(), 10.0, 0.0)
+    truth = sim.truth_profiles(scene, sim.Pose(), 10.0, 0.0)
+    np.testing.assert_array_equal(rings["s"], truth["s"])
+    near = np.abs(truth["s"] - 8.0) < 0.5  # rings 0.2 m apart here: the 1 m bump is seen
+    assert np.nanmax(rings["left"][near]) == pytest.approx(0.06, abs=0.01)
+    far = np.abs(truth["s"] - between) < 0.5  # the bump falls between two rings: no return shows it
+    assert truth["left"][far].max() > 0.05 and np.nanmax(rings["left"][far]) < 1e-9
+    assert np.isnan(rings["left"][truth["s"] < crossings[0]]).all()  # nothing before the nearest ring
+    swell = sim.Scene(sim.Road.iso8608("C", seed=5, step_m=0.5))  # waves of 1 m and longer only
+    rings, truth = sim.ring_profiles(swell, lidar, sim.Pose(), 10.0, 0.2), sim.truth_profiles(swell, sim.Pose(), 10.0, 0.2)
+    seen = np.isfinite(rings["right"]) & (truth["s"] < 10.0)  # rings < 0.5 m apart: long waves follow exactly
+    assert seen.sum() > 50 and np.abs(rings["right"][seen] - truth["right"][seen]).max() < 2e-3
 
 
 @pytest.mark.parametrize("process", ["native", "reference"])

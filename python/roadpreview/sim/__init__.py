@@ -13,7 +13,7 @@ Every result is deterministic for a given seed. Units: metres, seconds, radians 
 degrees, as the manuals give them). Frames: see ``drive`` (world = frame 0's base frame) and ``lidar``.
 """
 
-from .drive import Frame, Pose, drive, scan, trajectory, truth_profiles, wheel_path_xy
+from .drive import Frame, Pose, drive, ring_profiles, scan, trajectory, truth_profiles, wheel_path_xy
 from .lidar import PRESETS, Lidar, hdl_64e, os1_128, preset, vlp_16
 from .road import ISO_CLASSES, GradeChange, Pothole, Road, RoughField, SpeedBump, class_gd_n0, iso_psd
 from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
@@ -26,7 +26,7 @@ __all__ = [
     "Box", "Frame", "ISO_CLASSES", "LABEL_NONE", "LABEL_OBSTACLE", "LABEL_ROAD", "Lidar", "PRESETS", "Pose",
     "GradeChange", "Pothole", "Road", "RoughField", "Scene", "SpeedBump", "cast", "class_gd_n0", "drive", "hdl_64e",
     "iso_psd",
-    "os1_128", "preset", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
+    "os1_128", "preset", "ring_profiles", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
     "BenchTrack", "ProfileTrack", "RangeDrive", "RangeSensorModel", "bench_counts", "bench_profile", "bench_reference", "bench_road",
     "drive_readings", "laser", "layout_yaml", "measured_distance", "ultrasonic",
     "StereoCamera", "StereoFrame", "drive_stereo", "kitti_stereo", "render",

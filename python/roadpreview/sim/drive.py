@@ -31,13 +31,15 @@ class Pose:
         return self.x_m + c * x - s * y, self.y_m + s * x + c * y
 
 
-def trajectory(speed_mps: float, yaw_rate_rps: float, frames: int, rate_hz: float = 10.0) -> list[Pose]:
-    """Poses at t = i/rate_hz, i = 0 … frames−1, of rigid planar motion at constant V and ω from the origin."""
-    if frames < 1 or rate_hz <= 0:
-        raise ValueError(f"need frames >= 1 and rate_hz > 0, got {frames}, {rate_hz}")
+def trajectory(speed_mps: float, yaw_rate_rps: float, frames: int, rate_hz: float = 10.0,
+               start_s: float = 0.0) -> list[Pose]:
+    """Poses at t = start_s + i/rate_hz, i = 0 … frames−1, of rigid planar motion at constant V and ω that is at
+    the origin at t = 0 (a later start_s: another pass along the same path, its frames taken elsewhere)."""
+    if frames < 1 or rate_hz <= 0 or not math.isfinite(start_s):
+        raise ValueError(f"need frames >= 1, rate_hz > 0 and a finite start_s, got {frames}, {rate_hz}, {start_s}")
     poses = []
     for i in range(frames):
-        t = i / rate_hz
+        t = start_s + i / rate_hz
         heading = yaw_rate_rps * t
         if yaw_rate_rps == 0:
             poses.append(Pose(speed_mps * t, 0.0, 0.0))
@@ -80,13 +82,14 @@ def scan(scene: Scene, lidar: Lidar, pose: Pose, rng: np.random.Generator) -> tu
 
 
 def drive(scene: Scene, lidar: Lidar, speed_mps: float, yaw_rate_rps: float = 0.0, frames: int = 10,
-          rate_hz: float = 10.0, seed: int = 0) -> list[Frame]:
-    """Frames recorded while driving at constant speed and yaw rate; deterministic for a given seed."""
+          rate_hz: float = 10.0, seed: int = 0, start_s: float = 0.0) -> list[Frame]:
+    """Frames recorded while driving at constant speed and yaw rate, from time start_s on (see trajectory);
+    deterministic for a given seed."""
     streams = np.random.SeedSequence(seed).spawn(frames)
     out = []
-    for i, pose in enumerate(trajectory(speed_mps, yaw_rate_rps, frames, rate_hz)):
+    for i, pose in enumerate(trajectory(speed_mps, yaw_rate_rps, frames, rate_hz, start_s)):
         points, labels, ranges = scan(scene, lidar, pose, np.random.default_rng(streams[i]))
-        out.append(Frame(i, i / rate_hz, pose, points, labels, ranges))
+        out.append(Frame(i, start_s + i / rate_hz, pose, points, labels, ranges))
     return out
 
 
@@ -114,3 +117,31 @@ def truth_profiles(scene: Scene, pose: Pose, speed_mps: float, yaw_rate_rps: flo
         x_base, y_base = wheel_path_xy(s, speed_mps, yaw_rate_rps, y_wheel)
         out[wheel] = scene.road.relief(*pose.to_world(x_base, y_base))
     return out
+
+
+def ring_profiles(scene: Scene, lidar: Lidar, pose: Pose, speed_mps: float, yaw_rate_rps: float, *,
+                  track_width_m: float = 1.6, ds_m: float = 0.1, preview_length_m: float = 40.0) -> dict:
+    """What a noise-free LiDAR with this beam table could know of the relief under each wheel: the exact relief
+    where each ring crosses the wheel path, linearly interpolated in between (as the profile's gap filling
+    does), at the bin centres truth_profiles uses; NaN before the nearest and after the farthest crossing.
+    {"s": s, "left": z, "right": z}. The bound of what any processing of one frame can resolve: between rings
+    no return exists. Rings are where the beams (elevation − pitch, from the mounting height) meet the mean plane;
+    the relief's few centimetres move them by millimetres at most; the tire's width is not averaged over."""
+    s = (np.arange(math.ceil(preview_length_m / ds_m - 1e-9)) + 0.5) * ds_m
+    downward = np.radians(np.asarray(lidar.elevations_deg, float) - lidar.pitch_deg)
+    rings = np.sort(lidar.height_m / np.tan(-downward[downward < 0]))  # horizontal range from the sensor, m
+    rings = rings[(rings >= lidar.min_range_m) & (rings <= lidar.max_range_m)]
+    dense = np.arange(0.0, preview_length_m + 1.0, 0.01)  # the path finely, to find where each ring crosses it
+    out = {"s": s}
+    for wheel, y_wheel in (("left", track_width_m / 2), ("right", -track_width_m / 2)):
+        x, y = wheel_path_xy(dense, speed_mps, yaw_rate_rps, y_wheel)
+        reach = np.maximum.accumulate(np.hypot(x, y))  # the path recedes from the sensor
+        crossed = rings[(rings > reach[0]) & (rings < reach[-1])]
+        s_ring = np.interp(crossed, reach, dense)
+        z_ring = scene.road.relief(*pose.to_world(*wheel_path_xy(s_ring, speed_mps, yaw_rate_rps, y_wheel)))
+        z = np.interp(s, s_ring, z_ring) if len(s_ring) >= 2 else np.full(len(s), np.nan)
+        if len(s_ring) >= 2:
+            z[(s < s_ring[0]) | (s > s_ring[-1])] = np.nan
+        out[wheel] = z
+    return out
+
