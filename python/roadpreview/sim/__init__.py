@@ -8,6 +8,7 @@
     frames = sim.drive(scene, lidar, speed_mps=10, yaw_rate_rps=0.1, frames=10, seed=0)
     cfg = rp.Config(extrinsics=lidar.extrinsics())
     truth = sim.truth_profiles(scene, frames[0].pose, 10, 0.1)
+    rings = sim.ring_profiles(scene, lidar, frames[0].pose, 10, 0.1)   # what a noise-free sensor's rings can see
 
 Every result is deterministic for a given seed. Units: metres, seconds, radians (angles of beam tables in
 degrees, as the manuals give them). Frames: see ``drive`` (world = frame 0's base frame) and ``lidar``.
