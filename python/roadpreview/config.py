@@ -52,6 +52,7 @@ class GroundConfig:
     zone_seed_points: int = 20  #: the mean height of this many lowest points starts a patch's fit
     zone_max_step_m: float = 0.3  #: elevation test: a patch's ground centroid off the inner ground by at most this
     zone_max_flatness_m: float = 0.08  #: flatness test: RMS distance of the fitted points from the patch plane
+    zone_min_breadth_m: float = 0.1  #: breadth test: the fitted points' RMS spread across their longest direction
 
 
 @dataclass

@@ -77,6 +77,7 @@ TEST(Config, BadFilesAreRejectedWithTheFieldNamed) {
     expect_rejected(R"({"roughness": {"band_min_cpm": 5, "band_max_cpm": 4}})", "band_min_cpm");
     expect_rejected(R"({"obstacles": {"cluster_tolerance_m": 0}})", "obstacles.cluster_tolerance_m");
     expect_rejected(R"({"obstacles": {"voxel_m": 0.001}})", "obstacles.voxel_m");
+    expect_rejected(R"({"ground": {"zone_min_breadth_m": -0.1}})", "ground.zone_min_breadth_m");
     expect_rejected(R"({"obstacles": {"min_cluster_points": 10, "max_cluster_points": 5}})", "obstacles.max_cluster_points");
     expect_rejected(R"({"obstacles": {"safety_margin_m": -0.1}})", "obstacles.safety_margin_m");
     expect_rejected(R"({"obstacles": {"tolerance": 0.5}})", "obstacles.tolerance");

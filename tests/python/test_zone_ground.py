@@ -69,6 +69,20 @@ def car_beside_a_camera():
     return with_extra(road, side)
 
 
+def sparse_rings():
+    """A 16-beam sensor 1.8 m up on a level road: its ground rings 1.4–14 m apart (the VLP-16's −15°…−3° beams),
+    a point every 0.2° of azimuth, each with 3 cm of range noise along its ray. Each patch holds one ring's arc:
+    a ribbon along the arc and along the rays, which lean 3–15° — any plane through the arc fits it."""
+    rng = np.random.default_rng(7)
+    elevation, azimuth = (v.ravel() for v in np.meshgrid(np.radians([-15.0, -13.0, -11.0, -9.0, -7.0, -5.0, -3.0]),
+                                                          np.radians(np.arange(-90.0, 90.0, 0.2))))
+    ray = np.column_stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
+    reach = 1.8 / -np.sin(elevation) + rng.normal(0.0, 0.03, len(ray))
+    road = ray * reach[:, None] + [0.0, 0.0, 1.8]
+    road = road[(road[:, 0] >= 1.0) & (np.abs(road[:, 1]) <= 10.0)]
+    return road, np.ones(len(road), dtype=bool)
+
+
 def surface_scene(height):
     road = road_grid(height)
     return road, np.ones(len(road), dtype=bool)
@@ -82,6 +96,7 @@ SCENES = {
     "wall beside the road": wall_scene,
     "overhead canopy": canopy_scene,
     "car beside a camera": car_beside_a_camera,
+    "rings of a sparse sensor": sparse_rings,
 }
 
 

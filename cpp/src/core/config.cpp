@@ -46,7 +46,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_
                                                 pca_iterations, pca_threshold_m, ransac_distance_m,
                                                 ransac_max_iterations, ransac_seed, max_tilt_deg,
                                                 zone_ring_edges_m, zone_sectors, zone_root_m, zone_min_points, zone_seed_points,
-                                                zone_max_step_m, zone_max_flatness_m)
+                                                zone_max_step_m, zone_max_flatness_m, zone_min_breadth_m)
 
 const char* to_string(FusionMethod method) {
     switch (method) {
@@ -158,6 +158,8 @@ void validate_zones(const GroundConfig& g) {
     require(g.zone_seed_points >= 1, "ground.zone_seed_points must be >= 1");
     require(positive(g.zone_max_step_m), "ground.zone_max_step_m must be > 0");
     require(positive(g.zone_max_flatness_m), "ground.zone_max_flatness_m must be > 0");
+    require(std::isfinite(g.zone_min_breadth_m) && g.zone_min_breadth_m >= 0.0,
+            "ground.zone_min_breadth_m must be >= 0");
 }
 
 // Config files written before the tilt limit applied to every method name it ransac_max_tilt_deg.

@@ -28,7 +28,7 @@ std::optional<PlaneFit> plane_fit(const Moments& m) {
     if (normal.z() < 0.0) normal = -normal;
     const Eigen::Vector3d centre = m.shift + mean_q;
     return PlaneFit{{normal.x(), normal.y(), normal.z(), -normal.dot(centre)}, centre,
-                    std::max(0.0, eig.eigenvalues()(0))};
+                    std::max(0.0, eig.eigenvalues()(0)), eig.eigenvalues()(1)};
 }
 
 double tilt_deg(const Plane& plane) { return std::acos(std::clamp(plane[2], -1.0, 1.0)) * 180.0 / M_PI; }

@@ -32,6 +32,7 @@ struct PlaneFit {
     Plane plane;
     Eigen::Vector3d centre;   ///< mean of the points (on the plane)
     double flatness_m2 = 0.0; ///< smallest covariance eigenvalue: mean squared distance from the plane
+    double breadth_m2 = 0.0;  ///< middle eigenvalue: the points' spread across their longest direction
 };
 
 /// PCA plane of the moments; nullopt for fewer than 3 points or collinear/coincident points.

@@ -78,8 +78,9 @@ void densest_slab(const std::vector<Eigen::Vector3d>& pts, double thickness_m, s
 }
 
 // The reference of the innermost ring: the paper's fit of the points within zone_root_m (the road the vehicle
-// stands on) started from their densest slab, or the level the extrinsics give when that fails or is too steep.
-Plane root_reference(PointsView points, const GroundConfig& cfg, ZoneScratch& z) {
+// stands on) started from their densest slab; nullopt (the level the extrinsics give stands in) when that fails
+// or is too steep.
+std::optional<Plane> root_reference(PointsView points, const GroundConfig& cfg, ZoneScratch& z) {
     z.pts.clear();
     const double r_sq = cfg.zone_root_m * cfg.zone_root_m;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
@@ -88,7 +89,7 @@ Plane root_reference(PointsView points, const GroundConfig& cfg, ZoneScratch& z)
     }
     densest_slab(z.pts, cfg.pca_threshold_m, z.slab_counts, z.ground);
     const auto fit = iterate_fit(z.pts, z.ground, cfg);
-    return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? fit->plane : kLevel;
+    return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? std::optional<Plane>(fit->plane) : std::nullopt;
 }
 
 struct PatchResult {
@@ -98,8 +99,8 @@ struct PatchResult {
 
 // One patch (its points z.pts; their ground flags left in z.ground): seeds = points at most `threshold` above
 // the mean of the lowest seed points (heights above the reference, and never more than `threshold` above the
-// reference), the paper's fit from them, then the uprightness, elevation and flatness tests. A patch with too
-// few points or seeds for a fit, or whose fit fails a test, keeps the reference: its points at most
+// reference), the paper's fit from them, then the breadth, uprightness, elevation and flatness tests. A patch with
+// too few points or seeds for a fit, or whose fit fails a test, keeps the reference: its points at most
 // `threshold` above it are ground.
 PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScratch& z) {
     const auto& pts = z.pts;
@@ -127,6 +128,9 @@ PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScrat
     const double step = height_above(reference, fit->centre.x(), fit->centre.y(), fit->centre.z());
     const bool near_inner_ground = std::abs(step) <= cfg.zone_max_step_m;
     const bool flat = std::sqrt(fit->flatness_m2) <= cfg.zone_max_flatness_m;
+    // One ring's arc across a patch is nearly a line: any plane through it fits, and its tilt across the line
+    // is noise. Such a patch neither holds a plane of its own nor fails (a sparse sensor's every patch).
+    if (std::sqrt(fit->breadth_m2) < cfg.zone_min_breadth_m) return inherit(false);
     if (upright && near_inner_ground && flat) return PatchResult{fit->plane, false};
     return inherit(!upright);  // the inner ground goes on: the foot of a wall or a car is no obstacle
 }
@@ -160,11 +164,12 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     fit.count = 0;
     fit.reason.clear();
 
-    const Plane root = root_reference(points, cfg, z);
+    const std::optional<Plane> fitted_root = root_reference(points, cfg, z);
+    const Plane root = fitted_root.value_or(kLevel);
     // Each patch hands on to the next ring its own plane when accepted, else the reference it was given.
     z.handed.assign(static_cast<std::size_t>(zones.patches()), root);
     Moments all;
-    bool any_too_steep = false, any_accepted = false;
+    bool any_too_steep = false, any_accepted = fitted_root.has_value();  // a fitted root is ground of its own
     for (int ring = 0; ring < zones.rings(); ++ring) {
         for (int sector = 0; sector < zones.sectors(ring); ++sector) {
             const std::int32_t patch = zones.first(ring) + sector;
@@ -187,7 +192,7 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
             }
         }
     }
-    const auto frame_plane = any_accepted ? plane_fit(all) : std::nullopt;  // inherited ground needs a real patch
+    const auto frame_plane = any_accepted ? plane_fit(all) : std::nullopt;  // ground from the level alone is none
     if (frame_plane) {
         fit.plane = frame_plane->plane;
         fit.count = all.count;

@@ -37,12 +37,13 @@ def paper_fit(xyz: np.ndarray, start: np.ndarray, cfg: Config) -> tuple[np.ndarr
     return plane, fitted, kept
 
 
-def _flatness_and_centre(xyz: np.ndarray) -> tuple[float, np.ndarray]:
-    """RMS distance of the points from their PCA plane, and their mean."""
+def _spreads_and_centre(xyz: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """RMS distance of the points from their PCA plane (flatness), their RMS spread across their longest
+    direction within it (breadth), and their mean."""
     centre = xyz.mean(axis=0)
     offsets = xyz - centre
-    smallest = np.linalg.eigvalsh(offsets.T @ offsets / len(xyz))[0]
-    return math.sqrt(max(smallest, 0.0)), centre
+    smallest, middle, _ = np.linalg.eigvalsh(offsets.T @ offsets / len(xyz))
+    return math.sqrt(max(smallest, 0.0)), math.sqrt(max(middle, 0.0)), centre
 
 
 SLAB_SEARCH_M = 20.0  # the root's seeds lie within ±20 m of the level (a 10 m mounting plus the tilt limit)
@@ -61,21 +62,23 @@ def densest_slab(heights: np.ndarray, thickness_m: float) -> np.ndarray:
     return (index >= best) & (index < best + 4)
 
 
-def _root_reference(xyz: np.ndarray, cfg: Config) -> np.ndarray:
+def _root_reference(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, bool]:
     """The innermost ring's reference: the paper's plane of the points within zone_root_m, started from their
-    densest horizontal slab (the road, not the side of a car beside it), else the level z = 0."""
+    densest horizontal slab (the road, not the side of a car beside it), else the level z = 0; and whether it
+    is a fit (not the level)."""
     xyz = xyz[np.hypot(xyz[:, 0], xyz[:, 1]) < cfg.ground.zone_root_m]
     try:
         plane, _, _ = paper_fit(xyz, densest_slab(xyz[:, 2], cfg.ground.pca_threshold_m), cfg)
     except DegenerateFit:
-        return LEVEL
-    return plane if tilt_deg(plane) <= cfg.ground.max_tilt_deg else LEVEL
+        return LEVEL, False
+    return (plane, True) if tilt_deg(plane) <= cfg.ground.max_tilt_deg else (LEVEL, False)
 
 
 def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
     """(plane, ground mask, too steep) of one patch; the plane is None when it has no plane of its own (too few
-    points or seeds for a fit, or a fit that failed a test: then the points at most pca_threshold_m above the
-    reference are ground), and `too steep` says whether its fit failed the uprightness test."""
+    points or seeds for a fit, a fit on a line of points, or a fit that failed a test: then the points at most
+    pca_threshold_m above the reference are ground), and `too steep` says whether its fit failed the
+    uprightness test."""
     g = cfg.ground
     above_reference = height_above(xyz, reference)
     inherited = above_reference <= g.pca_threshold_m  # the inner ground goes on
@@ -88,7 +91,9 @@ def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
         plane, fitted, ground = paper_fit(xyz, seeds, cfg)
     except DegenerateFit:  # too few seeds for a plane of its own
         return None, inherited, False
-    flatness, centre = _flatness_and_centre(xyz[fitted])
+    flatness, breadth, centre = _spreads_and_centre(xyz[fitted])
+    if breadth < g.zone_min_breadth_m:  # one ring's arc: a line, no plane of its own (and no failed test)
+        return None, inherited, False
     upright = tilt_deg(plane) <= g.max_tilt_deg
     near_inner = abs(height_above(centre[None, :], reference)[0]) <= g.zone_max_step_m
     flat = flatness <= g.zone_max_flatness_m
@@ -107,9 +112,9 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
     order = np.argsort(patch, kind="stable")  # the points patch by patch, each patch's in input order
     bounds = np.searchsorted(patch[order], np.arange(first[-1] + 1))
     ground = np.zeros(len(xyz), dtype=bool)
-    root = _root_reference(xyz, cfg)
+    root, accepted = _root_reference(xyz, cfg)  # a fitted root is ground of its own, as an accepted patch
     handed_inward = None
-    too_steep = accepted = False  # the planes ring − 1 hands on, one per sector
+    too_steep = False
     for r, count in enumerate(g.zone_sectors):
         handed = []
         for s in range(count):
@@ -124,8 +129,8 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
                 ground[rows[mine]] = True
         handed_inward = handed
     try:
-        if not accepted:  # ground handed on from references alone is no ground: no patch held a plane
-            raise DegenerateFit("no patch accepted")
+        if not accepted:  # ground handed on from the level alone is no ground: no plane was fitted
+            raise DegenerateFit("no plane fitted")
         plane = fit_plane(xyz[ground])
     except DegenerateFit:
         return np.zeros(len(xyz), dtype=bool), None, too_steep

@@ -43,6 +43,7 @@ struct GroundConfig {
     int zone_seed_points = 20;        ///< the mean height of this many lowest points starts the fit
     double zone_max_step_m = 0.3;     ///< elevation test: ground centroid off the inner ground by at most this
     double zone_max_flatness_m = 0.08; ///< flatness test: RMS distance of the fitted points from their plane
+    double zone_min_breadth_m = 0.1;   ///< breadth test: the fitted points' RMS spread across their longest direction
 };
 
 struct PathConfig {
