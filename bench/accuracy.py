@@ -36,6 +36,7 @@ import sys
 import time
 from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
+from typing import Optional
 
 import numpy as np
 
@@ -116,12 +117,21 @@ def suite(quick: bool) -> list[Scenario]:
 
 
 # ------------------------------------------------------------------------------------------------ one run
-def detrended_rms(s: np.ndarray, error: np.ndarray) -> float:
+def detrended_rms(s: np.ndarray, error: np.ndarray, band_m: Optional[float] = None) -> float:
     """RMS of a profile error after removing its least-squares line: profiles are heights above the fitted
-    ground plane, which takes up the road's long waves over the region of interest as an offset and tilt."""
+    ground plane, which takes up the road's long waves over the region of interest as an offset and tilt. With
+    band_m, a line per band of band_m along s: the local levelling's bands (docs/method.md §3), each of whose
+    planes takes up its own offset and grade (waves longer than ~1.5 band_m)."""
     if len(error) < 3:
         return math.nan
-    residual = error - np.polyval(np.polyfit(s, error, 1), s)
+    band = np.floor(s / band_m) if band_m else np.zeros(len(s))
+    residual = np.array(error, dtype=float)
+    for k in np.unique(band):
+        inside = band == k
+        if inside.sum() >= 3:
+            residual[inside] -= np.polyval(np.polyfit(s[inside], error[inside], 1), s[inside])
+        else:
+            residual[inside] -= np.mean(error[inside])
     return float(np.sqrt(np.mean(residual**2)))
 
 
@@ -162,8 +172,14 @@ def ground_counts(frame: sim.Frame, mask: np.ndarray) -> np.ndarray:
                      np.count_nonzero(truth & scored)])
 
 
-def measure(res, frame: sim.Frame, truth: dict, scenario: Scenario) -> dict:
-    """One frame's result against the truth."""
+def levelling_band_m(cfg) -> Optional[float]:
+    """The band length of the local levelling, None when one plane levels the frame."""
+    return cfg.profile.level_band_m if cfg.profile.level_local else None
+
+
+def measure(res, frame: sim.Frame, truth: dict, scenario: Scenario, band_m: Optional[float]) -> dict:
+    """One frame's result against the truth; profile errors detrended per levelling band of band_m (None: one
+    plane levels the frame)."""
     record = {"gd_n0": res.vehicle.gd_n0, "class": res.vehicle.iso_class, "confidence": res.vehicle.confidence,
               "band": res.vehicle.band, "ms": res.timing_ms["total"],
               "ground": ground_counts(frame, np.asarray(res.ground_mask)), "rms": [], "rms_all": [],
@@ -171,8 +187,8 @@ def measure(res, frame: sim.Frame, truth: dict, scenario: Scenario) -> dict:
     for wheel in WHEELS:
         profile, truth_z = getattr(res, wheel), truth[wheel]
         s, z, count = np.asarray(profile.s), np.asarray(profile.z), np.asarray(profile.count)
-        record["rms"].append(detrended_rms(s[count > 0], (z - truth_z)[count > 0]))
-        record["rms_all"].append(detrended_rms(s[np.isfinite(z)], (z - truth_z)[np.isfinite(z)]))
+        record["rms"].append(detrended_rms(s[count > 0], (z - truth_z)[count > 0], band_m))
+        record["rms_all"].append(detrended_rms(s[np.isfinite(z)], (z - truth_z)[np.isfinite(z)], band_m))
         record["ranges"].append(range_stats(profile, truth_z))
         record["coverage"].append(float(np.mean(count[s < COVERAGE_M] > 0)))
         if scenario.bump_height:
@@ -197,7 +213,8 @@ def run(scenario: Scenario) -> dict:
     for method in FUSION:
         est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method}))
         results = [est.process(f.points, SPEED_MPS, scenario.yaw_rate, timestamp=f.time_s) for f in frames]
-        out[method] = [measure(res, f, truth, scenario) for res, f, truth in zip(results, frames, truths)]
+        out[method] = [measure(res, f, truth, scenario, levelling_band_m(est.config))
+                       for res, f, truth in zip(results, frames, truths)]
         out[method][0]["repeatability"] = [frame_repeatability(getattr(results[0], w), getattr(results[-1], w),
                                                                travel[w]) for w in WHEELS]
         if second:

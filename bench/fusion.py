@@ -36,7 +36,7 @@ from roadpreview import sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from accuracy import BUMP_HEIGHTS_M, BUMP_X_M, CURVE_YAW_RATE_RPS, Scenario, bump_height, class_index, \
-    detrended_rms, md_table, run_in_pool  # noqa: E402
+    detrended_rms, levelling_band_m, md_table, run_in_pool  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 OUSTER = REPO / "tests" / "data" / "ouster"
@@ -84,7 +84,7 @@ def coverage(res, lo: float, hi: float) -> float:
     return float(np.mean(np.concatenate(parts) > 0))
 
 
-def score(res, truth: dict, scenario: Scenario, pose) -> dict:
+def score(res, truth: dict, scenario: Scenario, pose, band_m) -> dict:
     out = {"near": coverage(res, 0.0, NEAR_M), "far": coverage(res, NEAR_M, FAR_M), "rms": [], "bump": [],
            "class": res.vehicle.iso_class, "ms": res.timing_ms["total"],
            "fusion_ms": res.fusion["time_ms"] if res.fusion else 0.0}
@@ -92,7 +92,7 @@ def score(res, truth: dict, scenario: Scenario, pose) -> dict:
         p = getattr(res, wheel)
         s, z, count = np.asarray(p.s), np.asarray(p.z), np.asarray(p.count)
         backed = (count > 0) & np.isfinite(z) & (s >= 0)
-        out["rms"].append(detrended_rms(s[backed], (z - truth[wheel][: len(z)])[backed]))
+        out["rms"].append(detrended_rms(s[backed], (z - truth[wheel][: len(z)])[backed], band_m))
         if scenario.bump_height:
             out["bump"].append(bump_height(s, z, BUMP_X_M - pose.x_m) - scenario.bump_height)
     return out
@@ -109,7 +109,7 @@ def run(seq: Sequence) -> dict:
         est = rp.Estimator(rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": method, "alpha": ALPHA}))
         for f in frames:
             res = est.process(f.points, speed, sc.yaw_rate, timestamp=f.time_s)
-        out[method] = score(res, truth, sc, frames[-1].pose)
+        out[method] = score(res, truth, sc, frames[-1].pose, levelling_band_m(est.config))
     return out
 
 

@@ -12,22 +12,46 @@ from roadpreview.reference.profile import local_ground_heights
 LEVEL = np.array([0.0, 0.0, 1.0, 0.0])
 
 
+X_M = np.arange(10.0, 30.0, 0.005)  # two bands of 10 m: [10, 20) and [20, 30)
+PHASES = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+
+
 def left_after_levelling(wavelength_m, band_m):
-    """Mean fraction of a sine's power (over 8 phases) left after levelling, in the bands [10, 20) and [20, 30) m."""
-    x = np.arange(10.0, 30.0, 0.005)
+    """Mean fraction of a sine's power (over 8 phases) left after the reference's levelling, on X_M."""
     cfg = Config(profile={"level_band_m": band_m})
-    amplitude = 0.01  # m: a road, flatter than it is wide, so that PCA's normal is the vertical
+    amplitude = 0.001  # m: a road, flatter than it is wide, so that PCA's normal is the vertical
     fractions = []
-    for phase in np.linspace(0, 2 * np.pi, 8, endpoint=False):
-        z = amplitude * np.sin(2 * np.pi * x / wavelength_m + phase)
-        xyz = np.vstack([np.column_stack([x, np.full_like(x, y), z]) for y in (-1.0, 0.0, 1.0)])
+    for phase in PHASES:
+        z = amplitude * np.sin(2 * np.pi * X_M / wavelength_m + phase)
+        # Rows 0.1 m apart: their range r = √(x² + y²), which the bands and the blend go by, is x within 0.3 mm.
+        xyz = np.vstack([np.column_stack([X_M, np.full_like(X_M, y), z]) for y in (-0.1, 0.0, 0.1)])
         levelled = local_ground_heights(xyz, LEVEL, cfg)
         fractions.append(np.mean(levelled**2) / (amplitude**2 / 2))
     return float(np.mean(fractions))
 
 
+def blended_levelling(x, z, band_m):
+    """method.md §3 on a profile along x: each band's least-squares line, and a point t bands from its band's
+    centre taking |t| of the line of the neighbour band it lies towards, where that band has samples."""
+    band = np.floor(x / band_m)
+    t = x / band_m - band - 0.5
+    lines = {k: np.polyfit(x[band == k], z[band == k], 1) for k in np.unique(band)}
+    removed = np.array([np.polyval(lines[k], xi) for k, xi in zip(band, x)])
+    neighbour = band + np.where(t < 0, -1, 1)
+    for j in lines:
+        towards = neighbour == j
+        removed[towards] = (1 - np.abs(t[towards])) * removed[towards] + np.abs(t[towards]) * np.polyval(lines[j], x[towards])
+    return z - removed
+
+
+def transfer_blended(wavelength_m, band_m, x, scored):
+    """Mean fraction of a sine's power (16 phases) that blended_levelling leaves on the samples `scored`."""
+    return float(np.mean([np.mean(blended_levelling(x, np.sin(2 * np.pi * x / wavelength_m + phase), band_m)[scored]**2)
+                          / 0.5 for phase in np.linspace(0, 2 * np.pi, 16, endpoint=False)]))
+
+
 def transfer(wavelength_m, band_m):
-    """method.md §3: T = 1 − sinc²(u) − 3·j1(u)², u = π·band/λ."""
+    """method.md §3, one band's plane: T = 1 − sinc²(u) − 3·j1(u)², u = π·band/λ."""
     u = math.pi * band_m / wavelength_m
     sinc, j1 = math.sin(u) / u, math.sin(u) / u**2 - math.cos(u) / u
     return 1 - sinc**2 - 3 * j1**2
@@ -35,12 +59,35 @@ def transfer(wavelength_m, band_m):
 
 @pytest.mark.parametrize("wavelength_m", [40.0, 20.0, 10.0, 5.0, 2.5, 1.0])
 def test_levelling_keeps_the_fraction_of_a_long_wave_method_md_states(wavelength_m):
-    assert left_after_levelling(wavelength_m, 10.0) == pytest.approx(transfer(wavelength_m, 10.0), abs=0.005)
+    expected = transfer_blended(wavelength_m, 10.0, X_M, np.ones(len(X_M), dtype=bool))
+    assert left_after_levelling(wavelength_m, 10.0) == pytest.approx(expected, abs=0.005)
 
 
 def test_the_stated_numbers():
-    """The table in method.md §3 (band 10 m)."""
+    """The table in method.md §3 (band 10 m): one band's plane, and blended on bands with both neighbours."""
     assert [round(transfer(lam, 10.0), 2) for lam in (20.0, 10.0, 5.0, 2.5)] == [0.10, 0.70, 0.92, 0.98]
+    x = np.arange(0.0, 100.0, 0.005)
+    inner = (x >= 20.0) & (x < 80.0)
+    blended = [transfer_blended(lam, 10.0, x, inner) for lam in (40.0, 20.0, 15.0, 10.0, 7.5, 5.0)]
+    assert blended == pytest.approx([0.015, 0.15, 0.37, 1.00, 1.04, 1.00], abs=0.005)
+
+
+def test_blending_leaves_no_step_where_bands_meet():
+    """Level to 15 m, then rising 3 %: the 10–20 m band's plane leans between the two, the 20–30 m band's lies on
+    the grade, and alone they would meet 20 m ahead with a step of centimetres. Blended, the heights meet there
+    (method.md §3)."""
+    x, y = np.meshgrid(np.arange(11.0, 29.0, 0.05), np.arange(-1.0, 1.01, 0.5))
+    x, y = x.ravel(), y.ravel()
+    xyz = np.column_stack([x, y, 0.03 * np.maximum(x - 15.0, 0.0)])
+    z = local_ground_heights(xyz, LEVEL, Config())
+    on_axis = y == 0.0
+    before = on_axis & (x == x[on_axis & (x < 20.0)].max())  # the last sample of the 10–20 m band
+    after = on_axis & (x == x[on_axis & (x >= 20.0)].min())  # and the first of the next, 5 cm on
+    assert abs(z[after].item() - z[before].item()) < 0.002
+    # The step each band's plane alone leaves (their least-squares lines along the axis) at 20 m:
+    lines = [np.polyfit(x[on_axis & (x >= lo) & (x < lo + 10.0)], xyz[on_axis & (x >= lo) & (x < lo + 10.0), 2], 1)
+             for lo in (10.0, 20.0)]
+    assert abs(np.polyval(lines[0], 20.0) - np.polyval(lines[1], 20.0)) > 0.02
 
 
 def grade_frame(level_local):

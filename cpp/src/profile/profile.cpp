@@ -169,6 +169,23 @@ void place_short_bands(PointsView points, const Plane& frame, ProfileScratch& s)
     }
 }
 
+// A point's height above the band planes, blended between band centres: t bands from its own band's centre
+// (|t| ≤ ½), it takes |t| of its height above the neighbour band it lies towards when that band has corridor
+// points (a plane of its own) — so the levelled heights are continuous where two bands meet.
+double blended_height(PointsView points, Eigen::Index i, double band_m, const ProfileScratch& s) {
+    const auto at = static_cast<std::size_t>(i);
+    const auto k = static_cast<std::size_t>(s.band[at]);
+    const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+    const double own = height_above(s.plane[k], x, y, z);
+    const double t = s.range[at] / band_m - static_cast<double>(k) - 0.5;
+    const bool inward = t < 0.0;
+    if ((inward && k == 0) || (!inward && k + 1 >= s.fitted.size())) return own;
+    const std::size_t j = inward ? k - 1 : k + 1;
+    if (s.band_start[j] == s.band_start[j + 1]) return own;  // no corridor points: the frame plane stands in
+    const double w = std::abs(t);
+    return (1.0 - w) * own + w * height_above(s.plane[j], x, y, z);
+}
+
 }  // namespace
 
 Levelling levelling_for(const Plane* plane) {
@@ -193,12 +210,8 @@ void local_ground_heights(PointsView points, const std::vector<std::uint8_t>& ma
     fit_band_planes(points, frame, band_m, s);
     place_short_bands(points, frame, s);
     z.assign(mask.size(), kNaN);
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto k = s.band[static_cast<std::size_t>(i)];
-        if (k >= 0)
-            z[static_cast<std::size_t>(i)] =
-                height_above(s.plane[static_cast<std::size_t>(k)], points(i, 0), points(i, 1), points(i, 2));
-    }
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (s.band[static_cast<std::size_t>(i)] >= 0) z[static_cast<std::size_t>(i)] = blended_height(points, i, band_m, s);
 }
 
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,

@@ -177,10 +177,19 @@ def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = Non
     for k, corridor in short.items():
         normal = planes[min(fitted, key=lambda j: (abs(j - k), j))][:3] if fitted else frame[:3]
         planes[k] = np.append(normal, -np.median(corridor @ normal))
+    # Blended between band centres: a point t bands from its band's centre (|t| ≤ ½) takes |t| of its height above
+    # the neighbour band it lies towards, when that band has a plane of its own — continuous where bands meet.
+    position = np.hypot(xyz[:, 0], xyz[:, 1]) / cfg.profile.level_band_m - band - 0.5
+    neighbour = band + np.where(position < 0, -1, 1)
     z = np.empty(len(xyz))
     for k in np.unique(band):
         mine = band == k
         z[mine] = height_above(xyz[mine], planes.get(k, frame))
+        for j in (k - 1, k + 1):
+            towards = mine & (neighbour == j)
+            if j in planes and towards.any():
+                w = np.abs(position[towards])
+                z[towards] = (1 - w) * z[towards] + w * height_above(xyz[towards], planes[j])
     return z
 
 
