@@ -184,3 +184,22 @@ def test_kitti_beams_found_by_elevation(tmp_path):
     assert np.mean(beams[ahead] >= 0) > 0.9
     moved = np.linalg.norm(frame.points[:, :3] - raw[:, :3], axis=1)
     assert np.all(moved[beams < 0] == 0) and np.any(moved[beams >= 0] > 0)
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_the_calibration_compares_the_one_plane_ground_whatever_the_ground_method():
+    """method.md §8: the zone ground also takes a KITTI street's verges (low vegetation, pavements), which no two
+    beams see at one height; the calibration's ground is the paper's one plane under either setting."""
+    frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
+    zones, pca = (rp.Config(sensor_height=1.73, ground={"method": m}) for m in ("zones", "pca"))
+    assert np.count_nonzero(rp.reference.fit_ground(_base(frames[0]), zones)[0]
+                            != rp.reference.fit_ground(_base(frames[0]), pca)[0]) > 1000  # the masks differ
+    by_zones, by_pca = (rp.calibrate_beams(frames, poses=KITTI_POSES, config=c) for c in (zones, pca))
+    np.testing.assert_array_equal(by_zones.elevation_offset_deg, by_pca.elevation_offset_deg)
+    np.testing.assert_array_equal(cal.ground_mask_of(frames[0], zones), cal.ground_mask_of(frames[0], pca))
+
+
+def _base(points):
+    """A KITTI frame (sensor 1.73 m up, level) in the base frame, finite rows."""
+    xyz = points[:, :3].astype(np.float64)
+    return xyz[np.isfinite(xyz).all(axis=1)] + [0.0, 0.0, 1.73]

@@ -5,6 +5,7 @@ beams' and frames' parameters are the weighted least-squares solution with weak 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -77,11 +78,13 @@ def point_observations(points, beams, ground_mask, pose, cfg: Config):
 
 
 def ground_mask_of(points, cfg: Config) -> np.ndarray:
-    """The reference ground of one frame, as a mask over its rows."""
+    """The reference ground of one frame, as a mask over its rows: the paper's one plane (method "pca") whatever
+    ground.method says — the smooth road every beam crosses, not the verges a zone ground follows (method.md §8)."""
     from .frames import to_base_frame
     base, finite = to_base_frame(points, cfg)
     mask = np.zeros(len(finite), bool)
-    ground, _plane = fit_ground(base, cfg)
+    one_plane = dataclasses.replace(cfg, ground=dataclasses.replace(cfg.ground, method="pca"))
+    ground, _plane = fit_ground(base, one_plane)
     mask[np.flatnonzero(finite)[ground]] = True
     return mask
 
