@@ -78,6 +78,11 @@ TEST(Config, BadFilesAreRejectedWithTheFieldNamed) {
     expect_rejected(R"({"obstacles": {"cluster_tolerance_m": 0}})", "obstacles.cluster_tolerance_m");
     expect_rejected(R"({"obstacles": {"voxel_m": 0.001}})", "obstacles.voxel_m");
     expect_rejected(R"({"ground": {"zone_min_breadth_m": -0.1}})", "ground.zone_min_breadth_m");
+    // Integers beyond their type: nlohmann would cast them unchecked (undefined behaviour).
+    expect_rejected(R"({"ground": {"pca_iterations": 1e83}})", "ground.pca_iterations must be a whole number from");
+    expect_rejected(R"({"ground": {"ransac_seed": -1}})", "ground.ransac_seed must be a whole number from 0 to");
+    expect_rejected(R"({"ground": {"zone_sectors": [16, 1e83]}})", "ground.zone_sectors must hold whole numbers from");
+    expect_rejected(R"({"ground": {"zone_sectors": [16, 2.5]}})", "ground.zone_sectors must hold whole numbers from");
     expect_rejected(R"({"obstacles": {"min_cluster_points": 10, "max_cluster_points": 5}})", "obstacles.max_cluster_points");
     expect_rejected(R"({"obstacles": {"safety_margin_m": -0.1}})", "obstacles.safety_margin_m");
     expect_rejected(R"({"obstacles": {"tolerance": 0.5}})", "obstacles.tolerance");

@@ -179,6 +179,26 @@ TEST(Ouster, BadMetadataNamesTheFileAndTheField) {
     EXPECT_NE(error_of([&] { rp::parse_ouster_metadata("{not json", "m.json"); }).find("m.json"), std::string::npos);
 }
 
+TEST(Ouster, IntegerFieldsOutOfTheirTypeAreErrorsNotUndefinedCasts) {
+    // Fuzzing found 1.9e83 in pixel_shift_by_row: nlohmann casts it to int unchecked (UBSan: not representable).
+    for (const auto& [field, value] : std::vector<std::pair<std::string, json>>{
+             {"pixel_shift_by_row", json::parse("1.8888888888888888e83")},
+             {"pixel_shift_by_row", json(4294967296LL)},
+             {"columns_per_packet", json(1e20)},
+             {"columns_per_packet", json(16.5)},
+             {"udp_port_lidar", json(-1e30)}}) {
+        json j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+        if (field == "pixel_shift_by_row")
+            j["data_format"][field][3] = value;
+        else if (field == "columns_per_packet")
+            j["data_format"][field] = value;
+        else
+            j[field] = value;
+        const std::string err = error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); });
+        EXPECT_NE(err.find("m.json: " + field + " must hold whole numbers"), std::string::npos) << field << ": " << err;
+    }
+}
+
 namespace {
 
 // The OS1-128 recording decoded with an altered copy of its metadata.

@@ -2,9 +2,12 @@
 #include "roadpreview/core/config.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 // Type errors then name the offending field (/track_width); the setting is part of nlohmann's ABI tag.
 #define JSON_DIAGNOSTICS 1
@@ -108,10 +111,30 @@ namespace {
 
 // What a field of the defaults' JSON type needs, or empty when `value` has it. Null stands for "not set" in
 // the optional fields only (sensor_height, extrinsics).
+// Integer fields take whole numbers within their type (int, or std::uint32_t where the defaults hold an unsigned):
+// nlohmann casts a number to an integer unchecked, undefined for 1e83 into an int.
+std::pair<double, double> integer_range(const json& known) {
+    if (known.is_number_unsigned()) return {0.0, std::numeric_limits<std::uint32_t>::max()};
+    return {std::numeric_limits<int>::min(), std::numeric_limits<int>::max()};
+}
+
+bool fits_integer(const json& value, const json& known) {
+    const auto [lo, hi] = integer_range(known);
+    const double v = value.is_number() ? value.get<double>() : std::nan("");
+    return v == std::floor(v) && v >= lo && v <= hi;
+}
+
+std::string range_text(const json& known) {
+    const auto [lo, hi] = integer_range(known);
+    return "from " + std::to_string(static_cast<long long>(lo)) + " to " + std::to_string(static_cast<long long>(hi));
+}
+
 std::string type_problem(const json& value, const json& known, bool optional) {
     if (value.is_null()) return optional ? "" : "must not be null";
-    if (known.is_number_integer() && !(value.is_number() && value.get<double>() == std::floor(value.get<double>())))
-        return "must be a whole number";
+    if (known.is_number_integer()) return fits_integer(value, known) ? "" : "must be a whole number " + range_text(known);
+    if (known.is_array() && !known.empty() && known[0].is_number_integer() && value.is_array())
+        for (const json& v : value)
+            if (!fits_integer(v, known[0])) return "must hold whole numbers " + range_text(known[0]);
     if ((known.is_number() || known.is_null()) && !value.is_number()) return "must be a number";
     if (known.is_boolean() && !value.is_boolean()) return "must be true or false";
     if (known.is_string() && !value.is_string()) return "must be a string";

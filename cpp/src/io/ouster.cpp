@@ -4,9 +4,12 @@
 #include "roadpreview/io/ouster.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -78,10 +81,45 @@ const json* find_field(const json& j, const char* section, const char* flat_sect
     return j.contains(key) ? &j[key] : nullptr;
 }
 
+// An integer field's value out of its type's reach (parse_ouster_metadata adds the file's name).
+struct FieldError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// nlohmann casts a JSON number to an integer unchecked: undefined for 1.9e83 into an int (fuzzing found it in
+// pixel_shift_by_row). Integer fields must hold whole numbers within their type.
+template <typename I>
+bool fits(const json& v) {
+    constexpr auto lo = static_cast<std::int64_t>(std::numeric_limits<I>::min());
+    constexpr auto hi = static_cast<std::uint64_t>(std::numeric_limits<I>::max());
+    if (v.is_number_unsigned()) return v.get<std::uint64_t>() <= hi;
+    if (!v.is_number_integer()) return false;  // a float, whole or not
+    const auto x = v.get<std::int64_t>();
+    return x < 0 ? x >= lo : static_cast<std::uint64_t>(x) <= hi;
+}
+
+template <typename I>
+void check_integer(const json& v, const char* key) {
+    if (v.is_number() && !fits<I>(v))  // not a number at all: nlohmann's type error says so
+        throw FieldError(std::string(key) + " must hold whole numbers from " + std::to_string(std::numeric_limits<I>::min()) +
+                         " to " + std::to_string(std::numeric_limits<I>::max()) + ", got " + v.dump());
+}
+
+template <typename T>
+T checked_get(const json& f, const char* key) {
+    if constexpr (std::is_integral_v<T>) {
+        check_integer<T>(f, key);
+    } else if constexpr (std::is_same_v<T, std::vector<int>>) {
+        if (f.is_array())
+            for (const json& v : f) check_integer<int>(v, key);
+    }
+    return f.get<T>();
+}
+
 template <typename T>
 T get_or(const json& j, const char* section, const char* flat_section, const char* key, T fallback) {
     const json* f = find_field(j, section, flat_section, key);
-    return f && !f->is_null() ? f->get<T>() : fallback;
+    return f && !f->is_null() ? checked_get<T>(*f, key) : fallback;
 }
 
 template <typename T>
@@ -89,7 +127,7 @@ T require_field(const json& j, const char* section, const char* flat_section, co
                 const std::string& source) {
     const json* f = find_field(j, section, flat_section, key);
     if (!f || f->is_null()) throw std::runtime_error(source + ": Ouster metadata has no " + key);
-    return f->get<T>();
+    return checked_get<T>(*f, key);
 }
 
 Mat4 mat4_or(const json& j, const char* section, const char* key, const Mat4& fallback, const std::string& source) {
@@ -165,7 +203,8 @@ OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::st
         // Nested (firmware 2.x/3.x) sections first, then the flat layout's data_format / top level.
         m.prod_line = get_or<std::string>(j, "sensor_info", nullptr, "prod_line", "");
         const json* sn = find_field(j, "sensor_info", nullptr, "prod_sn");
-        if (sn && !sn->is_null()) m.prod_sn = sn->is_string() ? sn->get<std::string>() : std::to_string(sn->get<std::uint64_t>());
+        if (sn && !sn->is_null())
+            m.prod_sn = sn->is_string() ? sn->get<std::string>() : std::to_string(checked_get<std::uint64_t>(*sn, "prod_sn"));
         m.init_id = get_or<std::uint32_t>(j, "sensor_info", nullptr, "initialization_id", 0);
         m.lidar_mode = require_field<std::string>(j, "config_params", nullptr, "lidar_mode", source);
         const auto [mode_columns, rate] = parse_lidar_mode(m.lidar_mode, source);
@@ -193,6 +232,8 @@ OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::st
         m.udp_port_imu = get_or<int>(j, "config_params", nullptr, "udp_port_imu", 0);
     } catch (const json::exception& e) {
         throw std::runtime_error(source + ": not valid Ouster metadata (" + e.what() + ")");
+    } catch (const FieldError& e) {
+        throw std::runtime_error(source + ": " + e.what());
     }
     validate(m);
     return m;

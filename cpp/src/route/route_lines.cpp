@@ -2,6 +2,7 @@
 // A run's output lines back into what RouteBuilder::add reads, so a drive can be stitched after the fact from
 // its JSON lines (roadpreview batch reads them from its Parquet parts).
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -50,7 +51,8 @@ Profile profile_from(const json& p, const std::string& where) {
     out.z = numbers(member(p, "z", where), where + " z");
     out.spread = numbers(member(p, "spread", where), where + " spread");
     for (const json& c : member(p, "count", where)) {
-        if (!c.is_number_integer()) fail(where, "count must hold integers, got " + c.dump());
+        if (!c.is_number_integer() || c.get<std::int64_t>() < 0 || c.get<std::int64_t>() > std::numeric_limits<std::int32_t>::max())
+            fail(where, "count must hold whole numbers from 0 to 2147483647, got " + c.dump());
         out.count.push_back(c.get<std::int32_t>());
     }
     if (out.z.size() != out.s.size() || out.count.size() != out.s.size() || out.spread.size() != out.s.size())
