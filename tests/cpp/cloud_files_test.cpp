@@ -83,6 +83,12 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
                  "the bytes after the DATA line begin like a 'COLUMNS' line");
     expect_error(written("points.pcd", header + "#\nPOINTS 9\n" + std::string(12, '\0')), "begin like a 'POINTS' line");
     EXPECT_EQ(rp::read_frame(written("hash.pcd", header + "#\n" + std::string(22, '\0'))).points.rows(), 2);
+    // A second FIELDS line: PCL adds its fields to the first's and read past them (an ASan SEGV; found by fuzzing).
+    const std::string twice = header.substr(0, fields) + "FIELDS a b c d e\n" + header.substr(fields);
+    expect_error(written("twice.pcd", twice + std::string(24, '\0')), "a second FIELDS line");
+    expect_error(written("heights.pcd", header.substr(0, fields) + "HEIGHT 1\n" + header.substr(fields) +
+                                            std::string(24, '\0')),
+                 "a second HEIGHT line");
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {

@@ -77,6 +77,7 @@ PcdHeader scan_header(const std::string& path) {
     std::vector<std::string> types;
     bool has_types = false;
     std::size_t fields = 0;
+    std::set<std::string> seen;
     for (std::string line; std::getline(in, line);) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
         const auto w = header_words(line);
@@ -85,6 +86,8 @@ PcdHeader scan_header(const std::string& path) {
             fail_file(path, "PCD header: line '" + w[0] + " …' holds a control character (the header is text)");
         if (!is_header_keyword(w[0]))
             fail_file(path, "PCD header: unknown line '" + line.substr(0, 80) + "' before DATA");
+        // PCL adds a second FIELDS line's fields to the first's and reads past its offsets (found by fuzzing).
+        if (!seen.insert(w[0]).second) fail_file(path, "PCD header: a second " + w[0] + " line (each keyword once)");
         if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
         if (w[0] == "SIZE") read_sizes(path, w, sizes);
         if (w[0] == "COUNT") read_sizes(path, w, counts);
