@@ -238,7 +238,7 @@ def repeated_pass(scenario: Scenario, scene: sim.Scene, lidar: sim.Lidar) -> lis
 
 def ring_repeatability(scenario: Scenario, scene: sim.Scene, lidar: sim.Lidar, frames: list, travel: dict) -> list:
     """frame_repeatability of what a noise-free sensor with this beam table gives the first and last frame
-    (sim.ring_profiles: the exact relief where the rings cross the wheel paths): the bound the ring spacing sets."""
+    (sim.ring_profiles: the exact relief where the rings cross the wheel paths): what the ring spacing allows."""
     first, last = (sim.ring_profiles(scene, lidar, f.pose, SPEED_MPS, scenario.yaw_rate) for f in (frames[0], frames[-1]))
     return [frame_repeatability(SimpleNamespace(s=first["s"], z=first[w]), SimpleNamespace(s=last["s"], z=last[w]),
                                 travel[w]) for w in WHEELS]
@@ -433,7 +433,7 @@ def print_repeatability(results: list[dict]) -> None:
                     rings_compared = [ring for x, ring in pairs if x.correlation is not None]
                     rows.append([sensor, group, method, correlations([x for x, _ in pairs]),
                                  median_rms_cm([x for x, _ in pairs]), correlations([ring for _, ring in pairs]),
-                                 correlations(rings_compared) if rings_compared else "–"])
+                                 correlations(rings_compared)])
     print(f"## Repeatability: {NEAR_M[0]:g}–{NEAR_M[1]:g} m ahead in the last frame vs the first frame's view\n")
     print("Correlation of the IRI-filtered profiles: median (min), wheels with a common stretch of 5 m / wheels. "
           "'Perfect rings': the same for a noise-free sensor with this beam table (sim.ring_profiles: the exact "
@@ -445,7 +445,7 @@ def print_repeatability(results: list[dict]) -> None:
     if not passes:
         return
     print(f"## Repeatability of repeated passes: {NEAR_M[0]:g}–{NEAR_M[1]:g} m ahead in the last frame of two "
-          f"drives over the same road\n")
+          "drives over the same road\n")
     print(f"The second drive's frames lie {SPEED_MPS * SECOND_PASS_S:g} m further along the path, its noise drawn "
           "anew (profiler certification's repeated runs, AASHTO R 56). Correlation left / right.\n")
     rows = [[r["scenario"].sensor, r["scenario"].name] + [wheel_correlations(r[m][0]["passes"]) for m in FUSION]
