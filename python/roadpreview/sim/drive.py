@@ -124,8 +124,7 @@ def ring_profiles(scene: Scene, lidar: Lidar, pose: Pose, speed_mps: float, yaw_
     """What a noise-free LiDAR with this beam table could know of the relief under each wheel: the exact relief
     where each ring crosses the wheel path, linearly interpolated in between (as the profile's gap filling
     does), at the bin centres truth_profiles uses; NaN before the nearest and after the farthest crossing.
-    {"s": s, "left": z, "right": z}. The bound of what any processing of one frame can resolve: between rings
-    no return exists. Rings are where the beams (elevation − pitch, from the mounting height) meet the mean plane;
+    {"s": s, "left": z, "right": z}. A model of what one frame can resolve: between rings no return exists. Rings are where the beams (elevation − pitch, from the mounting height) meet the mean plane;
     the relief's few centimetres move them by millimetres at most; the tire's width is not averaged over."""
     s = (np.arange(math.ceil(preview_length_m / ds_m - 1e-9)) + 0.5) * ds_m
     downward = np.radians(np.asarray(lidar.elevations_deg, float) - lidar.pitch_deg)
