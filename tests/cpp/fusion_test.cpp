@@ -393,17 +393,61 @@ TEST(Fusion, CellsFarOffTheAlignmentPlaneLeaveItAndKeepTheirDisagreement) {
 
 TEST(Fusion, TheFootOfAWallDoesNotInflateTheNoiseOfSinglePoints) {
     // One frame on an empty map: cells of four points spread 1 cm, a strip of cells spread 10 cm (a wall's
-    // foot), and single points. A single point's variance is the pooled variance of the road cells (~1e-4 m²),
-    // not of the strip.
+    // foot), and a single point in the same 5 m band of range. A single point's variance is the pooled variance
+    // of the road cells (~1e-4 m²), not of the strip.
     std::mt19937 rng(7);
     std::normal_distribution<double> road(0.0, 0.01), foot(0.0, 0.1);
     std::vector<Eigen::Vector3d> pts;
     for (double x = 1.025; x < 10.0; x += 0.05)
         for (double y = -1.975; y < 2.0; y += 0.05) pts.emplace_back(x, y, y > 1.5 ? foot(rng) : road(rng));
-    pts.emplace_back(12.05, 0.05, 0.0);  // alone in its cell
+    pts.emplace_back(7.05, -2.45, 0.0);  // alone in its cell
     scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
     for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
     rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
     fuse_at(fusion, cloud, {}, 0.0);
-    EXPECT_NEAR(fusion.map().at(12.05, 0.05)->variance, 1e-4, 1e-5);
+    EXPECT_NEAR(fusion.map().at(7.05, -2.45)->variance, 1e-4, 1e-5);
+}
+
+// A frame of cells of two points: near (x < 10 m) spread 1 cm, far (20–25 m) spread 2 mm, as range noise along
+// rays leaning ever flatter gives them; plus single points near and far.
+scenes::Cloud near_and_far_cells() {
+    std::mt19937 rng(11);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = 2.05; x < 25.0; x += 0.1) {
+        if (x > 10.0 && x < 20.0) continue;
+        const double sigma = x < 10.0 ? 0.01 : 0.002;
+        for (double y = -0.95; y < 1.0; y += 0.1)
+            for (double dy : {-0.02, 0.02}) pts.emplace_back(x, y + dy, sigma * gauss(rng));
+    }
+    pts.emplace_back(5.05, 1.55, 0.0);   // alone in their cells
+    pts.emplace_back(22.05, 1.55, 0.0);
+    pts.emplace_back(15.05, 1.55, 0.0);  // in a band with no cell of two points: the nearest band below lends
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    return cloud;
+}
+
+TEST(Fusion, ASinglePointTakesThePooledVarianceOfItsOwnRangeBand) {
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, near_and_far_cells(), {}, 0.0);
+    // Pooled over its 5 m band: (1 cm)² near, (2 mm)² far. One pool over the frame would give the far point
+    // ~0.5e-4 m², 12× its noise.
+    EXPECT_NEAR(fusion.map().at(5.05, 1.55)->variance, 1e-4, 2e-5);
+    EXPECT_NEAR(fusion.map().at(22.05, 1.55)->variance, 4e-6, 1e-6);
+    EXPECT_NEAR(fusion.map().at(15.05, 1.55)->variance, 1e-4, 2e-5);
+}
+
+TEST(Fusion, TwoPointsThatAgreeWeighNoMoreThanTheirBandAllows) {
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = 2.05; x < 5.0; x += 0.1)
+        for (double y = -0.95; y < 1.0; y += 0.1) pts.emplace_back(x, y - 0.02, 0.01), pts.emplace_back(x, y + 0.02, -0.01);
+    pts.emplace_back(3.03, 1.55, 0.004), pts.emplace_back(3.07, 1.55, 0.004);  // spread 0
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, cloud, {}, 0.0);
+    // The band's point variance is 2e-4 m² (pairs ±1 cm): the agreeing pair's median gets half of it, not 1e-12.
+    EXPECT_NEAR(fusion.map().at(3.05, 1.55)->variance, 1e-4, 1e-6);
+    EXPECT_NEAR(fusion.map().at(3.05, 0.05)->variance, 1e-4, 1e-6);
 }

@@ -25,7 +25,6 @@ constexpr double kMinVariance = 1e-12;              // m²; keeps a noise-free c
 constexpr std::size_t kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
 constexpr double kMadToSigma = 1.4826;        // σ of a Gaussian from its median absolute deviation
 constexpr double kOutlierSigmas = 3.0;        // cells farther than this from the alignment plane are outliers
-constexpr double kPoolMaxSpread = 3.0;        // × the median spread: cells spread wider stay out of the pool
 
 std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_t>(std::floor(v / cell)); }
 
@@ -49,12 +48,11 @@ void fuse_cell(MapCell& c, double z, double r, std::int32_t points, std::int32_t
     c.last_update = frame;
 }
 
-// The spread that makes the roughness stage's bin variance ((π/2)·spread²/count, or spread²/2 for two points)
-// equal the map's variance v of the bin; one point: unknown (the stage pools the others).
+// The spread that makes the roughness stage's bin variance ((π/2)·spread²/count, spread²/2 for two points,
+// spread² for one) equal the map's variance v of the bin.
 double spread_for_variance(double v, std::int32_t count) {
     if (count >= 3) return std::sqrt(v * count / kMedianVarianceFactor);
-    if (count == 2) return std::sqrt(2.0 * v);
-    return kNaN;
+    return std::sqrt(count == 2 ? 2.0 * v : v);
 }
 
 }  // namespace
@@ -183,6 +181,9 @@ void TemporalFusion::reserve_cells(std::size_t cells) {
     touched_.reserve(cells);
     for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
     counts_.reserve(cells);
+    bands_.reserve(cells);
+    // no cell lies farther from the vehicle than the map's half-diagonal, less than its side
+    pool_buffers_.reserve(static_cast<std::size_t>(map_.side() * map_.cell_m() / kPoolBandM) + 1, cells);
     align_v_.reserve(cells);
     shared_.reserve(cells);
 }
@@ -208,15 +209,13 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         z_[static_cast<std::size_t>(i)] = z;
         if (height_variances) variance_[static_cast<std::size_t>(i)] = (*height_variances)[static_cast<std::size_t>(i)];
     }
-    // Per cell: the median of its points, their count and spread; then each median's variance as the
-    // roughness stage rates a bin's (backed_variances: single points get the frame's pooled variance, pooled
-    // without the cells spread over kPoolMaxSpread × the median spread — the foot of a wall or a car counts
-    // as ground up to 0.2 m high and says nothing of the road's noise).
+    // Per cell: the median of its points, their count and spread, and its range band.
     const std::size_t cells = touched.size();
     std::vector<double>&medians = medians_, &spreads = spreads_, &cell_z = cell_z_;
     medians.resize(cells);
     spreads.resize(cells);
     counts_.resize(cells);
+    bands_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
         double variance_sum = 0.0;
@@ -230,15 +229,22 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts_[c])
                                         : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
+        const auto [x, y] = map_.centre(touched[c]);
+        bands_[c] = static_cast<std::int32_t>(std::hypot(x - pose_.x_m, y - pose_.y_m) / kPoolBandM);
     }
-    cell_z.clear();  // now the spreads of the cells that have one
-    for (std::size_t c = 0; c < cells; ++c)
-        if (counts_[c] >= 2) cell_z.push_back(spreads[c]);
-    const double typical = cell_z.empty() ? kNaN : median(cell_z.begin(), cell_z.end());
-    const bool pooled = backed_variances(counts_.data(), spreads.data(), cells, kPoolMaxSpread * typical, pooled_);
+    // Each median's variance r as the roughness stage rates a bin's, with the pooled point variance of the cell's
+    // range band (pooled_variances) for a single point, and as a floor under a cell's own spread: r is a weight
+    // in the Kalman gain and the alignment, where two points that happen to agree would outweigh a hundred.
+    const bool pooled = pooled_variances(counts_.data(), spreads.data(), bands_.data(), cells, kPoolMaxSpread,
+                                         pool_buffers_, pooled_);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
     variances_.resize(cells);
-    for (std::size_t c = 0; c < cells; ++c) variances_[c] = std::max(pooled ? pooled_[c] : single_point, kMinVariance);
+    for (std::size_t c = 0; c < cells; ++c) {
+        const double point = pooled ? pooled_[c] : single_point;
+        const double own = counts_[c] >= 2 ? std::max(point, spreads[c] * spreads[c]) : point;
+        const double n = counts_[c], of_median = n >= 3 ? kMedianVarianceFactor / n : 1.0 / n;  // 1, 2: the mean
+        variances_[c] = std::max(of_median * own, kMinVariance);
+    }
     if (cfg_.fusion.align) align(touched, variances_, medians);
     for (std::size_t c = 0; c < cells; ++c)
         fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], counts_[c], frame_, cfg_.fusion);

@@ -122,8 +122,11 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
     used.reserve(ordinates);
     strong.reserve(ordinates);
-    for (auto* v : {&variance, &lag_sum, &window, &support.noise, &support.resolved, &other.noise, &other.resolved})
+    for (auto* v : {&variance, &lag_sum, &window, &pooled, &support.noise, &support.resolved, &other.noise,
+                    &other.resolved})
         v->reserve(bins);
+    band.reserve(bins);
+    pool.reserve(bins, bins);  // a band holds one bin at least
     anchors.reserve(bins);
     interval.reserve(bins);
     power_by_interval.reserve(bins);

@@ -39,7 +39,9 @@ struct RoughnessScratch {
     Spectrum right;                 // the right wheel's PSD over the vehicle's stretch
     SupportBuffers support, other;  // the wheel's (the left's), and the right wheel's for the vehicle
     // stretch_support
-    std::vector<double> variance, lag_sum, window;
+    std::vector<double> variance, lag_sum, window, pooled;
+    std::vector<std::int32_t> band;
+    PoolBuffers pool;
     std::vector<Anchors> anchors;
     std::vector<std::size_t> interval;
     std::vector<std::pair<std::size_t, double>> power_by_interval;
@@ -61,9 +63,9 @@ void vehicle_roughness(const Profile& left, const Profile& right, const Roughnes
 void stretch_support(const std::vector<std::int32_t>& count, const std::vector<double>& spread, std::size_t first,
                      std::size_t last, double ds, const std::vector<double>& n, RoughnessScratch& s,
                      SupportBuffers& out);
-/// backed_variances into `v`; false (v untouched) when no bin has 2+ points (with a spread within the pool's).
-bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, double pool_max_spread,
-                      std::vector<double>& v);
+/// backed_variances into `v`; false when no bin holds points, or a single point has neither spread nor pool.
+bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, double ds,
+                      RoughnessScratch& s, std::vector<double>& v);
 /// wheel_iri and vehicle_iri into `out`.
 void wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg, Iri& out);
 void vehicle_iri(const Iri& left, const Iri& right, Iri& out);

@@ -21,14 +21,13 @@ from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
 from .stereo import height_variances
-from .support import backed_variances
+from .support import POOL_BAND_M, POOL_MAX_SPREAD, pooled_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
 _MIN_VARIANCE = 1e-12
 _MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
 _MAD_TO_SIGMA = 1.4826  # σ of a Gaussian from its median absolute deviation
 _OUTLIER_SIGMAS = 3.0  # cells farther than this from the alignment plane are outliers
-_POOL_MAX_SPREAD = 3.0  # × the median spread: cells spread wider stay out of the pooled variance
 
 
 def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[float, float, float]:
@@ -64,10 +63,10 @@ def fuse_cell(cell: Optional[Cell], z: float, r: float, points: int, frame: int,
 
 
 def spread_for_variance(v: float, count: int) -> float:
-    """The spread whose bin variance in the roughness stage ((π/2)s²/n; s²/2 for two points) is v."""
+    """The spread whose bin variance in the roughness stage ((π/2)s²/n; s²/2 for two points, s² for one) is v."""
     if count >= 3:
         return math.sqrt(v * count / _MEDIAN_VARIANCE_FACTOR)
-    return math.sqrt(2 * v) if count == 2 else math.nan
+    return math.sqrt(2 * v if count == 2 else v)
 
 
 def path_point(path: dict, wheel: str, s: float, offset: float, speed: float, yaw_rate: float, cfg: Config):
@@ -141,13 +140,15 @@ class FusedMap:
             mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
         medians = np.array([np.median(z) for z in groups])
-        # As the roughness stage rates a bin's median; single points get the pooled variance of the cells spread
-        # at most _POOL_MAX_SPREAD × the median spread (a wall's foot, ground up to 0.2 m high, is no road noise).
-        measured = spreads[counts >= 2]
-        typical = np.median(measured) if len(measured) else np.nan
-        variances = backed_variances(counts, spreads, pool_max_spread=_POOL_MAX_SPREAD * typical)
-        if variances is None:  # no cell with two points: the configured noise of one point
-            variances = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
+        # As the roughness stage rates a bin's median, with the pooled variance of a point in the cell's 5 m band of
+        # range (cells spread over POOL_MAX_SPREAD × their band's median stay out: a wall's foot is no road noise)
+        # for single points and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
+        distance = np.hypot(*((keys + 0.5) * cell - np.array(self.pose[:2])).T)
+        pooled = pooled_variances(counts, spreads, np.floor(distance / POOL_BAND_M), POOL_MAX_SPREAD)
+        if pooled is None:  # no cell with two points: the configured noise of one point
+            pooled = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
+        point = np.where(counts >= 2, np.fmax(pooled, spreads ** 2), pooled)
+        variances = np.where(counts >= 3, _MEDIAN_VARIANCE_FACTOR / counts, 1 / counts) * point
         variances = np.maximum(variances, _MIN_VARIANCE)
         if self.cfg.fusion.align:
             medians, variances = self.align(keys, medians, variances)

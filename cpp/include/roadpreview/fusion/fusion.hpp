@@ -13,6 +13,7 @@
 #include "roadpreview/paths/path.hpp"
 #include "roadpreview/core/points.hpp"
 #include "roadpreview/profile/profile.hpp"
+#include "roadpreview/roughness/support.hpp"
 
 namespace roadpreview {
 
@@ -154,7 +155,8 @@ private:
     // Per cell of the frame (reused): its slot, median, spread, count, variance, and the heights of one cell.
     std::vector<std::int64_t> touched_;
     std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_;
-    std::vector<std::int32_t> counts_;
+    std::vector<std::int32_t> counts_, bands_;
+    PoolBuffers pool_buffers_;
     std::vector<Eigen::Vector3d> align_v_;  // align's scratch
     std::vector<SharedCell> shared_;
     std::vector<double> deviations_;
