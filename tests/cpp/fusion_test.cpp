@@ -438,6 +438,26 @@ TEST(Fusion, ASinglePointTakesThePooledVarianceOfItsOwnRangeBand) {
     EXPECT_NEAR(fusion.map().at(15.05, 1.55)->variance, 1e-4, 2e-5);
 }
 
+TEST(Fusion, AWallsFootThatFillsAFarBandDoesNotSetItsPool) {
+    // Near (2–10 m): road cells of four points spread 1 cm. Far (20–25 m): the road's cells hold one point each,
+    // and the only cells of several points are a wall's foot, spread 10 cm: the band's own median. Its single
+    // points take the near road's pool, not the foot's.
+    std::mt19937 rng(5);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = 2.025; x < 10.0; x += 0.05)
+        for (double y = -0.975; y < 1.0; y += 0.05) pts.emplace_back(x, y, 0.01 * gauss(rng));
+    for (double x = 20.05; x < 25.0; x += 0.1) {
+        pts.emplace_back(x, 0.05, 0.0);
+        for (double dz : {-0.12, -0.04, 0.04, 0.12}) pts.emplace_back(x, 5.05, dz);  // the foot, 10 cm spread
+    }
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].cast<float>().transpose();
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    fuse_at(fusion, cloud, {}, 0.0);
+    EXPECT_NEAR(fusion.map().at(22.05, 0.05)->variance, 1e-4, 2e-5);
+}
+
 TEST(Fusion, TwoPointsThatAgreeWeighNoMoreThanTheirBandAllows) {
     std::vector<Eigen::Vector3d> pts;
     for (double x = 2.05; x < 5.0; x += 0.1)

@@ -125,8 +125,7 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     for (auto* v : {&variance, &lag_sum, &window, &pooled, &support.noise, &support.resolved, &other.noise,
                     &other.resolved})
         v->reserve(bins);
-    band.reserve(bins);
-    pool.reserve(bins, bins);  // a band holds one bin at least
+    pool.reserve(1, bins);
     anchors.reserve(bins);
     interval.reserve(bins);
     power_by_interval.reserve(bins);

@@ -40,7 +40,6 @@ struct RoughnessScratch {
     SupportBuffers support, other;  // the wheel's (the left's), and the right wheel's for the vehicle
     // stretch_support
     std::vector<double> variance, lag_sum, window, pooled;
-    std::vector<std::int32_t> band;
     PoolBuffers pool;
     std::vector<Anchors> anchors;
     std::vector<std::size_t> interval;
@@ -64,8 +63,8 @@ void stretch_support(const std::vector<std::int32_t>& count, const std::vector<d
                      std::size_t last, double ds, const std::vector<double>& n, RoughnessScratch& s,
                      SupportBuffers& out);
 /// backed_variances into `v`; false when no bin holds points, or a single point has neither spread nor pool.
-bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, double ds,
-                      RoughnessScratch& s, std::vector<double>& v);
+bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, RoughnessScratch& s,
+                      std::vector<double>& v);
 /// wheel_iri and vehicle_iri into `out`.
 void wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg, Iri& out);
 void vehicle_iri(const Iri& left, const Iri& right, Iri& out);

@@ -49,7 +49,7 @@ double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(M_PI * x) / (M_PI * x);
 // noise_psd into `psd`; false when the bins' noise is unknown.
 bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins, double ds, RoughnessScratch& s,
                std::vector<double>& psd) {
-    if (!backed_variances(count, spread, bins, ds, s, s.variance)) return false;
+    if (!backed_variances(count, spread, bins, s, s.variance)) return false;
     interpolation_anchors(count, bins, s.anchors);
     const auto& anchors = s.anchors;
     // Windowed error covariance summed by lag, R(L) = Σ_j w_j w_{j+L} C(j, j+L). Bins share an error only when
@@ -124,41 +124,47 @@ void PoolBuffers::reserve(std::size_t bands, std::size_t bins) {
     spreads.reserve(bins);
 }
 
-bool pooled_variances(const std::int32_t* count, const double* spread, const std::int32_t* band, std::size_t bins,
-                      double max_spread_factor, PoolBuffers& b, std::vector<double>& out) {
-    std::size_t bands = 0;
-    for (std::size_t j = 0; j < bins; ++j) bands = std::max(bands, static_cast<std::size_t>(band[j]) + 1);
+bool pooled_variances(const std::int32_t* count, const double* spread, const std::int32_t* bands_of, std::size_t bins,
+                      double max_spread_factor, std::size_t min_bins, PoolBuffers& b, std::vector<double>& out) {
+    auto band = [&](std::size_t j) { return bands_of ? static_cast<std::size_t>(bands_of[j]) : std::size_t{0}; };
+    std::size_t bands = 1;
+    for (std::size_t j = 0; j < bins; ++j) bands = std::max(bands, band(j) + 1);
     auto measured = [&](std::size_t j) { return count[j] >= 2 && std::isfinite(spread[j]); };
     b.limit.assign(bands, std::numeric_limits<double>::infinity());
     if (std::isfinite(max_spread_factor)) {  // each band's spreads, contiguous (a counting sort), for its median
         b.start.assign(bands + 1, 0);
         for (std::size_t j = 0; j < bins; ++j)
-            if (measured(j)) ++b.start[static_cast<std::size_t>(band[j]) + 1];
+            if (measured(j)) ++b.start[band(j) + 1];
         for (std::size_t k = 0; k < bands; ++k) b.start[k + 1] += b.start[k];
         b.next.assign(b.start.begin(), b.start.end() - 1);
         b.spreads.resize(b.start[bands]);
         for (std::size_t j = 0; j < bins; ++j)
-            if (measured(j)) b.spreads[b.next[static_cast<std::size_t>(band[j])]++] = spread[j];
+            if (measured(j)) b.spreads[b.next[band(j)]++] = spread[j];
+        // Honest noise does not grow with range: a band's typical spread is at most the least of the nearer bands'
+        // (those of min_bins bins at least), lest a wall's foot that fills a far band's bins of several points
+        // set its own limit.
+        double nearer = std::numeric_limits<double>::infinity();
         for (std::size_t k = 0; k < bands; ++k) {
             const auto first = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k]);
             const auto last = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k + 1]);
-            if (first != last) b.limit[k] = max_spread_factor * median(first, last);
+            if (first == last) continue;
+            const double typical = median(first, last);
+            if (static_cast<std::size_t>(last - first) >= min_bins) nearer = std::min(nearer, typical);
+            b.limit[k] = max_spread_factor * std::min(typical, nearer);
         }
     }
     b.squares.assign(bands, 0.0);
     b.dof.assign(bands, 0.0);
     b.cells.assign(bands, 0);
     for (std::size_t j = 0; j < bins; ++j) {
-        const auto k = static_cast<std::size_t>(band[j]);
+        const std::size_t k = band(j);
         if (measured(j) && spread[j] <= b.limit[k])
             b.squares[k] += (count[j] - 1) * spread[j] * spread[j], b.dof[k] += count[j] - 1, ++b.cells[k];
     }
-    // A band's pool stands on kMinPoolBins bins at least: a far band's few cells of several points are often a
-    // kerb's face or a wall's foot (measured on the OS1-128 recording: 1–4 cells beyond 20 m, spread 10–20 cm).
     b.pool.assign(bands, std::numeric_limits<double>::quiet_NaN());
     bool any = false;
     for (std::size_t k = 0; k < bands; ++k)
-        if (b.cells[k] >= kMinPoolBins) b.pool[k] = b.squares[k] / b.dof[k], any = true;
+        if (b.cells[k] >= min_bins) b.pool[k] = b.squares[k] / b.dof[k], any = true;
     if (!any) {  // too few anywhere: one pool over every band
         double squares = 0.0, dof = 0.0;
         for (std::size_t k = 0; k < bands; ++k) squares += b.squares[k], dof += b.dof[k];
@@ -166,19 +172,21 @@ bool pooled_variances(const std::int32_t* count, const double* spread, const std
         b.pool.assign(bands, squares / dof);
     }
     for (std::size_t k = 1; k < bands; ++k)  // a band without a pool borrows the nearest below …
-        if (b.cells[k] < kMinPoolBins) b.pool[k] = b.pool[k - 1];
+        if (b.cells[k] < min_bins) b.pool[k] = b.pool[k - 1];
     for (std::size_t k = bands - 1; k-- > 0;)  // … or, below every pool, the nearest above
         if (std::isnan(b.pool[k])) b.pool[k] = b.pool[k + 1];
     out.resize(bins);
-    for (std::size_t j = 0; j < bins; ++j) out[j] = b.pool[static_cast<std::size_t>(band[j])];
+    for (std::size_t j = 0; j < bins; ++j) out[j] = b.pool[band(j)];
     return true;
 }
 
-bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, double ds,
-                      RoughnessScratch& s, std::vector<double>& v) {
-    s.band.resize(bins);
-    for (std::size_t j = 0; j < bins; ++j) s.band[j] = static_cast<std::int32_t>(static_cast<double>(j) * ds / kPoolBandM);
-    const bool pooled = pooled_variances(count, spread, s.band.data(), bins, kPoolMaxSpread, s.pool, s.pooled);
+bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, RoughnessScratch& s,
+                      std::vector<double>& v) {
+    // One pool over the stretch, not per band of range as the map's cells (method.md §7): a bin beside a ring's
+    // crossing holds the points whose range error carried them there, noisier than their ring's spread says, and
+    // the stretch's pool, ruled by the nearer bins, covers them (README, "Temporal fusion").
+    const bool pooled = pooled_variances(count, spread, nullptr, bins, std::numeric_limits<double>::infinity(), 1,
+                                         s.pool, s.pooled);
     v.assign(bins, std::numeric_limits<double>::quiet_NaN());
     bool any = false;
     for (std::size_t j = 0; j < bins; ++j) {
@@ -201,10 +209,10 @@ bool backed_variances(const std::int32_t* count, const double* spread, std::size
 }
 
 std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread,
-                                                    std::size_t bins, double ds) {
+                                                    std::size_t bins) {
     RoughnessScratch scratch;
     std::vector<double> v;
-    if (!backed_variances(count, spread, bins, ds, scratch, v)) return std::nullopt;
+    if (!backed_variances(count, spread, bins, scratch, v)) return std::nullopt;
     return v;
 }
 

@@ -21,13 +21,18 @@ from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
 from .stereo import height_variances
-from .support import POOL_BAND_M, POOL_MAX_SPREAD, pooled_variances
+from .support import pooled_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
 _MIN_VARIANCE = 1e-12
 _MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
 _MAD_TO_SIGMA = 1.4826  # σ of a Gaussian from its median absolute deviation
 _OUTLIER_SIGMAS = 3.0  # cells farther than this from the alignment plane are outliers
+# A single point's variance is pooled over its 5 m band of range (its height error shrinks with range), from the
+# band's cells spread at most 4 × its typical spread, no more than a nearer band's (a wall's foot is no road noise,
+# and far out may be most of a band's cells of several points; 3 × would cut honest pairs), when
+# 10 cells at least stand behind it (beyond 20 m the few cells of several points are mostly kerb faces).
+_POOL_BAND_M, _POOL_MAX_SPREAD, _MIN_POOL_CELLS = 5.0, 4.0, 10
 
 
 def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[float, float, float]:
@@ -141,10 +146,9 @@ class FusedMap:
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
         medians = np.array([np.median(z) for z in groups])
         # As the roughness stage rates a bin's median, with the pooled variance of a point in the cell's 5 m band of
-        # range (cells spread over POOL_MAX_SPREAD × their band's median stay out: a wall's foot is no road noise)
-        # for single points and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
+        # range for single points, and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
         distance = np.hypot(*((keys + 0.5) * cell - np.array(self.pose[:2])).T)
-        pooled = pooled_variances(counts, spreads, np.floor(distance / POOL_BAND_M), POOL_MAX_SPREAD)
+        pooled = pooled_variances(counts, spreads, np.floor(distance / _POOL_BAND_M), _POOL_MAX_SPREAD, _MIN_POOL_CELLS)
         if pooled is None:  # no cell with two points: the configured noise of one point
             pooled = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
         point = np.where(counts >= 2, np.fmax(pooled, spreads ** 2), pooled)

@@ -16,25 +16,25 @@ MEDIAN_VARIANCE_FACTOR = math.pi / 2
 NYQUIST_TOLERANCE = 1e-9  # relative: a frequency on an interval's Nyquist frequency is resolved
 
 
-POOL_BAND_M = 5.0  # a single point's variance is pooled over its own 5 m band of range
-# Bins spread over this × their band's median stay out of its pool (a wall's foot is no road noise). Two points'
-# spread is σ·|N(0, 1)|: 3× would leave out 4 % of honest pairs and bias the pool 22 % low; 4× leaves 0.7 %.
-POOL_MAX_SPREAD = 4.0
-MIN_POOL_BINS = 10  # a band's own pool stands on this many bins; a far band's few are often a kerb's face
 
 
-def pooled_variances(count, spread, band, max_spread_factor: float = np.inf) -> Optional[np.ndarray]:
+def pooled_variances(count, spread, band, max_spread_factor: float = np.inf, min_bins: int = 1) -> Optional[np.ndarray]:
     """Per bin, the pooled within-bin variance Σ(n − 1)s² / Σ(n − 1) of its band (``band``: small integers by
-    range), over the band's bins of 2+ points spread at most max_spread_factor × the band's median spread. A band
-    with fewer than MIN_POOL_BINS such bins borrows the pool of the nearest band below it, else of the nearest
+    range), over the band's bins of 2+ points spread at most max_spread_factor × its typical spread: its median, or
+    the least median of the bands below it with min_bins such bins if smaller. A band
+    with fewer than min_bins such bins borrows the pool of the nearest band below it, else of the nearest
     above; with too few in every band, one pool over them all. None when there is no such bin at all."""
     count, band = np.asarray(count, dtype=np.int64), np.asarray(band, dtype=np.int64)
     spread = np.asarray(spread, dtype=np.float64)
     measured = (count >= 2) & np.isfinite(spread)
     use = np.zeros(len(count), dtype=bool)
+    nearer = np.inf  # honest noise does not grow with range: no band's typical spread exceeds a nearer band's
     for b in np.unique(band[measured]):
         mine = measured & (band == b)
-        limit = max_spread_factor * np.median(spread[mine]) if np.isfinite(max_spread_factor) else np.inf
+        if mine.sum() >= min_bins:
+            nearer = min(nearer, np.median(spread[mine]))
+        typical = min(np.median(spread[mine]), nearer)
+        limit = max_spread_factor * typical if np.isfinite(max_spread_factor) else np.inf
         use |= mine & (spread <= limit)
     if not use.any():
         return None
@@ -42,7 +42,7 @@ def pooled_variances(count, spread, band, max_spread_factor: float = np.inf) -> 
     def pool(bins):
         return np.sum((count[bins] - 1) * spread[bins] ** 2) / np.sum(count[bins] - 1)
 
-    pools = {b: pool(use & (band == b)) for b in np.unique(band[use]) if np.sum(use & (band == b)) >= MIN_POOL_BINS}
+    pools = {b: pool(use & (band == b)) for b in np.unique(band[use]) if np.sum(use & (band == b)) >= min_bins}
     if not pools:
         return np.full(len(count), pool(use))
     have = np.array(sorted(pools))
@@ -54,17 +54,17 @@ def pooled_variances(count, spread, band, max_spread_factor: float = np.inf) -> 
     return np.array([pool_of(b) for b in band], dtype=np.float64)
 
 
-def backed_variances(count, spread, ds: float) -> Optional[np.ndarray]:
+def backed_variances(count, spread) -> Optional[np.ndarray]:
     """Variance (m²) of the height of each bin of a stretch that holds points (NaN elsewhere), or None when no bin
     holds points or a single point's variance is unknown.
 
     Bins with 2+ points use their own sample variance s²: s²/2 for 2 points, (π/2)·s²/n from 3 on. A single-point
-    bin uses s² when it carries a spread (a fused map's cell), else the pooled within-bin variance of its band of
-    POOL_BAND_M along the stretch (bins ``ds`` apart; bins spread over POOL_MAX_SPREAD × the band's median left out).
+    bin uses s² when it carries a spread (a fused map's cell), else the pooled within-bin variance of the stretch's
+    bins of 2+ points.
     """
     count = np.asarray(count, dtype=np.int64)
     spread = np.asarray(spread, dtype=np.float64)
-    pooled = pooled_variances(count, spread, np.floor(np.arange(len(count)) * ds / POOL_BAND_M), POOL_MAX_SPREAD)
+    pooled = pooled_variances(count, spread, np.zeros(len(count)))
     variance = np.full(len(count), np.nan)
     single = count == 1
     variance[single] = spread[single] ** 2
@@ -97,7 +97,7 @@ def noise_psd(count, spread, ds: float) -> Optional[np.ndarray]:
     """Expected one-sided PSD (m³, on the grid of displacement_psd) of the bin errors of a stretch: independent
     errors of the backed bins, carried into the gaps by the linear interpolation, windowed like the profile
     (periodic Hann; the detrend is neglected). None when the bin variances are unknown."""
-    variance = backed_variances(count, spread, ds)
+    variance = backed_variances(count, spread)
     if variance is None:
         return None
     count = np.asarray(count)

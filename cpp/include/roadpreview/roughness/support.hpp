@@ -16,19 +16,6 @@ struct StretchSupport {
     double backed_fraction = 0.0;              ///< bins that hold points (the others are interpolated)
 };
 
-/// Width (m) of the range bands over which a single point's variance is pooled. A point's height error changes
-/// with range (range noise along a ray that meets the road ever more obliquely farther out), so the pool for a
-/// point is taken near it, not over the whole frame (method.md §7, noise-aware-roughness.md §1).
-inline constexpr double kPoolBandM = 5.0;
-
-/// Cells or bins spread over kPoolMaxSpread × their band's median spread stay out of its pool: the foot of a wall
-/// counts as ground up to 0.2 m high and says nothing of the road's noise. Two points' spread is σ·|N(0, 1)|: 3×
-/// the median of a band of pairs would leave out 4 % of honest ones and bias its pool 22 % low, 4× leaves 0.7 %
-/// (6 % low), and of a wall's foot spread 10× the road's, 7 % of the cells still pass (12 % at 5×).
-inline constexpr double kPoolMaxSpread = 4.0;
-/// Fewest bins (of 2+ points, within the spread limit) a band's own pool stands on; fewer borrow.
-inline constexpr std::size_t kMinPoolBins = 10;
-
 /// What pooled_variances keeps between calls: per band, its spreads, sums and pool.
 struct PoolBuffers {
     std::vector<std::size_t> start, next, cells;
@@ -36,20 +23,19 @@ struct PoolBuffers {
     void reserve(std::size_t bands, std::size_t bins);  ///< so that calls up to that size allocate nothing
 };
 
-/// Per bin, the pooled within-bin variance Σ(c − 1)s² / Σ(c − 1) of its band (`band[j]` ≥ 0, by range), over the
-/// band's bins of 2+ points whose spread is at most `max_spread_factor` × the band's median spread (infinite:
-/// all). A band with fewer than kMinPoolBins such bins takes the pool of the nearest band below it (nearer points
-/// are the noisier: the borrowed pool errs high), else of the nearest above; when no band has enough, one pool
-/// over all bands serves every band. False (`out` untouched) when there is no such bin at all.
+/// Per bin, the pooled within-bin variance Σ(c − 1)s² / Σ(c − 1) of its band (`band[j]` ≥ 0, by range; null: one
+/// band), over the band's bins of 2+ points whose spread is at most `max_spread_factor` × its typical spread (infinite:
+/// all): the band's median spread, or the least median of the bands below it with `min_bins` such bins if smaller. A band with fewer than `min_bins` such bins takes the pool of the nearest band below
+/// it (nearer points are the noisier: the borrowed pool errs high), else of the nearest above; when no band has
+/// enough, one pool over all bands serves every band. False (`out` untouched) when there is no such bin at all.
 bool pooled_variances(const std::int32_t* count, const double* spread, const std::int32_t* band, std::size_t bins,
-                      double max_spread_factor, PoolBuffers& buffers, std::vector<double>& out);
+                      double max_spread_factor, std::size_t min_bins, PoolBuffers& buffers, std::vector<double>& out);
 
-/// Variance (m²) of each backed bin's height of a stretch of bins `ds` apart (NaN for interpolated bins);
-/// nullopt when no bin holds points or a single point's variance is unknown. Own sample variance s² scaled to the median (s²/2 for 2 points, (π/2)s²/n
-/// from 3); for a single-point bin, s² when it carries a spread (a fused map's cell knows its variance), else
-/// the pooled variance of its kPoolBandM band of the stretch (pooled_variances, kPoolMaxSpread).
-std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread, std::size_t bins,
-                                                    double ds);
+/// Variance (m²) of each backed bin's height of a stretch (NaN for interpolated bins); nullopt when no bin holds
+/// points or a single point's variance is unknown. Own sample variance s² scaled to the median (s²/2 for 2
+/// points, (π/2)s²/n from 3); for a single-point bin, s² when it carries a spread (a fused map's cell knows its
+/// variance), else the pooled within-bin variance of the stretch's bins of 2+ points.
+std::optional<std::vector<double>> backed_variances(const std::int32_t* count, const double* spread, std::size_t bins);
 
 /// Expected one-sided PSD of the bin errors of a stretch (independent errors of the backed bins, carried into
 /// the gaps by the linear interpolation, periodic Hann window; detrend neglected), k = 0 … bins/2.
