@@ -27,12 +27,13 @@ constexpr double kMadToSigma = 1.4826;        // σ of a Gaussian from its media
 constexpr double kOutlierSigmas = 3.0;        // cells farther than this from the alignment plane are outliers
 // Single points take the pooled variance of their 5 m band of range: a point's height error is its range error
 // times the sine of its ray's depression, which shrinks with range (method.md §7, step 2). Cells spread over
-// kPoolMaxSpread × their band's typical spread stay out of its pool (pooled_variances: no more than a nearer
-// band's): the foot of a wall (ground up to 0.2 m high) says nothing of the road's noise, and far out, where the
-// road's cells hold one point, it may be most of a band's cells of several. Two points' spread is σ·|N(0, 1)|: 3× the median of a band of pairs would leave
-// out 4 % of honest ones and bias its pool 22 % low, 4× leaves 0.7 % (6 % low), and 7 % of the cells of a foot
-// spread 10× the road's still pass. A band's own pool needs kMinPoolCells: beyond 20 m the few cells of several
-// points are mostly kerb faces (1–4 per band, spread 10–20 cm, on the bundled OS1-128 recording).
+// kPoolMaxSpread × their band's typical spread (pooled_variances: no more than a nearer band's) stay out of its
+// pool: the foot of a wall (ground up to 0.2 m high) says nothing of the road's noise, and far out, where the
+// road's cells hold one point, it may be most of a band's cells of several. Two points' spread is σ·|N(0, 1)|:
+// 3× the median of a band of pairs would leave out 4 % of honest ones and bias its pool 22 % low, 4× leaves
+// 0.7 % (6 % low), and 7 % of the cells of a foot spread 10× the road's still pass. A band's own pool needs
+// kMinPoolCells: beyond 20 m the few cells of several points are mostly kerb faces (1–4 per band, spread
+// 10–20 cm, on the bundled OS1-128 recording).
 constexpr double kPoolBandM = 5.0;
 constexpr double kPoolMaxSpread = 4.0;
 constexpr std::size_t kMinPoolCells = 10;

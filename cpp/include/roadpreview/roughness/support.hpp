@@ -24,8 +24,9 @@ struct PoolBuffers {
 };
 
 /// Per bin, the pooled within-bin variance Σ(c − 1)s² / Σ(c − 1) of its band (`band[j]` ≥ 0, by range; null: one
-/// band), over the band's bins of 2+ points whose spread is at most `max_spread_factor` × its typical spread (infinite:
-/// all): the band's median spread, or the least median of the bands below it with `min_bins` such bins if smaller. A band with fewer than `min_bins` such bins takes the pool of the nearest band below
+/// band), over the band's bins of 2+ points whose spread is at most `max_spread_factor` × the band's typical
+/// spread (infinite: all) — its median spread, or the least median of the bands below it with `min_bins` bins
+/// of 2+ points if smaller. A band with fewer than `min_bins` such bins takes the pool of the nearest band below
 /// it (nearer points are the noisier: the borrowed pool errs high), else of the nearest above; when no band has
 /// enough, one pool over all bands serves every band. False (`out` untouched) when there is no such bin at all.
 bool pooled_variances(const std::int32_t* count, const double* spread, const std::int32_t* band, std::size_t bins,
