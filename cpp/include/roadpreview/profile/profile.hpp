@@ -24,7 +24,8 @@ struct Profile {
     std::vector<double> s;             ///< m, bin centres
     std::vector<double> z;             ///< m, median height per bin (levelled), NaN where missing
     std::vector<std::int32_t> count;   ///< points per bin (0 for interpolated bins)
-    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points
+    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points (a
+                                       ///< fused map's bins: the spread giving the map's variance, one point's too)
     Roughness roughness;
     std::vector<std::uint8_t> blocked;  ///< 1 where an obstacle covers the bin (z is NaN there), docs/method.md §5
     std::optional<std::vector<PathObstacle>> obstacles;  ///< in this wheel's path; nullopt: clustering is off
