@@ -21,9 +21,9 @@ NYQUIST_TOLERANCE = 1e-9  # relative: a frequency on an interval's Nyquist frequ
 def pooled_variances(count, spread, band, max_spread_factor: float = np.inf, min_bins: int = 1) -> Optional[np.ndarray]:
     """Per bin, the pooled within-bin variance Σ(n − 1)s² / Σ(n − 1) of its band (``band``: small integers by
     range), over the band's bins of 2+ points spread at most max_spread_factor × its typical spread: its median, or
-    the least median of the bands below it with min_bins such bins if smaller. A band
-    with fewer than min_bins such bins borrows the pool of the nearest band below it, else of the nearest
-    above; with too few in every band, one pool over them all. None when there is no such bin at all."""
+    the least median of the bands below it with min_bins such bins if smaller. A band with fewer than min_bins
+    such bins borrows the pool of the nearest band below it, else of the nearest above; with too few in every
+    band, one pool over them all. None when there is no such bin at all."""
     count, band = np.asarray(count, dtype=np.int64), np.asarray(band, dtype=np.int64)
     spread = np.asarray(spread, dtype=np.float64)
     measured = (count >= 2) & np.isfinite(spread)
