@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 #include <roadpreview/roadpreview.hpp>
@@ -215,4 +216,50 @@ TEST(Pipeline, HugeRoiGivesTheAnswerOfATightOne) {
     EXPECT_EQ(a.cluster_labels, b.cluster_labels);
     ASSERT_TRUE(a.plane && b.plane);
     for (int k = 0; k < 4; ++k) EXPECT_NEAR((*a.plane)[k], (*b.plane)[k], 1e-12);
+}
+
+// The pipeline levels only the points in a wheel's corridor, by the local ground model: its profiles are those the
+// stage functions give from every ground point's local height — on a grade change, with a track wider than the
+// levelling corridor, and with no corridor points beyond 25 m (bands there keep the frame plane).
+TEST(Pipeline, LocallyLevelledProfilesAreThoseOfTheStageFunctions) {
+    scenes::Cloud road = scenes::plane(0.0, 0.0, 0.0, 120000, 0.5, 45.0, 10.0);
+    Eigen::Index kept = 0;
+    for (Eigen::Index i = 0; i < road.rows(); ++i) {
+        const float x = road(i, 0), y = road(i, 1);
+        if (x > 25.0f && std::abs(y) < 1.5f) continue;
+        road.row(kept++) << x, y, float(0.04 * std::max(0.0, x - 15.0) + 0.01 * std::sin(2.0 * x) - 1.8);
+    }
+    road.conservativeResize(kept, 3);
+    rp::Config cfg = kitti_like();
+    cfg.track_width = 3.4;
+    cfg.obstacles.enabled = false;
+    for (const double yaw_rate : {0.0, 0.08}) {
+        const rp::Result r = rp::Estimator(cfg).process(road, 5.0, yaw_rate);
+        ASSERT_TRUE(r.plane);
+        scenes::Cloud base = road;
+        base.col(2).array() += 1.8f;
+        const auto view = rp::points_view(base.data(), base.rows(), 3);
+        const std::vector<double> local_z =
+            rp::local_ground_heights(view, r.ground_mask, *r.plane, cfg.profile.level_band_m, r.path);
+        const rp::WheelProfiles expected = rp::build_profiles(view, r.ground_mask, rp::levelling_for(&*r.plane), r.path,
+                                                              cfg.tire_width, cfg.profile, nullptr, &local_z);
+        const double wheel_y = 0.5 * cfg.track_width;
+        for (const auto& [got, want, y] : {std::tuple{&r.left, &expected.left, wheel_y},
+                                           std::tuple{&r.right, &expected.right, -wheel_y}}) {
+            ASSERT_EQ(got->count, want->count);
+            EXPECT_GT(std::count_if(got->count.begin() + 260, got->count.end(), [](auto c) { return c > 0; }), 20)
+                << "bins beyond 26 m hold points";
+            if (yaw_rate == 0.0)  // beyond 35 m, a band past the last corridor point: heights above the frame plane
+                for (std::size_t k = 360; k < got->z.size(); ++k) {
+                    const double x = (static_cast<double>(k) + 0.5) * cfg.profile.ds_m;
+                    const double z = 0.04 * (x - 15.0) + 0.01 * std::sin(2.0 * x);
+                    EXPECT_NEAR(got->z[k], rp::height_above(*r.plane, x, y, z), 0.01) << k;
+                }
+            for (std::size_t k = 0; k < got->z.size(); ++k) {
+                if (std::isnan(want->z[k])) EXPECT_TRUE(std::isnan(got->z[k])) << k;
+                else EXPECT_NEAR(got->z[k], want->z[k], 1e-6) << k;  // the ROI's points are rounded to float in
+                                                                      // the base frame, these in the sensor's
+            }
+        }
+    }
 }

@@ -19,7 +19,8 @@ std::optional<PlaneFit> plane_fit(const Moments& m) {
     if (m.count < 3) return std::nullopt;
     const double n = static_cast<double>(m.count);
     const Eigen::Vector3d mean_q = m.sum / n;
-    const Eigen::Matrix3d cov = m.outer / n - mean_q * mean_q.transpose();
+    const Eigen::Matrix3d outer = m.outer.selfadjointView<Eigen::Lower>();
+    const Eigen::Matrix3d cov = outer / n - mean_q * mean_q.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     // Collinear or coincident points span no plane.
     if (eig.info() != Eigen::Success || !(eig.eigenvalues()(1) > 1e-12 * eig.eigenvalues()(2)))

@@ -16,14 +16,20 @@ namespace roadpreview {
 struct Moments {
     Eigen::Vector3d shift = Eigen::Vector3d::Zero();
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();  // Σ q·qᵀ, lower triangle
     std::int64_t count = 0;
 
     void add(const Eigen::Vector3d& p) {
         if (count == 0) shift = p;
-        const Eigen::Vector3d q = p - shift;
-        sum += q;
-        outer.noalias() += q * q.transpose();
+        const double x = p.x() - shift.x(), y = p.y() - shift.y(), z = p.z() - shift.z();
+        sum += Eigen::Vector3d(x, y, z);
+        // The lower triangle only (plane_fit mirrors it): the ground stages add every ROI point several times.
+        outer(0, 0) += x * x;
+        outer(1, 0) += y * x;
+        outer(2, 0) += z * x;
+        outer(1, 1) += y * y;
+        outer(2, 1) += z * y;
+        outer(2, 2) += z * z;
         ++count;
     }
 };

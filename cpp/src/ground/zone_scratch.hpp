@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,11 +23,49 @@ inline double pseudo_angle(double u, double v) {
     return u < 0.0 ? 2.0 - v / (-u - v) : 3.0 + u / (u - v);
 }
 
+// Sorted thresholds t and, for a value v, how many of them are ≤ v (std::upper_bound's answer) by a table: bucket b
+// of [lo, lo + buckets/scale) holds how many thresholds lie in buckets before b, the few in b itself are compared
+// one by one. The patch of every ROI point asks this twice, and a binary search's branches are guesses.
+class Thresholds {
+public:
+    Thresholds(std::vector<double> sorted, double lo, double hi, int buckets)
+        : t_(std::move(sorted)), lo_(lo), scale_(buckets / (hi - lo)), last_(buckets - 1),
+          before_(static_cast<std::size_t>(buckets) + 1, 0) {
+        for (const double t : t_) ++before_[static_cast<std::size_t>(bucket(t)) + 1];
+        for (std::size_t b = 1; b < before_.size(); ++b) before_[b] += before_[b - 1];
+        before_.pop_back();
+        t_.push_back(std::numeric_limits<double>::quiet_NaN());  // the end: no value is at least it
+    }
+
+    // Exact whatever the spacing: bucket() never decreases as v grows, so a threshold in an earlier bucket is < v
+    // and one in a later bucket > v.
+    int count_at_most(double v) const {
+        if (std::isnan(v)) return static_cast<int>(t_.size()) - 1;  // as upper_bound: NaN < t is false for every t
+        auto n = before_[static_cast<std::size_t>(bucket(v))];
+        n += t_[static_cast<std::size_t>(n)] <= v;  // without a branch: most buckets hold no threshold or one
+        while (t_[static_cast<std::size_t>(n)] <= v) ++n;  // the end's NaN compares false
+        return n;
+    }
+
+private:
+    int bucket(double v) const {
+        const double at = (v - lo_) * scale_;
+        return at >= 0.0 ? static_cast<int>(std::min(at, static_cast<double>(last_))) : 0;
+    }
+
+    std::vector<double> t_;  // and a NaN after the last
+    double lo_, scale_;
+    int last_;
+    std::vector<int> before_;
+};
+
 // The patch of a point: ring by horizontal distance, sector by azimuth φ = atan2(y, x) + π ∈ [0, 2π].
 class ZoneModel {
 public:
     explicit ZoneModel(const GroundConfig& cfg) : sectors_(cfg.zone_sectors) {
-        for (const double e : cfg.zone_ring_edges_m) edges_sq_.push_back(e * e);
+        std::vector<double> edges_sq;
+        for (const double e : cfg.zone_ring_edges_m) edges_sq.push_back(e * e);
+        rings_.emplace(edges_sq, 0.0, edges_sq.back(), kRingBuckets);
         first_.push_back(0);
         for (const int s : sectors_) {
             first_.push_back(first_.back() + s);
@@ -33,7 +74,7 @@ public:
                 const double phi = 2.0 * M_PI * k / s;
                 bounds.push_back(pseudo_angle(std::cos(phi), std::sin(phi)));
             }
-            bounds_.push_back(std::move(bounds));
+            bounds_.emplace_back(std::move(bounds), 0.0, 4.0, std::min(8 * s, kMaxSectorBuckets));  // a sector spans ≥ 2
         }
     }
 
@@ -43,20 +84,19 @@ public:
     std::int32_t patches() const { return first_.back(); }
 
     std::int32_t patch(double x, double y) const {
-        const double r_sq = x * x + y * y;
-        const auto ring = std::upper_bound(edges_sq_.begin(), edges_sq_.end(), r_sq) - edges_sq_.begin() - 1;
+        const int ring = rings_->count_at_most(x * x + y * y) - 1;
         if (ring < 0 || ring >= rings()) return -1;
-        const auto& bounds = bounds_[static_cast<std::size_t>(ring)];
         // φ = angle of (−x, −y) measured from +x: atan2(y, x) + π.
-        const auto sector = std::upper_bound(bounds.begin(), bounds.end(), pseudo_angle(-x, -y)) - bounds.begin();
-        return first_[static_cast<std::size_t>(ring)] + static_cast<std::int32_t>(sector);
+        const int sector = bounds_[static_cast<std::size_t>(ring)].count_at_most(pseudo_angle(-x, -y));
+        return first_[static_cast<std::size_t>(ring)] + sector;
     }
 
 private:
+    static constexpr int kRingBuckets = 1024, kMaxSectorBuckets = 4096;
     std::vector<int> sectors_;
-    std::vector<double> edges_sq_;
+    std::optional<Thresholds> rings_;  // of squared horizontal distance
     std::vector<std::int32_t> first_;
-    std::vector<std::vector<double>> bounds_;
+    std::vector<Thresholds> bounds_;
 };
 
 struct ZoneScratch {

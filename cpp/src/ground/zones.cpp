@@ -38,10 +38,14 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
         fit = plane_fit(m);
         if (!fit) return std::nullopt;
         m = Moments{};
+        bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
-            kept[i] = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z()) <= cfg.pca_threshold_m;
-            if (kept[i]) m.add(pts[i]);
+            const bool keep = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z()) <= cfg.pca_threshold_m;
+            changed = changed || keep != static_cast<bool>(kept[i]);
+            kept[i] = keep;
+            if (keep) m.add(pts[i]);
         }
+        if (!changed) break;  // the same points again: every later fit would be this one
     }
     return fit;
 }

@@ -44,23 +44,4 @@ WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width,
     return p;
 }
 
-std::optional<double> arc_length(const WheelPaths& p, Wheel w, double x, double y, double tire_width) {
-    const double half = 0.5 * tire_width;
-    const double y_w = p.wheel_y(w);
-    if (p.status == PathStatus::Straight) {
-        if (std::abs(y - y_w) > half) return std::nullopt;
-        const double s = p.direction * x;
-        return s >= 0.0 ? std::optional<double>(s) : std::nullopt;
-    }
-    if (p.status != PathStatus::Arc) return std::nullopt;
-    const double r_w = p.radius(w);
-    const double ux = x, uy = y - p.icr_y;  // point relative to the ICR
-    // sqrt, not std::hypot: coordinates are metres, far from overflow, and hypot is several times slower.
-    if (std::abs(std::sqrt(ux * ux + uy * uy) - r_w) > half || r_w <= 0.0) return std::nullopt;
-    const double w0y = y_w - p.icr_y;  // wheel relative to the ICR (its x is 0)
-    const double phi = std::atan2(-w0y * ux, w0y * uy);  // angle from w0 to u: atan2(w0 × u, w0 · u)
-    if (phi * p.rotation < 0.0) return std::nullopt;      // behind the wheel
-    return std::abs(phi) * r_w;
-}
-
 }  // namespace roadpreview

@@ -99,7 +99,6 @@ struct Estimator::Impl {
     ObstacleScratch obstacle_scratch;
     Clustering clustering;
     PathCrossings crossings;
-    std::vector<double> local_z;
     ProfileScratch profile_scratch;
     RoughnessScratch roughness_scratch;
 
@@ -189,10 +188,9 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
     } else {
         // Levelling by the local ground model (method.md §3); without it, by the one plane.
         const bool local = cfg.profile.level && cfg.profile.level_local && r.plane;
-        if (local) local_ground_heights(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path,
-                                        profile_scratch, local_z);
-        build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked,
-                       local ? &local_z : nullptr, height_variances, profile_scratch, r.left, r.right);
+        if (local) fit_local_ground(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path, profile_scratch);
+        build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked, local,
+                       height_variances, profile_scratch, r.left, r.right);
     }
     if (!cfg.obstacles.enabled) return;
     for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {

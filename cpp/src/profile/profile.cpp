@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "core/median.hpp"
@@ -55,44 +56,38 @@ void clear_bins(Profile& p) {
     p.blocked.clear();
 }
 
-// Each ground point's band ⌊r / band_m⌋ (−1 off the ground); the corridor points (those the planes are fitted to)
-// grouped by band: band k's are corridor[band_start[k] .. band_start[k + 1]), with the range they span.
+std::int64_t band_of(double range, double band_m) { return static_cast<std::int64_t>(std::min(range / band_m, 1e6)); }
+
+// The corridor points (the ground points within kLevelCorridorHalfWidthM of the vehicle's path, those the planes
+// are fitted to) grouped by band k = ⌊r / band_m⌋, in input order: band k's are corridor[band_start[k] ..
+// band_start[k + 1]), with the range they span.
 void assign_bands(PointsView points, const std::vector<std::uint8_t>& mask, double band_m, const WheelPaths& paths,
                   ProfileScratch& s) {
-    s.band.assign(mask.size(), -1);
-    s.range.assign(mask.size(), 0.0);
+    s.found.clear();
     std::int64_t bands = 0;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto at = static_cast<std::size_t>(i);
-        if (!mask[at]) continue;
+        if (!mask[static_cast<std::size_t>(i)]) continue;
         const double x = points(i, 0), y = points(i, 1);
-        s.range[at] = std::sqrt(x * x + y * y);  // not std::hypot: metres, far from overflow, and hypot is slower
-        s.band[at] = static_cast<std::int64_t>(std::min(s.range[at] / band_m, 1e6));
-        bands = std::max(bands, s.band[at] + 1);
+        if (distance_from_path(paths, x, y) > kLevelCorridorHalfWidthM) continue;
+        const double range = std::sqrt(x * x + y * y);  // not std::hypot: metres, far from overflow, and hypot is slower
+        s.found.push_back({i, band_of(range, band_m), range});
+        bands = std::max(bands, s.found.back().band + 1);
     }
     constexpr double kInf = std::numeric_limits<double>::infinity();
     const auto n = static_cast<std::size_t>(bands);
     s.nearest.assign(n, kInf);
     s.farthest.assign(n, -kInf);
     s.band_start.assign(n + 1, 0);
-    s.in_corridor.assign(mask.size(), 0);
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto at = static_cast<std::size_t>(i);
-        if (s.band[at] < 0 || distance_from_path(paths, points(i, 0), points(i, 1)) > kLevelCorridorHalfWidthM)
-            continue;
-        s.in_corridor[at] = 1;
-        const auto k = static_cast<std::size_t>(s.band[at]);
+    for (const auto& c : s.found) {
+        const auto k = static_cast<std::size_t>(c.band);
         ++s.band_start[k + 1];
-        s.nearest[k] = std::min(s.nearest[k], s.range[at]);
-        s.farthest[k] = std::max(s.farthest[k], s.range[at]);
+        s.nearest[k] = std::min(s.nearest[k], c.range);
+        s.farthest[k] = std::max(s.farthest[k], c.range);
     }
     for (std::size_t k = 0; k < n; ++k) s.band_start[k + 1] += s.band_start[k];
     s.corridor.resize(s.band_start[n]);
     s.band_next.assign(s.band_start.begin(), s.band_start.end() - 1);
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        const auto at = static_cast<std::size_t>(i);
-        if (s.in_corridor[at]) s.corridor[s.band_next[static_cast<std::size_t>(s.band[at])]++] = i;
-    }
+    for (const auto& c : s.found) s.corridor[s.band_next[static_cast<std::size_t>(c.band)]++] = c.index;
 }
 
 // The refits' window about band k's plane: the median residual m and the half-width w of the points within
@@ -169,24 +164,37 @@ void place_short_bands(PointsView points, const Plane& frame, ProfileScratch& s)
     }
 }
 
-// A point's height above the band planes, blended between band centres: t bands from its own band's centre
-// (|t| ≤ ½), it takes |t| of its height above the neighbour band it lies towards when that band has corridor
-// points (a plane of its own) — so the levelled heights are continuous where two bands meet.
-double blended_height(PointsView points, Eigen::Index i, double band_m, const ProfileScratch& s) {
-    const auto at = static_cast<std::size_t>(i);
-    const auto k = static_cast<std::size_t>(s.band[at]);
-    const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
-    const double own = height_above(s.plane[k], x, y, z);
-    const double t = s.range[at] / band_m - static_cast<double>(k) - 0.5;
-    const bool inward = t < 0.0;
-    if ((inward && k == 0) || (!inward && k + 1 >= s.fitted.size())) return own;
-    const std::size_t j = inward ? k - 1 : k + 1;
-    if (s.band_start[j] == s.band_start[j + 1]) return own;  // no corridor points: the frame plane stands in
-    const double w = std::abs(t);
-    return (1.0 - w) * own + w * height_above(s.plane[j], x, y, z);
+bool has_corridor_points(std::size_t k, const ProfileScratch& s) {
+    return k < s.plane.size() && s.band_start[k] != s.band_start[k + 1];
 }
 
 }  // namespace
+
+void fit_local_ground(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,
+                      const WheelPaths& paths, ProfileScratch& s) {
+    assign_bands(points, mask, band_m, paths, s);
+    fit_band_planes(points, frame, band_m, s);
+    place_short_bands(points, frame, s);
+    s.frame = frame;
+    s.band_m = band_m;
+}
+
+// Blended between band centres: t bands from its own band's centre (|t| ≤ ½), a point takes |t| of its height above
+// the neighbour band it lies towards when that band has corridor points (a plane of its own) — so the levelled
+// heights are continuous where two bands meet. Bands beyond the last corridor point keep the frame plane.
+double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s) {
+    const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+    const double range = std::sqrt(x * x + y * y);
+    const auto k = static_cast<std::size_t>(band_of(range, s.band_m));
+    const double own = height_above(k < s.plane.size() ? s.plane[k] : s.frame, x, y, z);
+    const double t = range / s.band_m - static_cast<double>(k) - 0.5;
+    const bool inward = t < 0.0;
+    if (inward && k == 0) return own;
+    const std::size_t j = inward ? k - 1 : k + 1;
+    if (!has_corridor_points(j, s)) return own;  // the frame plane stands in there
+    const double w = std::abs(t);
+    return (1.0 - w) * own + w * height_above(s.plane[j], x, y, z);
+}
 
 Levelling levelling_for(const Plane* plane) {
     Levelling L{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
@@ -204,21 +212,13 @@ double distance_from_path(const WheelPaths& paths, double x, double y) {
     return std::abs(std::sqrt(x * x + dy * dy) - std::abs(paths.icr_y));  // sqrt: see the ranges above
 }
 
-void local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,
-                          const WheelPaths& paths, ProfileScratch& s, std::vector<double>& z) {
-    assign_bands(points, mask, band_m, paths, s);
-    fit_band_planes(points, frame, band_m, s);
-    place_short_bands(points, frame, s);
-    z.assign(mask.size(), kNaN);
-    for (Eigen::Index i = 0; i < points.rows(); ++i)
-        if (s.band[static_cast<std::size_t>(i)] >= 0) z[static_cast<std::size_t>(i)] = blended_height(points, i, band_m, s);
-}
-
 std::vector<double> local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame,
                                          double band_m, const WheelPaths& paths) {
     ProfileScratch s;
-    std::vector<double> z;
-    local_ground_heights(points, mask, frame, band_m, paths, s, z);
+    fit_local_ground(points, mask, frame, band_m, paths, s);
+    std::vector<double> z(mask.size(), kNaN);
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+        if (mask[static_cast<std::size_t>(i)]) z[static_cast<std::size_t>(i)] = local_height(points, i, s);
     return z;
 }
 
@@ -226,11 +226,15 @@ std::size_t bin_count(const ProfileConfig& cfg) {
     return static_cast<std::size_t>(std::ceil(cfg.preview_length_m / cfg.ds_m - 1e-9));
 }
 
-void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-                    const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
-                    const std::vector<double>* local_z, const std::vector<float>* height_variances, ProfileScratch& s,
-                    Profile& left, Profile& right) {
-    if (local_z && local_z->size() != mask.size()) throw std::invalid_argument("local_z and mask differ in length");
+namespace {
+
+// The profile stage with each ground point's height from `height(i, z_levelled)`, asked only of the points in a
+// wheel's corridor.
+template <class Height>
+void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                         const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
+                         const BlockedBins* blocked, const std::vector<float>* height_variances, Height&& height,
+                         ProfileScratch& s, Profile& left, Profile& right) {
     if (height_variances && height_variances->size() != mask.size())
         throw std::invalid_argument("height_variances and mask differ in length");
     if (paths.status == PathStatus::Stopped) {
@@ -243,27 +247,47 @@ void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, co
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [xl, yl, z_levelled] = L.apply(points(i, 0), points(i, 1), points(i, 2));
-        const double zl = local_z ? (*local_z)[static_cast<std::size_t>(i)] : z_levelled;
+        std::optional<double> zl;
         for (const Wheel w : {Wheel::Left, Wheel::Right}) {
             const auto arc = arc_length(paths, w, xl, yl, tire_width);
             if (!arc || *arc >= cfg.preview_length_m) continue;
+            if (!zl) zl = height(i, z_levelled);
             // s < preview but s/ds can round up to `bins`: such a point belongs to the last bin.
             const auto bin = std::min(static_cast<std::size_t>(*arc / cfg.ds_m), bins - 1);
             const double variance = height_variances ? (*height_variances)[static_cast<std::size_t>(i)] : 0.0;
-            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), zl, variance});
+            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), *zl, variance});
         }
     }
     bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, s, left);
     bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, s, right);
 }
 
+}  // namespace
+
+void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                    const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
+                    bool level_local, const std::vector<float>* height_variances, ProfileScratch& s, Profile& left,
+                    Profile& right) {
+    if (level_local)
+        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances,
+                            [&](Eigen::Index i, double) { return local_height(points, i, s); }, s, left, right);
+    else
+        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances,
+                            [](Eigen::Index, double z_levelled) { return z_levelled; }, s, left, right);
+}
+
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
                              const BlockedBins* blocked, const std::vector<double>* local_z,
                              const std::vector<float>* height_variances) {
+    if (local_z && local_z->size() != mask.size()) throw std::invalid_argument("local_z and mask differ in length");
     ProfileScratch s;
     WheelProfiles out;
-    build_profiles(points, mask, L, paths, tire_width, cfg, blocked, local_z, height_variances, s, out.left, out.right);
+    const auto height = [&](Eigen::Index i, double z_levelled) {
+        return local_z ? (*local_z)[static_cast<std::size_t>(i)] : z_levelled;
+    };
+    build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, height, s, out.left,
+                        out.right);
     return out;
 }
 

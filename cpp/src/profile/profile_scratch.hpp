@@ -22,23 +22,34 @@ struct ProfileScratch {
     std::vector<Hit> hits[2];  // left, right
     std::vector<double> variance_sum, sorted;
     std::vector<std::size_t> start, next;
-    // local_ground_heights
-    std::vector<std::int64_t> band;
+    // the local ground model (fit_local_ground)
+    struct CorridorPoint {
+        Eigen::Index index;
+        std::int64_t band;
+        double range;
+    };
+    std::vector<CorridorPoint> found;
     std::vector<Eigen::Index> corridor;  // corridor points grouped by band, band k's from band_start[k]
     std::vector<std::size_t> band_start, band_next;
-    std::vector<std::uint8_t> in_corridor, fitted;
-    std::vector<double> range, nearest, farthest, offsets;
-    std::vector<Plane> plane;
+    std::vector<std::uint8_t> fitted;
+    std::vector<double> nearest, farthest, offsets;
+    std::vector<Plane> plane;  // of each band out to the farthest corridor point
+    Plane frame{0.0, 0.0, 1.0, 0.0};
+    double band_m = 0.0;
 };
 
-/// local_ground_heights into `z`.
-void local_ground_heights(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,
-                          const WheelPaths& paths, ProfileScratch& s, std::vector<double>& z);
+/// The local ground model of local_ground_heights (docs/method.md §3) fitted into `s`.
+void fit_local_ground(PointsView points, const std::vector<std::uint8_t>& mask, const Plane& frame, double band_m,
+                      const WheelPaths& paths, ProfileScratch& s);
 
-/// build_profiles into `left` and `right`.
+/// Ground point i's height above the local ground model last fitted into `s`: local_ground_heights' value for it.
+double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s);
+
+/// build_profiles into `left` and `right`; with `level_local`, heights above the local ground model last fitted into
+/// `s` (local_height, asked only of the points in a wheel's corridor) instead of their levelled z.
 void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                     const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
-                    const std::vector<double>* local_z, const std::vector<float>* height_variances, ProfileScratch& s,
-                    Profile& left, Profile& right);
+                    bool level_local, const std::vector<float>* height_variances, ProfileScratch& s, Profile& left,
+                    Profile& right);
 
 }  // namespace roadpreview

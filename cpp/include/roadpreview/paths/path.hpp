@@ -6,6 +6,8 @@
 // that is r − track/2 (inner) and r + track/2 (outer); for a right turn the other way round.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 
 #include "roadpreview/core/config.hpp"
@@ -37,7 +39,28 @@ WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width,
 
 /// Arc length s ≥ 0 travelled by wheel `w` until it is beside (x, y), if (x, y) lies in that wheel's
 /// corridor (within tire_width/2 of its path) ahead of it in the direction of travel; nullopt otherwise.
-std::optional<double> arc_length(const WheelPaths& p, Wheel w, double x, double y, double tire_width);
+/// Inline: the profile and obstacle stages ask it for every ground and clustered point, twice.
+inline std::optional<double> arc_length(const WheelPaths& p, Wheel w, double x, double y, double tire_width) {
+    const double half = 0.5 * tire_width;
+    const double y_w = p.wheel_y(w);
+    if (p.status == PathStatus::Straight) {
+        if (std::abs(y - y_w) > half) return std::nullopt;
+        const double s = p.direction * x;
+        return s >= 0.0 ? std::optional<double>(s) : std::nullopt;
+    }
+    if (p.status != PathStatus::Arc) return std::nullopt;
+    const double r_w = p.radius(w);
+    const double ux = x, uy = y - p.icr_y;  // point relative to the ICR
+    // In the corridor when |ρ − r_w| ≤ half for ρ = |u|: compared squared, so the many points outside it cost no
+    // square root.
+    const double rho_sq = ux * ux + uy * uy;
+    const double inner = std::max(r_w - half, 0.0), outer = r_w + half;
+    if (rho_sq < inner * inner || rho_sq > outer * outer || r_w <= 0.0) return std::nullopt;
+    const double w0y = y_w - p.icr_y;  // wheel relative to the ICR (its x is 0)
+    const double phi = std::atan2(-w0y * ux, w0y * uy);  // angle from w0 to u: atan2(w0 × u, w0 · u)
+    if (phi * p.rotation < 0.0) return std::nullopt;      // behind the wheel
+    return std::abs(phi) * r_w;
+}
 
 const char* to_string(PathStatus s);
 

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The zone model's patch lookup (internal: cpp/src/ground/zone_scratch.hpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include <roadpreview/ground/zones.hpp>
+
+#include "ground/zone_scratch.hpp"
+#include "scenes.hpp"
+
+namespace rp = roadpreview;
+
+// The zone model's table lookups give the binary searches' answer: ring = (edges² ≤ r²) − 1, sector = (bounds ≤ the
+// pseudo-angle), also where a table bucket holds several edges (edges 1 mm apart), for points on the edges and for the
+// default model.
+TEST(Zones, PatchLookupAgreesWithABinarySearch) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> coordinate(-45.0, 45.0);
+    for (const auto& edges : {rp::GroundConfig{}.zone_ring_edges_m, std::vector<double>{0.0, 0.001, 0.002, 5.0, 5.001, 42.0}}) {
+        rp::GroundConfig cfg;
+        cfg.zone_ring_edges_m = edges;
+        cfg.zone_sectors.assign(edges.size() - 1, 0);
+        for (std::size_t k = 0; k < cfg.zone_sectors.size(); ++k) cfg.zone_sectors[k] = k % 2 ? 160 : 3;
+        std::vector<double> edges_sq;
+        for (const double e : edges) edges_sq.push_back(e * e);
+        scenes::Cloud pts(20000, 3);
+        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+            const bool on_edge = i < 100;
+            pts.row(i) << float(on_edge ? edges[static_cast<std::size_t>(i) % edges.size()] : coordinate(rng)),
+                float(on_edge ? 0.0 : coordinate(rng)), 0.0f;
+        }
+        const auto patch = rp::zone_patches(rp::points_view(pts.data(), pts.rows(), 3), cfg);
+        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+            const double x = pts(i, 0), y = pts(i, 1);
+            const auto ring = std::upper_bound(edges_sq.begin(), edges_sq.end(), x * x + y * y) - edges_sq.begin() - 1;
+            std::int32_t expected = -1;
+            if (ring >= 0 && ring + 1 < static_cast<std::ptrdiff_t>(edges.size())) {
+                const int sectors = cfg.zone_sectors[static_cast<std::size_t>(ring)];
+                std::vector<double> bounds;
+                for (int k = 1; k < sectors; ++k)
+                    bounds.push_back(rp::pseudo_angle(std::cos(2.0 * M_PI * k / sectors), std::sin(2.0 * M_PI * k / sectors)));
+                const auto sector = std::upper_bound(bounds.begin(), bounds.end(), rp::pseudo_angle(-x, -y)) - bounds.begin();
+                expected = std::accumulate(cfg.zone_sectors.begin(), cfg.zone_sectors.begin() + ring, 0) +
+                           static_cast<std::int32_t>(sector);
+            }
+            ASSERT_EQ(patch[static_cast<std::size_t>(i)], expected) << "point " << i << " at " << x << ", " << y;
+        }
+    }
+}
