@@ -24,39 +24,49 @@ inline double pseudo_angle(double u, double v) {
 }
 
 // Sorted thresholds t and, for a value v, how many of them are ≤ v (std::upper_bound's answer) by a table: bucket b
-// of [lo, lo + buckets/scale) holds how many thresholds lie in buckets before b, the few in b itself are compared
-// one by one. The patch of every ROI point asks this twice, and a binary search's branches are guesses.
+// of [lo, lo + buckets/scale) holds how many thresholds lie in buckets before it and the first one in it; more in
+// it are compared one by one. The patch of every ROI point asks this twice, and a binary search's branches are
+// guesses.
 class Thresholds {
 public:
     Thresholds(std::vector<double> sorted, double lo, double hi, int buckets)
         : t_(std::move(sorted)), lo_(lo), scale_(buckets / (hi - lo)), last_(buckets - 1),
-          before_(static_cast<std::size_t>(buckets) + 1, 0) {
-        for (const double t : t_) ++before_[static_cast<std::size_t>(bucket(t)) + 1];
-        for (std::size_t b = 1; b < before_.size(); ++b) before_[b] += before_[b - 1];
-        before_.pop_back();
-        t_.push_back(std::numeric_limits<double>::quiet_NaN());  // the end: no value is at least it
+          bucket_(static_cast<std::size_t>(buckets)) {
+        for (const double t : t_) ++bucket_[static_cast<std::size_t>(bucket(t))].within;
+        int before = 0;
+        for (Bucket& b : bucket_) {
+            b.before = before;
+            if (b.within > 0) b.first = t_[static_cast<std::size_t>(before)];
+            before += b.within;
+        }
     }
 
     // Exact whatever the spacing: bucket() never decreases as v grows, so a threshold in an earlier bucket is < v
     // and one in a later bucket > v.
     int count_at_most(double v) const {
-        if (std::isnan(v)) return static_cast<int>(t_.size()) - 1;  // as upper_bound: NaN < t is false for every t
-        auto n = before_[static_cast<std::size_t>(bucket(v))];
-        n += t_[static_cast<std::size_t>(n)] <= v;  // without a branch: most buckets hold no threshold or one
-        while (t_[static_cast<std::size_t>(n)] <= v) ++n;  // the end's NaN compares false
+        if (std::isnan(v)) return static_cast<int>(t_.size());  // as upper_bound: NaN < t is false for every t
+        const Bucket& b = bucket_[static_cast<std::size_t>(bucket(v))];
+        int n = b.before + (b.first <= v);  // no branch: most buckets hold no threshold or one
+        if (b.within > 1)
+            while (n < b.before + b.within && t_[static_cast<std::size_t>(n)] <= v) ++n;
         return n;
     }
 
 private:
+    struct Bucket {
+        int before = 0, within = 0;  // thresholds in the buckets before it, and in it
+        double first = std::numeric_limits<double>::quiet_NaN();  // its first threshold (NaN: none; v ≥ NaN is false)
+    };
+
     int bucket(double v) const {
         const double at = (v - lo_) * scale_;
         return at >= 0.0 ? static_cast<int>(std::min(at, static_cast<double>(last_))) : 0;
     }
 
-    std::vector<double> t_;  // and a NaN after the last
+    std::vector<double> t_;
     double lo_, scale_;
     int last_;
-    std::vector<int> before_;
+    std::vector<Bucket> bucket_;
 };
 
 // The patch of a point: ring by horizontal distance, sector by azimuth φ = atan2(y, x) + π ∈ [0, 2π].
