@@ -126,7 +126,7 @@ void bind_roadside(py::module_& parent) {
     m.def("label_points", [](const DoubleArray& xy, double cell_m, int dilation_cells) {
         const auto g = rs::label_points(points_from(xy), cell_m, dilation_cells);
         return py::make_tuple(py::array_t<std::int32_t>(static_cast<py::ssize_t>(g.point_label.size()), g.point_label.data()),
-                              g.components, py::make_tuple(g.x0_m, g.y0_m, g.rows, g.cols));
+                              g.components, py::make_tuple(g.x0_m, g.y0_m, g.cell_m));
     });
     m.def("fit_l_shape", [](const DoubleArray& xy) { return box_tuple(rs::fit_l_shape(points_from(xy))); });
     m.def("assign", [](const std::vector<std::vector<double>>& cost, double gate) { return rs::assign(cost, gate); });

@@ -3,9 +3,12 @@
 // gated assignment, Kalman tracking, latency compensation, a scanner dropping out, WGS84 and the output line.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <string>
 
 #include "roadpreview/roadside/extrinsics.hpp"
@@ -132,6 +135,52 @@ TEST(RoadsideGrid, LabelsDilatedComponents) {
     EXPECT_NEAR(objects[0].centroid_x_m, 0.35 / 3, 1e-12);
     EXPECT_EQ(rs::grid_objects(pts, g, 4).size(), 0u);
     EXPECT_EQ(rs::label_points({}, 0.1, 1).components, 0);
+}
+
+// Groups far apart are labelled on grids of their own; the labels are those of one grid over everything: two
+// occupied cells join when their dilated squares touch (rows and columns at most 2d + 1 apart), a component's
+// cells are the union of its squares, and components are numbered by their first cell in raster order.
+TEST(RoadsideGrid, SeparateGroupsAreLabelledAsOneGridWouldLabelThem) {
+    std::mt19937 rng(3);
+    for (int scene = 0; scene < 40; ++scene) {
+        const double cell = scene % 2 ? 0.1 : 0.25;
+        const int d = scene % 4;
+        std::uniform_real_distribution<double> centre(-30.0, 30.0), offset(-1.5, 1.5);
+        std::vector<rs::Point2> pts;
+        for (int cluster = 0; cluster < 6; ++cluster) {
+            const double cx = centre(rng), cy = scene % 3 ? centre(rng) : cx;  // a diagonal row in every third
+            for (int k = 0; k < 25; ++k) pts.push_back({cx + offset(rng), cy + offset(rng), 0});
+        }
+        const rs::GridLabels g = rs::label_points(pts, cell, d);
+        // The plain answer: cells of every point, joined while their squares touch.
+        std::vector<std::pair<int, int>> at(pts.size());
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            at[i] = {static_cast<int>((pts[i].y_m - g.y0_m) / cell), static_cast<int>((pts[i].x_m - g.x0_m) / cell)};
+        std::vector<std::size_t> root(pts.size());
+        for (std::size_t i = 0; i < root.size(); ++i) root[i] = i;
+        const auto find = [&](std::size_t i) {
+            while (root[i] != i) i = root[i] = root[root[i]];
+            return i;
+        };
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            for (std::size_t j = i + 1; j < pts.size(); ++j)
+                if (std::abs(at[i].first - at[j].first) <= 2 * d + 1 && std::abs(at[i].second - at[j].second) <= 2 * d + 1)
+                    root[find(i)] = find(j);
+        std::map<std::size_t, std::set<std::pair<int, int>>> squares;  // per component: its dilated cells
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            for (int r = -d; r <= d; ++r)
+                for (int c = -d; c <= d; ++c) squares[find(i)].insert({at[i].first + r, at[i].second + c});
+        std::vector<std::pair<std::pair<int, int>, std::size_t>> first;  // raster-first cell → component
+        for (const auto& [component, cells] : squares) first.push_back({*cells.begin(), component});
+        std::sort(first.begin(), first.end());
+        ASSERT_EQ(g.components, static_cast<int>(first.size())) << "scene " << scene;
+        for (std::size_t rank = 0; rank < first.size(); ++rank) {
+            const std::size_t component = first[rank].second;
+            EXPECT_EQ(g.cells[rank + 1], static_cast<int>(squares[component].size())) << "scene " << scene;
+            for (std::size_t i = 0; i < pts.size(); ++i)
+                if (find(i) == component) ASSERT_EQ(g.point_label[i], static_cast<int>(rank + 1)) << "scene " << scene;
+        }
+    }
 }
 
 TEST(RoadsideGrid, LShapeFindsTheCarsSidesWhereTheMbrIsTheSame) {

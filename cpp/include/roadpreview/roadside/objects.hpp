@@ -56,16 +56,18 @@ private:
 /// Beam endpoints in the site frame, for the beams flagged (all valid beams when `mask` is empty).
 void scan_points(const LaserScan& scan, const Pose2& pose, const std::vector<bool>& mask, std::vector<Point2>& out);
 
-/// Label image of a grid: cell (row, col) of point p is (floor((y − y0)/cell), floor((x − x0)/cell)).
+/// Components of a grid: cell (row, col) of point p is (floor((y − y0)/cell), floor((x − x0)/cell)).
 struct GridLabels {
     double x0_m = 0.0, y0_m = 0.0, cell_m = 0.1;
-    int rows = 0, cols = 0, components = 0;  ///< components excluding the background label 0
-    std::vector<std::int32_t> labels;        ///< row-major, 0 = empty
-    std::vector<std::int32_t> point_label;   ///< per input point
+    int components = 0;                     ///< components excluding the background label 0
+    std::vector<int> cells;                 ///< per label 1 … components (0 unused): its cells after dilation
+    std::vector<std::int32_t> point_label;  ///< per input point
 };
 
 /// Occupancy grid of the points, dilated by a (2r+1)² square (cv::dilate), labelled with 8-connectivity
-/// (cv::connectedComponentsWithStats). The grid covers the points' bounding box plus the dilation margin.
+/// (cv::connectedComponentsWithStats), components numbered in raster order (row, then column) of their first cell.
+/// The grid covers the points' bounding box plus the dilation margin; groups of points too far apart to touch are
+/// labelled on grids of their own, so the work follows the occupied area, not the spread.
 GridLabels label_points(const std::vector<Point2>& points, double cell_m, int dilation_cells);
 
 /// Rectangle of the points whose sides best fit them as seen from outside (search over orientations in 1°
