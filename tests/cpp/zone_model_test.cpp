@@ -18,7 +18,7 @@ namespace rp = roadpreview;
 // The zone model's table lookups give the binary searches' answer: ring = (edges² ≤ r²) − 1, sector = (bounds ≤ the
 // pseudo-angle), also where a table bucket holds several edges (edges 1 mm apart), for points on the edges and for the
 // default model.
-TEST(Zones, PatchLookupAgreesWithABinarySearch) {
+TEST(ZoneModel, PatchLookupAgreesWithABinarySearch) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> coordinate(-45.0, 45.0);
     for (const auto& edges : {rp::GroundConfig{}.zone_ring_edges_m, std::vector<double>{0.0, 0.001, 0.002, 5.0, 5.001, 42.0}}) {
