@@ -12,6 +12,7 @@
 
 #include <roadpreview/roadpreview.hpp>
 
+#include "roughness/roughness_scratch.hpp"
 #include "scenes.hpp"
 
 #include "counting_allocator.hpp"
@@ -76,6 +77,21 @@ rp::Frame simulated_frame() {
 }
 
 }  // namespace
+
+// Planned ahead (twiddles, factors, buffers), the FFT of every stretch length allocates nothing at its first
+// transform either — prime lengths included, whose transforms use the generic butterfly's buffer.
+TEST(Realtime, PlannedFftsTransformEveryLengthWithoutAllocating) {
+    constexpr std::size_t kBins = 450;
+    rp::RoughnessScratch s;
+    s.plan_ffts(kBins);
+    rp::Spectrum sp;
+    sp.n.reserve(kBins / 2 + 1);
+    sp.psd.reserve(kBins / 2 + 1);
+    std::vector<double> z(kBins);
+    for (std::size_t j = 0; j < kBins; ++j) z[j] = std::sin(0.3 * static_cast<double>(j)) + 0.01 * static_cast<double>(j);
+    for (std::size_t n = 2; n <= kBins; ++n)
+        EXPECT_EQ(allocations_in([&] { rp::displacement_psd(z.data(), n, 0.1, s, sp); }), 0) << n << " bins";
+}
 
 TEST(Realtime, KittiFramesAllocateNothingOnceWarmWithKalmanFusionAndObstacles) {
     expect_no_allocations(frame_allocations(kitti_frames(), kitti_config(rp::FusionMethod::Kalman), 5, 20), 5);

@@ -90,7 +90,8 @@ LogFit fit_log_line(const std::vector<double>& x, const std::vector<double>& y) 
     return {w2, my - slope * mx, -slope};
 }
 
-// displacement_psd into `sp`.
+}  // namespace
+
 void displacement_psd(const double* z, std::size_t count, double ds, RoughnessScratch& s, Spectrum& sp) {
     if (count < 2) throw std::invalid_argument("displacement_psd needs at least 2 samples");
     std::vector<double>& x = s.detrended;
@@ -115,8 +116,6 @@ void displacement_psd(const double* z, std::size_t count, double ds, RoughnessSc
     }
 }
 
-}  // namespace
-
 void RoughnessScratch::plan_ffts(std::size_t bins) {
     const std::size_t ordinates = bins / 2 + 1;
     for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
@@ -129,13 +128,9 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     anchors.reserve(bins);
     interval.reserve(bins);
     power_by_interval.reserve(bins);
-    Spectrum sp;
-    std::vector<double> z;
-    for (std::size_t n = 2; n <= bins; ++n) {
-        z.assign(n, 0.0);
-        z[0] = 1.0;  // a step, not flat: detrending leaves something to transform
-        displacement_psd(z.data(), n, 1.0, *this, sp);
-    }
+    detrended.reserve(bins);
+    transform.reserve(bins);
+    for (std::size_t n = 2; n <= bins; ++n) fft.impl().plan_real_forward(static_cast<int>(n));
 }
 
 Spectrum displacement_psd(const double* z, std::size_t count, double ds) {

@@ -32,8 +32,25 @@ struct SupportBuffers {
     double backed_fraction = 0.0;
 };
 
+/// Eigen's KISS FFT with its plans made ahead: a length's plan (twiddles, factors and the generic butterfly's
+/// buffer) is what its first transform makes before transforming. Planning by transforming every length up to a
+/// profile's bins took 32 ms per Estimator — a prime length transforms in O(n²). Uses the protected members of
+/// Eigen 3.4's kissfft_impl (unsupported/Eigen/src/FFT/ei_kissfft_impl.h).
+struct PlannedKissFft : Eigen::internal::kissfft_impl<double> {
+    /// The plans and buffer that fwd(Complex*, const double*, nfft), a real forward transform, uses.
+    void plan_real_forward(int nfft) {
+        if (nfft & 3) {  // a complex transform of the real input, through m_tmpBuf1
+            get_plan(nfft, false);
+            m_tmpBuf1.reserve(static_cast<std::size_t>(nfft));
+        } else {  // half as long a complex transform, and the twiddles that recombine it
+            real_twiddles(nfft >> 2);
+            get_plan(nfft >> 1, false);
+        }
+    }
+};
+
 struct RoughnessScratch {
-    Eigen::FFT<double> fft;  // keeps a plan per length it has seen
+    Eigen::FFT<double, PlannedKissFft> fft;  // a plan per length, made by plan_ffts
     std::vector<double> detrended;
     std::vector<std::complex<double>> transform;
     Spectrum right;                 // the right wheel's PSD over the vehicle's stretch
@@ -49,9 +66,12 @@ struct RoughnessScratch {
     std::vector<double> x, y, shape, floor, share, corrected;
 
     /// Plans the FFT of every stretch length up to `bins`, so that no frame pays (or allocates) for a plan, and
-    /// reserves the fits' buffers for that many bins.
+    /// reserves the transform's and the fits' buffers for that many bins.
     void plan_ffts(std::size_t bins);
 };
+
+/// The displacement PSD of `count` heights `ds` apart (docs/method.md §4) into `sp`, with the scratch's FFT plans.
+void displacement_psd(const double* z, std::size_t count, double ds, RoughnessScratch& s, Spectrum& sp);
 
 /// analyze_roughness(profile, cfg) into `out`.
 void analyze_roughness(const Profile& profile, const RoughnessConfig& cfg, RoughnessScratch& s, Roughness& out);
