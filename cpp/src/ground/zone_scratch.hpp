@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <optional>
 #include <utility>
 #include <vector>
 
@@ -72,10 +71,7 @@ private:
 // The patch of a point: ring by horizontal distance, sector by azimuth φ = atan2(y, x) + π ∈ [0, 2π].
 class ZoneModel {
 public:
-    explicit ZoneModel(const GroundConfig& cfg) : sectors_(cfg.zone_sectors) {
-        std::vector<double> edges_sq;
-        for (const double e : cfg.zone_ring_edges_m) edges_sq.push_back(e * e);
-        rings_.emplace(edges_sq, 0.0, edges_sq.back(), kRingBuckets);
+    explicit ZoneModel(const GroundConfig& cfg) : sectors_(cfg.zone_sectors), rings_(ring_table(cfg.zone_ring_edges_m)) {
         first_.push_back(0);
         for (const int s : sectors_) {
             first_.push_back(first_.back() + s);
@@ -94,7 +90,7 @@ public:
     std::int32_t patches() const { return first_.back(); }
 
     std::int32_t patch(double x, double y) const {
-        const int ring = rings_->count_at_most(x * x + y * y) - 1;
+        const int ring = rings_.count_at_most(x * x + y * y) - 1;
         if (ring < 0 || ring >= rings()) return -1;
         // φ = angle of (−x, −y) measured from +x: atan2(y, x) + π.
         const int sector = bounds_[static_cast<std::size_t>(ring)].count_at_most(pseudo_angle(-x, -y));
@@ -103,8 +99,16 @@ public:
 
 private:
     static constexpr int kRingBuckets = 1024, kMaxSectorBuckets = 4096;
+
+    static Thresholds ring_table(const std::vector<double>& edges_m) {  // of squared horizontal distance
+        std::vector<double> edges_sq;
+        for (const double e : edges_m) edges_sq.push_back(e * e);
+        const double last = edges_sq.back();
+        return Thresholds(std::move(edges_sq), 0.0, last, kRingBuckets);
+    }
+
     std::vector<int> sectors_;
-    std::optional<Thresholds> rings_;  // of squared horizontal distance
+    Thresholds rings_;
     std::vector<std::int32_t> first_;
     std::vector<Thresholds> bounds_;
 };

@@ -114,7 +114,8 @@ std::vector<std::vector<std::size_t>> separate_groups(const std::vector<Cell>& c
     std::vector<std::pair<std::vector<std::size_t>, bool>> pending{{std::move(all), false}};  // (points, by row?)
     std::vector<std::vector<std::size_t>> done;
     while (!pending.empty()) {
-        auto [group, by_row] = std::move(pending.back());
+        std::vector<std::size_t> group = std::move(pending.back().first);
+        const bool by_row = pending.back().second;
         pending.pop_back();
         const auto key = [&](std::size_t i) { return by_row ? cell[i].row : cell[i].col; };
         std::sort(group.begin(), group.end(), [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
