@@ -154,7 +154,13 @@ def memory_table(args, tmp: Path) -> str:
     row = (f"| {args.long_frames:,} | {wall:.0f} | {args.long_frames / wall:.1f} | {cpu:.0f} | "
            f"{args.long_frames / cpu:.1f} | {idle:.0f} | {at(0.1):.0f} | {at(0.5):.0f} | {at(1.0):.0f} | "
            f"{spread:.1f} % | {'yes' if spread <= 10 else 'no'} |")
-    return "\n".join(head + [row]) + f"\n\n1-min load at the end {os.getloadavg()[0]:.1f}.\n"
+    low = min((s for s in samples if s[0] >= t0 + 0.1 * wall), key=lambda s: s[1])
+    high = max((s for s in samples if s[0] >= t0 + 0.1 * wall), key=lambda s: s[1])
+    above = sum(r > 1.05 * statistics.median(steady) for r in steady)
+    extremes = (f"Lowest sample after 10 %: {low[1]:.0f} MB at {low[0] - t0:.0f} s; highest {high[1]:.0f} MB at "
+                f"{high[0] - t0:.0f} s; {above} of {len(steady)} samples (every 0.5 s) more than 5 % above their "
+                f"median {statistics.median(steady):.0f} MB.")
+    return "\n".join(head + [row]) + f"\n\n{extremes}\n\n1-min load at the end {os.getloadavg()[0]:.1f}.\n"
 
 
 def reference_route(out_dir: Path, rid: str):

@@ -23,3 +23,4 @@ def test_batch_bench_quick_prints_speedup_and_memory_tables():
     memory = out.split("## Worker memory")[1]
     assert re.search(r"\| 60 \| \d+ \| [\d.]+ \| \d+ \| [\d.]+ \| \d+ \| \d+ \| \d+ \| \d+ \| [\d.]+ % \| (yes|no) \|",
                      memory)
+    assert re.search(r"Lowest sample after 10 %: \d+ MB at \d+ s; highest \d+ MB at \d+ s; \d+ of \d+ samples", memory)
