@@ -140,7 +140,6 @@ std::vector<std::vector<std::size_t>> separate_groups(const std::vector<Cell>& c
 struct Component {
     Cell first;
     int cells;
-    std::int32_t local;  // its label in the group's grid
 };
 
 }  // namespace
@@ -190,7 +189,7 @@ GridLabels label_points(const std::vector<Point2>& points, double cell_m, int di
         cv::Mat labels, stats, centroids;
         const int n = cv::connectedComponentsWithStats(dilated, labels, stats, centroids, 8, CV_32S);
         const std::size_t base = components.size();
-        for (int l = 1; l < n; ++l) components.push_back({{-1, -1}, stats.at<int>(l, cv::CC_STAT_AREA), l});
+        for (int l = 1; l < n; ++l) components.push_back({{-1, -1}, stats.at<int>(l, cv::CC_STAT_AREA)});
         for (int r = 0; r < labels.rows; ++r)  // the first cell of each component
             for (int c = 0; c < labels.cols; ++c)
                 if (const int l = labels.at<std::int32_t>(r, c); l > 0 && components[base + l - 1].first.row < 0)
