@@ -168,8 +168,8 @@ GridLabels label_points(const std::vector<Point2>& points, double cell_m, int di
     for (std::size_t i = 0; i < points.size(); ++i)
         cell[i] = {static_cast<int>((points[i].y_m - g.y0_m) / cell_m), static_cast<int>((points[i].x_m - g.x0_m) / cell_m)};
 
-    // Each group on its own grid (its cells' box and the dilation margin), components numbered as one grid over
-    // everything would number them: by their first cell in raster order.
+    // Each group on its own grid (its cells' box and the dilation margin); the components of all groups numbered
+    // by their first cell in raster order over the whole area, whatever order the groups came in.
     std::vector<Component> components;
     std::vector<std::pair<std::size_t, std::size_t>> point_component;  // (point, index into components)
     for (const auto& group : separate_groups(cell, dilation_cells)) {
