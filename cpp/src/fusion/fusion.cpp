@@ -242,7 +242,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
                                         : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
         const auto [x, y] = map_.centre(touched[c]);
-        bands_[c] = static_cast<std::int32_t>(std::hypot(x - pose_.x_m, y - pose_.y_m) / kPoolBandM);
+        const double dx = x - pose_.x_m, dy = y - pose_.y_m;  // sqrt, not hypot: metres, and every cell of a frame
+        bands_[c] = static_cast<std::int32_t>(std::sqrt(dx * dx + dy * dy) / kPoolBandM);
     }
     // Each median's variance r as the roughness stage rates a bin's, with the pooled point variance of the cell's
     // range band (pooled_variances) for a single point, and as a floor under a cell's own spread: r is a weight
