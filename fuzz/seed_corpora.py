@@ -8,6 +8,7 @@ Usage: seed_corpora.py TESTS_DATA_DIR OUT_DIR  → OUT_DIR/<target>/seed_*. Seed
 import json
 import struct
 import sys
+import zlib
 from pathlib import Path
 
 MAX_SEED_BYTES = 60_000
@@ -176,6 +177,33 @@ def sick_seeds():
             "carmen": b"\x05" + carmen_log()}
 
 
+def png(width, height, colour_type, bit_depth, rows, extra=b""):
+    """A PNG file: IHDR, optional chunks (PLTE, tRNS), one IDAT of the filter-0 rows, IEND."""
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+    raw = b"".join(b"\x00" + row for row in rows)
+    header = struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + extra + chunk(b"IDAT", zlib.compress(raw))
+            + chunk(b"IEND", b""))
+
+
+def png_seeds():
+    w, h = 16, 8
+    grey = [bytes((3 * u + 7 * v) % 256 for u in range(w)) for v in range(h)]
+    palette = b"".join(bytes((i, 255 - i, i // 2)) for i in range(16))
+    return {
+        "grey8": png(w, h, 0, 8, grey),
+        "grey16": png(w, h, 0, 16, [b"".join(struct.pack(">H", 256 * b) for b in row) for row in grey]),
+        "rgb8": png(w, h, 2, 8, [bytes(b for x in row for b in (x, 255 - x, x // 2)) for row in grey]),
+        "rgba8": png(w, h, 6, 8, [bytes(b for x in row for b in (x, 255 - x, x // 2, 200)) for row in grey]),
+        "grey_alpha": png(w, h, 4, 8, [bytes(b for x in row for b in (x, 90)) for row in grey]),
+        "palette": png(w, h, 3, 4, [bytes((row[2 * i] % 16) << 4 | row[2 * i + 1] % 16 for i in range(w // 2))
+                                    for row in grey], struct.pack(">I", 48) + b"PLTE" + palette
+                       + struct.pack(">I", zlib.crc32(b"PLTE" + palette))),
+        "grey1": png(w, h, 0, 1, [bytes((0b10110010 ^ v,)) * (w // 8) for v in range(h)]),
+    }
+
+
 def main():
     data_dir, out_dir = Path(sys.argv[1]), Path(sys.argv[2])
     kitti = (data_dir / "semantickitti/000000.bin").read_bytes()
@@ -196,6 +224,7 @@ def main():
                                "yaml": b"\x01fx: 721.5\nfy: 721.5\ncx: 609.6\ncy: 172.9\nbaseline: 0.54\n"
                                        b"extrinsics: {x_m: 0.27, y_m: 0.06, z_m: 1.65, roll_rad: 0, pitch_rad: 0.01, "
                                        b"yaw_rad: 0}\n"},
+        "stereo_images": png_seeds(),
         "kitti_bin": {"first_rows": kitti[: 256 * 16]},
         "config": {"json": b"\x00" + json.dumps(config).encode(),
                    "yaml": b"\x01sensor_height: 1.73\nground:\n  method: ransac\nprofile:\n  ds_m: 0.1\n"},

@@ -3,6 +3,8 @@ StereoSGBM in C++ against OpenCV's Python matcher, simulator disparity → profi
 LiDAR scan, range variances through the pipeline, the CLI, and bad input."""
 
 import json
+import struct
+import zlib
 
 import numpy as np
 import pytest
@@ -238,6 +240,41 @@ def test_cli_stereo_run(tmp_path, calib):
     assert json.loads(out.read_text())["points"]["ground"] > 10000
 
 
+def test_every_kind_of_png_reads_as_opencv_reads_it(tmp_path, calib):
+    """PNGs are read with libpng, not OpenCV: grey, RGB, RGBA, palette and grey + alpha files give the disparity
+    of the grey images OpenCV's imread + cvtColor make of them (channels in the wrong order would not)."""
+    from PIL import Image
+
+    left, right = textured_ground_pair()
+    rng = np.random.default_rng(1)
+    cfg = cfg_for(num_disparities=64)
+
+    def coloured(grey):  # channels that differ, so that their order matters
+        noise = rng.integers(0, 60, grey.shape)
+        return np.stack([grey, np.clip(grey.astype(int) + noise, 0, 255), 255 - grey], axis=-1).astype(np.uint8)
+
+    kinds = {
+        "L": lambda g: Image.fromarray(g),
+        "RGB": lambda g: Image.fromarray(coloured(g)),
+        "RGBA": lambda g: Image.fromarray(np.dstack([coloured(g), np.full(g.shape, 200, np.uint8)])),
+        "P": lambda g: Image.fromarray(coloured(g)).convert("P", palette=Image.ADAPTIVE, colors=200),
+        "LA": lambda g: Image.fromarray(np.dstack([g, np.full(g.shape, 90, np.uint8)]), mode="LA"),
+    }
+    for kind, make in kinds.items():
+        paths = []
+        for name, grey in (("left", left), ("right", right)):
+            path = tmp_path / f"{name}_{kind}.png"
+            make(grey).save(path)
+            paths.append(path)
+        read = [cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in paths]
+        greys = [m if m.ndim == 2 else cv2.cvtColor(m, cv2.COLOR_BGR2GRAY if m.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
+                 for m in read]
+        found = rp.io.stereo_points(paths[0], paths[1], calib, config=cfg)
+        expected = rp.io.stereo_points(greys[0], greys[1], calib, config=cfg)
+        assert found.disparity.any(), kind
+        np.testing.assert_array_equal(found.disparity, expected.disparity, err_msg=kind)
+
+
 # ------------------------------------------------------------------------------------------- bad input
 def test_bad_input_errors_name_the_file(tmp_path, calib):
     left, right = textured_ground_pair()
@@ -246,6 +283,11 @@ def test_bad_input_errors_name_the_file(tmp_path, calib):
     cv2.imwrite(str(tmp_path / "right.png"), right)
     cv2.imwrite(str(tmp_path / "disp8.png"), (ground_disparity()).astype(np.uint8))
     (tmp_path / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"garbage" * 10)
+    (tmp_path / "truncated.png").write_bytes((tmp_path / "left.png").read_bytes()[:5000])
+    lying = bytearray((tmp_path / "left.png").read_bytes())  # IHDR says 30000 x 30000: more than its data holds
+    lying[16:24] = struct.pack(">II", 30000, 30000)
+    lying[29:33] = struct.pack(">I", zlib.crc32(bytes(lying[12:29])))
+    (tmp_path / "lying.png").write_bytes(bytes(lying))
     (tmp_path / "no_p3.txt").write_text("P2: 700 0 600 0 0 700 170 0 0 0 1 0\n")
     (tmp_path / "zero.yaml").write_text("fx: 400\nfy: 400\ncx: 320\ncy: 60\nbaseline: 0\n")
     cfg = cfg_for(num_disparities=64)
@@ -256,10 +298,14 @@ def test_bad_input_errors_name_the_file(tmp_path, calib):
          "baseline must be > 0"),
         (dict(left=None, right=None, calib=calib, disparity=tmp_path / "disp8.png"), "16-bit"),
         (dict(left=tmp_path / "broken.png", right=tmp_path / "right.png", calib=calib), "cannot read image"),
+        (dict(left=tmp_path / "truncated.png", right=tmp_path / "right.png", calib=calib), "cannot read image"),
+        (dict(left=tmp_path / "lying.png", right=tmp_path / "right.png", calib=calib), "more than its data holds"),
+        (dict(left=calib, right=tmp_path / "right.png", calib=calib), "not a PNG"),
         (dict(left=tmp_path / "missing.png", right=tmp_path / "right.png", calib=calib), "cannot read image"),
     ]
     for kwargs, message in cases:
-        named = kwargs.get("disparity") or (kwargs["left"] if message in ("cannot read image", "differ in size")
+        named = kwargs.get("disparity") or (kwargs["left"] if message in ("cannot read image", "differ in size",
+                                                                          "more than its data holds")
                                             else kwargs["calib"])
         with pytest.raises((RuntimeError, ValueError), match=message) as err:
             rp.io.stereo_points(kwargs["left"], kwargs["right"], kwargs["calib"], disparity=kwargs.get("disparity"),

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The OpenCV side of stereo input: images and disparity PNGs read with imgcodecs, matching with calib3d's
-// StereoSGBM. OpenCV stays inside this file (the library links it privately).
+// The OpenCV side of stereo input: images and disparity PNGs (read with libpng, png_file.hpp), matching with
+// calib3d's StereoSGBM. OpenCV stays inside the stereo folder (the library links it privately).
 #include <algorithm>
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "io/stereo/png_file.hpp"
 #include "roadpreview/io/stereo.hpp"
 
 namespace roadpreview {
@@ -20,26 +20,15 @@ std::string describe(const cv::Mat& m) {
     return bits + " " + std::to_string(m.channels()) + "-channel " + std::to_string(m.cols) + "x" + std::to_string(m.rows);
 }
 
-cv::Mat read_image(const std::string& path) {
-    cv::Mat m;
-    try {
-        m = cv::imread(path, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        throw std::runtime_error(path + ": cannot read image (" + e.what() + ")");
-    }
-    if (m.empty()) throw std::runtime_error(path + ": cannot read image (missing, truncated or not an image)");
-    return m;
-}
-
 // One channel, same depth.
 cv::Mat to_grey(const cv::Mat& m, const std::string& path) {
     if (m.depth() != CV_8U && m.depth() != CV_16U)
         throw std::runtime_error(path + ": images must be 8 or 16 bit, got " + describe(m));
     cv::Mat grey;
     if (m.channels() == 1) return m;
-    if (m.channels() == 3) cv::cvtColor(m, grey, cv::COLOR_BGR2GRAY);
-    else if (m.channels() == 4) cv::cvtColor(m, grey, cv::COLOR_BGRA2GRAY);
-    else throw std::runtime_error(path + ": images must be grey, BGR or BGRA, got " + describe(m));
+    if (m.channels() == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
+    else if (m.channels() == 4) cv::cvtColor(m, grey, cv::COLOR_RGBA2GRAY);
+    else throw std::runtime_error(path + ": images must be grey, RGB or RGBA, got " + describe(m));
     return grey;
 }
 
@@ -62,7 +51,7 @@ int sgbm_mode(const std::string& mode) {
 }  // namespace
 
 StereoImages read_stereo_pair(const std::string& left, const std::string& right) {
-    cv::Mat l = to_grey(read_image(left), left), r = to_grey(read_image(right), right);
+    cv::Mat l = to_grey(read_png(left), left), r = to_grey(read_png(right), right);
     if (l.size() != r.size())
         throw std::runtime_error(left + " and " + right + ": left and right differ in size (" + describe(l) + " vs " +
                                  describe(r) + ")");
@@ -111,7 +100,7 @@ DisparityImage match_stereo(const StereoImages& pair, int first_row, const Stere
 }
 
 DisparityImage read_disparity_png(const std::string& path) {
-    const cv::Mat m = read_image(path);
+    const cv::Mat m = read_png(path);
     if (m.type() != CV_16UC1)
         throw std::runtime_error(path + ": a disparity image must be a single-channel 16-bit PNG (disparity x 256, "
                                  "0 = invalid, as KITTI stores it), got " + describe(m));
