@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "helper_programs.hpp"
+
 namespace {
 
 constexpr const char* kPythonCli = "roadpreview-drives";
@@ -37,22 +39,11 @@ bool wants_python(int argc, char** argv) {
     return false;
 }
 
-// The Python entry point installed beside this executable (same venv or prefix), else the name for PATH.
-std::string python_cli() {
-    std::error_code ec;
-    const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        const auto beside = self.parent_path() / kPythonCli;
-        if (std::filesystem::exists(beside, ec)) return beside.string();
-    }
-    return kPythonCli;
-}
-
 }  // namespace
 
 std::optional<int> delegate_to_python(int argc, char** argv) {
     if (!wants_python(argc, argv)) return std::nullopt;
-    const std::string program = python_cli();
+    const std::string program = program_beside_self(kPythonCli);
     std::vector<char*> args{const_cast<char*>(program.c_str())};
     for (int i = 1; i < argc; ++i) args.push_back(argv[i]);
     args.push_back(nullptr);

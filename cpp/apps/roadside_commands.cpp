@@ -1,15 +1,21 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `roadpreview roadside run|info` (README "Roadside", docs/output.md "Roadside").
+// `roadpreview roadside run|detect|info|extrinsics` (README "Roadside", docs/output.md "Roadside").
 #include "roadside_commands.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
+#include <unistd.h>
+
+#include "helper_programs.hpp"
 #include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
 #include "roadpreview/roadside/sick.hpp"
@@ -18,13 +24,31 @@ namespace rs = roadpreview::roadside;
 
 namespace {
 
+// Camera detection from a video, done by the helper program roadpreview-video (README "Roadside").
+struct VideoOptions {
+    std::string video;
+    std::vector<std::string> cascades;
+    bool no_people = false;
+    double people_threshold = 0.0, start_s = 0.0;
+    int process_width_px = 720, stride = 1;
+};
+
 struct RoadsideOptions {
+    VideoOptions camera;
     std::string site, detections, output, geojson;
     std::vector<std::string> inputs;
     double carmen_rate_hz = 37.5, max_distance_m = 1.0;
     int sensor_port = 2112;
     bool skip_bad = false, quiet = false;
 };
+
+// Round-trips exactly through the helper's command line.
+std::string number(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
 
 bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
@@ -98,6 +122,43 @@ std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const Road
     return all;
 }
 
+// roadpreview-video's command line for `video` writing the detections CSV `output`.
+std::vector<std::string> video_command(const VideoOptions& v, const std::string& output, const std::string& size,
+                                       bool quiet) {
+    std::vector<std::string> args{program_beside_self("roadpreview-video"), v.video, "-o", output,
+                                  "--process-width", std::to_string(v.process_width_px),
+                                  "--stride", std::to_string(v.stride), "--start", number(v.start_s),
+                                  "--people-threshold", number(v.people_threshold)};
+    for (const auto& c : v.cascades) args.insert(args.end(), {"--cascade", c});
+    if (v.no_people) args.push_back("--no-people");
+    if (!size.empty()) args.insert(args.end(), {"--expect-size", size});
+    if (quiet) args.push_back("-q");
+    return args;
+}
+
+// The video's detections through roadpreview-video and a scratch CSV; frames must have the site camera's size.
+std::vector<rs::CameraDetection> detect_in_video(const VideoOptions& v, const rs::Site& site, bool quiet) {
+    if (!site.camera) throw std::runtime_error(v.video + ": a video needs a camera in the site file " + site.path);
+    const std::string size = site.camera->width_px > 0 && site.camera->height_px > 0
+                                 ? std::to_string(site.camera->width_px) + "x" + std::to_string(site.camera->height_px)
+                                 : "";
+    std::string scratch = (std::filesystem::temp_directory_path() / "roadpreview-video-XXXXXX.csv").string();
+    const int fd = mkstemps(scratch.data(), 4);
+    if (fd < 0) throw std::runtime_error(scratch + ": cannot create a scratch file for the video's detections");
+    close(fd);
+    struct Remove {
+        std::string path;
+        ~Remove() { std::remove(path.c_str()); }
+    } remove{scratch};
+    const int status = run_program(video_command(v, scratch, size, quiet));
+    if (status != 0)
+        throw std::runtime_error(v.video + ": camera detection failed (roadpreview-video exited with " +
+                                 std::to_string(status) + ")");
+    return rs::read_detections(scratch);
+}
+
+int detect(const RoadsideOptions& o) { return run_program(video_command(o.camera, o.output, "", o.quiet)); }
+
 int run(const RoadsideOptions& o) {
     const rs::Site site = rs::read_site(o.site);
     auto scans = read_all(resolve_inputs(o.inputs, &site), o, o.quiet);
@@ -112,6 +173,7 @@ int run(const RoadsideOptions& o) {
     });
     rs::Processor processor(site);
     if (!o.detections.empty()) processor.add_detections(rs::read_detections(o.detections));
+    if (!o.camera.video.empty()) processor.add_detections(detect_in_video(o.camera, site, o.quiet));
     std::ofstream file;
     if (!o.output.empty()) {
         file.open(o.output);
@@ -221,10 +283,30 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
     run_cmd->add_option("SCANS", o->inputs, "Scan files: SICK .json dump or .pcap/.pcapng, CARMEN .log[.gz], scan "
                                             ".csv; NAME=FILE assigns a site scanner")->required();
     run_cmd->add_option("--detections", o->detections, "Camera detections, CSV t,x,y,w,h,class,score or JSON");
+    run_cmd->add_option("--video", o->camera.video, "Camera video: detections by the built-in HOG people detector "
+                                                    "and --cascade files (roadpreview-video)");
     run_cmd->add_option("-o,--output", o->output, "JSON lines to write (default stdout)");
     run_cmd->add_option("--geojson", o->geojson, "Also write the objects as a GeoJSON FeatureCollection");
     run_cmd->add_flag("--skip-bad", o->skip_bad, "Skip and count telegrams that do not decode instead of stopping");
     run_cmd->add_flag("-q,--quiet", o->quiet, "No progress on stderr");
+    CLI::App* detect_cmd = roadside->add_subcommand("detect", "Camera detections from a video (HOG people detector, "
+                                                              "Viola–Jones cascades) as CSV t,x,y,w,h,class,score");
+    detect_cmd->add_option("VIDEO", o->camera.video, "Video file (any container and codec OpenCV's FFmpeg reads)")
+        ->required();
+    detect_cmd->add_option("-o,--output", o->output, "Detections CSV to write")->required();
+    detect_cmd->add_flag("-q,--quiet", o->quiet, "No progress on stderr");
+    for (CLI::App* cmd : {run_cmd, detect_cmd}) {
+        VideoOptions& v = o->camera;
+        cmd->add_option("--cascade", v.cascades, "CLASS=FILE[:MIN_NEIGHBOURS]: a Viola–Jones cascade (OpenCV XML) "
+                                                 "whose detections get CLASS (repeatable)");
+        cmd->add_flag("--no-people", v.no_people, "Do not run the HOG people detector (class pedestrian)");
+        cmd->add_option("--people-threshold", v.people_threshold, "HOG SVM margin a person needs (default 0)");
+        cmd->add_option("--process-width", v.process_width_px, "Video frames are scaled to this width for detection, "
+                                                               "px (default 720, as the paper)");
+        cmd->add_option("--video-stride", v.stride, "Detect in every n-th video frame (default 1)")
+            ->check(CLI::PositiveNumber);
+        cmd->add_option("--video-start", v.start_s, "Camera time of the video's first frame, s (default 0)");
+    }
     CLI::App* info_cmd = roadside->add_subcommand("info", "What scan files hold: scans, beams, angles, times, ranges");
     info_cmd->add_option("SCANS", o->inputs, "Scan files")->required();
     info_cmd->add_flag("--skip-bad", o->skip_bad, "Skip and count telegrams that do not decode");
@@ -240,5 +322,9 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
         cmd->add_option("--sensor-port", o->sensor_port, "TCP port of the scanner in captures (default 2112)")
             ->check(CLI::Range(1, 65535));
     }
-    return [o, run_cmd, ext_cmd]() { return run_cmd->parsed() ? run(*o) : ext_cmd->parsed() ? extrinsics(*o) : info(*o); };
+    return [o, run_cmd, ext_cmd, detect_cmd]() {
+        if (run_cmd->parsed()) return run(*o);
+        if (detect_cmd->parsed()) return detect(*o);
+        return ext_cmd->parsed() ? extrinsics(*o) : info(*o);
+    };
 }

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `roadpreview roadside run|info`: roadside perception from 2-D laser scanners (and camera detections).
+// `roadpreview roadside run|detect|info|extrinsics`: roadside perception from 2-D laser scanners (and a camera).
 #pragma once
 
 #include <functional>

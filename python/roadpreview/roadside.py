@@ -6,6 +6,7 @@
     scans = rp.roadside.read_rosbag_scans("people.bag")           # sensor_msgs/LaserScan (ROS 1/2 bags, MCAP)
     proc = rp.roadside.Processor("site.yaml")                      # or the YAML text
     cycles = proc.run(scans, detections=[(t, x, y, w, h, "car", 0.9), ...])
+    detections = rp.roadside.detect_video("camera.mp4")            # HOG people (+ cascades): the same tuples
     cycles[-1]["objects"][0]["lat_deg"]                            # exactly the CLI's output line, as a dict
 
 A scan is a dict: time_s, scanner (index into the site's scanners), counter, start_angle_rad, step_rad (scanner
@@ -14,9 +15,14 @@ frame: 0 = straight ahead, counter-clockwise), ranges_m (float32, NaN = no retur
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import os
+import shutil
+import subprocess
+import sysconfig
+import tempfile
 from pathlib import Path
 from typing import Iterable, Optional, Sequence, Union
 
@@ -85,6 +91,35 @@ def write_scan_csv(scans: Iterable[dict], path: PathLike) -> None:
             angles = np.degrees(s["start_angle_rad"] + s["step_rad"] * np.arange(len(s["ranges_m"])))
             for a, r in zip(angles, s["ranges_m"]):
                 f.write(f"{s['time_s']:.6f},{s['scanner']},{a:.6f},{'' if not np.isfinite(r) else f'{r:.4f}'}\n")
+
+
+def detect_video(path: PathLike, *, cascades: Optional[dict] = None, people: bool = True,
+                 people_threshold: float = 0.0, process_width: int = 720, stride: int = 1, start_s: float = 0.0,
+                 expect_size: Optional[tuple[int, int]] = None) -> list[tuple]:
+    """Camera detections from a video by the helper program `roadpreview-video` (OpenCV's HOG people detector,
+    class "pedestrian", and Viola–Jones `cascades` {class: cascade XML}): (t, x, y, w, h, class, score) tuples,
+    px, t = the frame's time in the video + `start_s`. Raises RuntimeError with the helper's message."""
+    helper = shutil.which("roadpreview-video", path=os.pathsep.join([sysconfig.get_path("scripts"),
+                                                                     os.environ.get("PATH", "")]))
+    if helper is None:
+        raise RuntimeError("roadpreview-video is not installed (it comes with the package: pip install .)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "detections.csv"
+        args = [helper, os.fspath(path), "-o", str(out), "-q", "--process-width", str(int(process_width)),
+                "--stride", str(int(stride)), "--start", repr(float(start_s)),
+                "--people-threshold", repr(float(people_threshold))]
+        for cls, xml in (cascades or {}).items():
+            args += ["--cascade", f"{cls}={os.fspath(xml)}"]
+        if not people:
+            args.append("--no-people")
+        if expect_size:
+            args += ["--expect-size", f"{int(expect_size[0])}x{int(expect_size[1])}"]
+        proc = subprocess.run(args, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(proc.stderr.strip().removeprefix("roadpreview-video: error: "))
+        with open(out) as f:
+            return [(float(r["t"]), float(r["x"]), float(r["y"]), float(r["w"]), float(r["h"]), r["class"],
+                     float(r["score"])) for r in csv.DictReader(f)]
 
 
 def decode_telegram(data: bytes) -> Optional[dict]:

@@ -3,6 +3,7 @@
 // (docs/output.md, "Roadside").
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -145,6 +146,17 @@ std::vector<CameraDetection> read_detections(const std::string& path) {
         out.push_back(d);
     }
     return out;
+}
+
+void write_detections_csv(const std::vector<CameraDetection>& detections, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw std::runtime_error(path + ": cannot write the detections");
+    out.precision(std::numeric_limits<double>::max_digits10);
+    out << "t,x,y,w,h,class,score\n";
+    for (const auto& d : detections)
+        out << d.t_s << ',' << d.x_px << ',' << d.y_px << ',' << d.w_px << ',' << d.h_px << ',' << d.cls << ','
+            << d.score << '\n';
+    if (!out) throw std::runtime_error(path + ": cannot write the detections");
 }
 
 }  // namespace roadpreview::roadside

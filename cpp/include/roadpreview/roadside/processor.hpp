@@ -25,6 +25,8 @@ struct CameraDetection {
 
 /// Detections from a CSV `t,x,y,w,h,class,score` or a JSON array / JSON lines of objects with those keys.
 std::vector<CameraDetection> read_detections(const std::string& path);
+/// Writes detections as that CSV, every number round-tripping exactly.
+void write_detections_csv(const std::vector<CameraDetection>& detections, const std::string& path);
 
 struct OutputObject {
     int id = 0;
