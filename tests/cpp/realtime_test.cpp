@@ -185,6 +185,27 @@ TEST(Realtime, TryProcessGivesOrdinaryFramesTheirFrameStatus) {
     EXPECT_STREQ(rp::to_string(rp::FrameStatus::TiltedGround), rp::kTiltedGround);
 }
 
+// A slope of 31° (z = 0.6 x): no ground within the 15° tilt limit, said by the ground stage's status enum; such
+// frames allocate nothing once warm either.
+TEST(Realtime, TiltedGroundFramesSaySoWithoutAllocating) {
+    const scenes::Cloud slope = scenes::plane(0.6, 0.0, -1.73, 20000, 1.0, 30.0, 9.0);
+    const rp::PointsView view = rp::points_view(slope.data(), slope.rows(), 3);
+    rp::Config cfg = kitti_config(rp::FusionMethod::None);
+    cfg.ground.method = rp::GroundMethod::Pca;
+    rp::Estimator est(cfg);
+    rp::Result out;
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(est.try_process(view, 5.0, 0.0, out).ok());
+    EXPECT_EQ(out.status, rp::FrameStatus::TiltedGround);
+    EXPECT_EQ(allocations_in([&] { est.try_process(view, 5.0, 0.0, out); }), 0);
+    for (const rp::GroundMethod method : {rp::GroundMethod::Zones, rp::GroundMethod::Pca}) {  // the stage itself
+        cfg.ground.method = method;
+        EXPECT_EQ(rp::fit_ground(view, cfg.ground).status, rp::GroundStatus::TiltedGround) << rp::to_string(method);
+    }
+    const scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 20000, 1.0, 30.0, 9.0);
+    EXPECT_EQ(rp::fit_ground(rp::points_view(road.data(), road.rows(), 3), rp::GroundConfig{}).status,
+              rp::GroundStatus::Found);
+}
+
 // The error path itself allocates nothing: the message goes into the Status's own buffer.
 TEST(Realtime, TryProcessRefusesBadMotionWithoutAllocating) {
     rp::Estimator est(kitti_config(rp::FusionMethod::None));

@@ -97,7 +97,8 @@ TEST(TiltLimit, ASlopeSteeperThanTheLimitIsNotGround) {
         const auto view = rp::points_view(slope.points.data(), slope.points.rows(), 3);
         const rp::GroundFit steep = rp::fit_ground(view, cfg);
         EXPECT_FALSE(steep.plane) << rp::to_string(method);
-        EXPECT_EQ(steep.reason, std::string(rp::kTiltedGround)) << rp::to_string(method);
+        EXPECT_EQ(steep.status, rp::GroundStatus::TiltedGround) << rp::to_string(method);
+        EXPECT_STREQ(rp::to_string(steep.status), rp::kTiltedGround);
         cfg.max_tilt_deg = 25.0;
         const rp::GroundFit allowed = rp::fit_ground(view, cfg);
         ASSERT_TRUE(allowed.plane) << rp::to_string(method);

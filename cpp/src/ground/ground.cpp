@@ -45,7 +45,7 @@ Eigen::Vector3d row(PointsView pts, Eigen::Index i) { return pts.row(i).cast<dou
 
 // The paper's method: fit, drop points more than `threshold` above the plane, repeat.
 void pca_ground(PointsView pts, const GroundConfig& cfg, GroundFit& fit) {
-    fit.reason.clear();
+    fit.status = GroundStatus::Found;
     fit.plane.reset();
     fit.mask.assign(static_cast<std::size_t>(pts.rows()), 1);
     Moments kept;
@@ -96,7 +96,7 @@ GroundFit ransac_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     ransac.setProbability(0.99);
     if (!ransac.computeModel()) {  // no sample within the tilt limit: say so when the points do span a plane
         const auto any_plane = fit_plane(pts);
-        if (any_plane && !within_tilt(*any_plane, cfg.max_tilt_deg)) fit.reason = kTiltedGround;
+        if (any_plane && !within_tilt(*any_plane, cfg.max_tilt_deg)) fit.status = GroundStatus::TiltedGround;
         return fit;
     }
 
@@ -144,9 +144,9 @@ void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scr
         std::fill(fit.mask.begin(), fit.mask.end(), 0);
         fit.plane.reset();
         fit.count = 0;
-        fit.reason = kTiltedGround;
+        fit.status = GroundStatus::TiltedGround;
     }
-    if (!fit.plane && fit.reason.empty()) fit.reason = "no ground";
+    if (!fit.plane && fit.status == GroundStatus::Found) fit.status = GroundStatus::NoGround;
 }
 
 GroundFit fit_ground(const RoiCloud& roi, const GroundConfig& cfg) {
@@ -163,7 +163,7 @@ GroundFit fit_ground(PointsView points, const GroundConfig& cfg) {
     GroundFit fit;
     fit.plane = in_roi.plane;
     fit.count = in_roi.count;
-    fit.reason = in_roi.reason;
+    fit.status = in_roi.status;
     fit.mask.assign(static_cast<std::size_t>(points.rows()), 0);
     for (std::size_t i = 0; i < in_roi.mask.size(); ++i) fit.mask[static_cast<std::size_t>(roi.input_index[i])] = in_roi.mask[i];
     return fit;

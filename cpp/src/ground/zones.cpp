@@ -166,7 +166,7 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     fit.mask.assign(static_cast<std::size_t>(points.rows()), 0);
     fit.plane.reset();
     fit.count = 0;
-    fit.reason.clear();
+    fit.status = GroundStatus::Found;
 
     const std::optional<Plane> fitted_root = root_reference(points, cfg, z);
     const Plane root = fitted_root.value_or(kLevel);
@@ -202,7 +202,8 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
         fit.count = all.count;
     } else {
         std::fill(fit.mask.begin(), fit.mask.end(), 0);
-        if (any_too_steep) fit.reason = kTiltedGround;  // say why: only steep patches held a plane
+        // Say why: only steep patches held a plane, or none did.
+        fit.status = any_too_steep ? GroundStatus::TiltedGround : GroundStatus::NoGround;
     }
 }
 

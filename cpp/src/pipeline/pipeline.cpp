@@ -22,7 +22,7 @@ namespace {
 // for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
 FrameStatus blocking_status(const Result& r, const GroundFit& ground, bool map_has_data) {
     if (!map_has_data && r.points.finite == 0) return FrameStatus::NoFinitePoints;
-    if (!map_has_data && !r.plane) return ground.reason == kTiltedGround ? FrameStatus::TiltedGround : FrameStatus::NoGround;
+    if (!map_has_data && !r.plane) return ground.status == GroundStatus::TiltedGround ? FrameStatus::TiltedGround : FrameStatus::NoGround;
     if (r.path.status == PathStatus::Stopped) return FrameStatus::VehicleStopped;
     return FrameStatus::Ok;
 }

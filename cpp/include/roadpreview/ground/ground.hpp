@@ -26,15 +26,26 @@ inline double height_above(const Plane& pl, double x, double y, double z) {
 /// `mask`, if given, selects the rows used. Returns nullopt for fewer than 3 points or a degenerate fit.
 std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t>* mask = nullptr);
 
+/// The text of a frame whose only ground plane lies farther from level than ground.max_tilt_deg.
+inline constexpr const char* kTiltedGround = "no ground within the tilt limit";
+
+/// Whether ground was found, and why not (an enum, not a string: the real-time path does not allocate).
+enum class GroundStatus {
+    Found,         ///< a plane
+    NoGround,      ///< "no ground"
+    TiltedGround,  ///< kTiltedGround: the only planes lie farther from level than ground.max_tilt_deg
+};
+
+inline const char* to_string(GroundStatus s) {
+    return s == GroundStatus::Found ? "" : s == GroundStatus::NoGround ? "no ground" : kTiltedGround;
+}
+
 struct GroundFit {
     std::vector<std::uint8_t> mask;  ///< 1 = ground, one entry per point given
     std::optional<Plane> plane;      ///< nullopt: no ground found
     std::int64_t count = 0;          ///< ground points
-    std::string reason;              ///< why there is no ground ("no ground", kTiltedGround); empty with a plane
+    GroundStatus status = GroundStatus::Found;  ///< Found with a plane, else why there is none
 };
-
-/// The reason of a frame whose only ground plane lies farther from level than ground.max_tilt_deg.
-inline constexpr const char* kTiltedGround = "no ground within the tilt limit";
 
 /// Ground among base-frame `points` by `cfg.method`; only points in the front ROI can be ground.
 /// The mask has one entry per point given.
