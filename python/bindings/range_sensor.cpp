@@ -70,11 +70,11 @@ rp::RangeMotion motion_from(const std::string& motion_path, std::optional<double
 
 using ReferenceArrays = std::vector<std::vector<std::pair<DoubleArray, DoubleArray>>>;  // [sensor][run]: (x, z)
 
-std::vector<std::vector<rp::ReferenceProfile>> references_from(const ReferenceArrays& refs) {
+std::vector<std::vector<rp::ReferenceProfile>> references_from(const ReferenceArrays& refs, bool leaning_datum) {
     std::vector<std::vector<rp::ReferenceProfile>> out;
     for (const auto& per_sensor : refs) {
         out.emplace_back();
-        for (const auto& [x, z] : per_sensor) out.back().push_back({to_vector(x), to_vector(z)});
+        for (const auto& [x, z] : per_sensor) out.back().push_back({to_vector(x), to_vector(z), leaning_datum});
     }
     return out;
 }
@@ -156,18 +156,19 @@ void bind_range_sensor(py::module_& m) {
         return samples_dict(samples);
     });
     m.def("range_register_run", [](DoubleArray x, DoubleArray z, DoubleArray ref_x, DoubleArray ref_z, double guess,
-                                   double search) {
+                                   double search, bool fit_tilt) {
         return shift_dict(rp::register_run(to_vector(x), to_vector(z), to_vector(ref_x), to_vector(ref_z), guess,
-            search));
-    });
+            search, fit_tilt));
+    }, py::arg("x"), py::arg("z"), py::arg("ref_x"), py::arg("ref_z"), py::arg("guess"), py::arg("search"),
+       py::arg("fit_tilt") = false);
     m.def("range_calibrate_offsets", [](const std::vector<std::string>& runs, const std::vector<std::string>& motions,
                                         const std::string& layout, const std::string& calibration,
-                                        const ReferenceArrays& refs, double search,
+                                        const ReferenceArrays& refs, bool leaning_datum, double search,
                                         const std::string& output) {
         const auto sensors = rp::read_range_layout(layout);
         std::vector<rp::RangeMotion> motion;
         for (const std::string& path : motions) motion.emplace_back(rp::MotionTable::read_csv(path));
-        const auto references = references_from(refs);
+        const auto references = references_from(refs, leaning_datum);
         rp::RangeCalibration cal;
         {
             py::gil_scoped_release release;

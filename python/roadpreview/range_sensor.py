@@ -55,10 +55,12 @@ def samples(readings: PathLike, sensors: PathLike, *, calibration: Optional[Path
                                 speed, float(yaw_rate), raw)
 
 
-def map_profile(estimator, y_m: float, x_from_m: float, x_to_m: float, step_m: float = 0.05) -> np.ndarray:
-    """(x, z) of an estimator's fused LiDAR map along the odometry line y = y_m, empty cells bridged linearly and
-    the ends trimmed to observed cells."""
-    x = np.arange(x_from_m, x_to_m + step_m / 2, step_m)
+def map_profile(estimator, y_m: float, x_from_m: float, x_to_m: float) -> np.ndarray:
+    """(x, z) of an estimator's fused LiDAR map along the odometry line y = y_m: one point per cell, at the cell's
+    centre (a cell holds the mean of [k·c, (k+1)·c); read at its edges it would shift the profile by up to half
+    a cell), empty cells bridged linearly, the ends trimmed to observed cells."""
+    cell = estimator.config.fusion.cell_m
+    x = (np.arange(np.floor(x_from_m / cell), np.ceil(x_to_m / cell)) + 0.5) * cell
     z = core().fusion_map_heights(estimator._impl, x, np.full_like(x, y_m))
     ok = np.isfinite(z)
     if ok.sum() < 2:
@@ -92,9 +94,9 @@ def calibrate_offset(runs: Sequence[PathLike], motions: Sequence[PathLike], sens
     if len(runs) != len(motions):
         raise ValueError(f"give one motion file per run ({len(runs)} runs, {len(motions)} motion files)")
     layout = read_layout(sensors)
-    refs = _references(reference, layout, len(runs))
+    refs, from_maps = _references(reference, layout, len(runs))
     return core().range_calibrate_offsets([os.fspath(r) for r in runs], [os.fspath(m) for m in motions],
-                                          os.fspath(sensors), _path(calibration), refs, float(search_m),
+                                          os.fspath(sensors), _path(calibration), refs, from_maps, float(search_m),
                                           _path(output))
 
 
@@ -111,9 +113,10 @@ def _path(p: Optional[PathLike]) -> str:
     return os.fspath(p) if p is not None else ""
 
 
-def _references(reference, layout: list[dict], runs: int) -> list:
+def _references(reference, layout: list[dict], runs: int) -> tuple[list, bool]:
     """The reference as (x, z) array pairs, [sensor][run]: one for all sensors and runs, or (fused maps) each
-    sensor's line in each run's map."""
+    sensor's line in each run's map; and whether they are maps (whose levelled datum may lean against the
+    sensor's heights: the registration then fits a tilt too)."""
     from .estimator import Estimator
 
     def from_map(est, sensor) -> tuple:
@@ -124,11 +127,11 @@ def _references(reference, layout: list[dict], runs: int) -> list:
     if isinstance(maps, (list, tuple)) and maps and isinstance(maps[0], Estimator):
         if len(maps) not in (1, runs):
             raise ValueError(f"give one estimator, or one per run ({runs} runs, {len(maps)} estimators)")
-        return [[from_map(est, sensor) for est in maps] for sensor in layout]
+        return [[from_map(est, sensor) for est in maps] for sensor in layout], True
     if isinstance(reference, (str, os.PathLike)):
         reference = np.genfromtxt(os.fspath(reference), delimiter=",", names=True)
         reference = np.column_stack([reference["x"], reference["z"]])
     xz = np.asarray(reference, dtype=float)
     if xz.ndim != 2 or xz.shape[1] != 2:
         raise ValueError(f"reference must be an (N, 2) array of x, z, got shape {xz.shape}")
-    return [[(np.ascontiguousarray(xz[:, 0]), np.ascontiguousarray(xz[:, 1]))]]
+    return [[(np.ascontiguousarray(xz[:, 0]), np.ascontiguousarray(xz[:, 1]))]], False

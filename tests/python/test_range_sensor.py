@@ -238,6 +238,24 @@ def test_range_samples_enter_the_fusion_map_and_its_profiles():
         rp.range_sensor.fuse_into(rp.Estimator(rp.Config(sensor_height=1.8)), x, 0.8, z, 0.001)
 
 
+def test_the_maps_profile_sits_where_the_road_is():
+    """A map holding a known relief (1.5 m waves) reads it back along the sensor's line without a shift: its cells
+    are read at their centres (read at cell edges half of the time, the profile moved by ~25 mm, which the offset
+    self-calibration took for b2)."""
+    est = rp.Estimator(rp.Config(sensor_height=1.8, fusion={"method": "kalman"}))
+    est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)
+    x = np.arange(0.0, 20.0, 0.002)
+    relief = lambda u: 0.02 * np.sin(2 * np.pi * u / 1.5)
+    rp.range_sensor.fuse_into(est, x, 0.8, relief(x), 0.001)
+    xz = rp.range_sensor.map_profile(est, 0.8, -5.0, 30.0)
+    assert xz[0, 0] == pytest.approx(0.05) and xz[-1, 0] == pytest.approx(19.95)
+    assert np.allclose(np.diff(xz[:, 0]), 0.1)
+    shifts = np.arange(-0.05, 0.0505, 0.001)
+    rms = [np.sqrt(np.mean((xz[:, 1] - relief(xz[:, 0] + sh)) ** 2)) for sh in shifts]
+    assert abs(shifts[int(np.argmin(rms))]) <= 0.002
+    assert min(rms) < 0.0005  # the cell means of 1.5 m waves: 0.7 % below their peaks
+
+
 def test_a_real_road_profile_read_by_simulated_lasers_keeps_its_iri(tmp_path):
     """The real profile of tests/data/profiles (Šroubek & Šorel, 0.25 m) laid under both wheels and read at 10 m/s:
     every window's IRI within 10 % of the IRI of the profile itself in the same bins."""

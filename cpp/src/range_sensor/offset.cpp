@@ -2,6 +2,7 @@
 // Offset calibration x = b1·v + b2 (docs/method.md §11.4): each run registered onto the known profile by PCL's
 // ICP (translation along x and a height offset), checked by cross-correlation, then a line over the runs.
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -25,15 +26,25 @@ constexpr int kStarts = 11;                 // ICP starts spread over guess ± s
 constexpr std::size_t kMaxIcpSamples = 2000;  // more add time, not precision (the residual check uses all)
 constexpr double kDistinctSpeeds = 0.1;     // speeds must span this fraction of the largest
 
-// ICP's only free parameters: a shift along x and a height offset (z).
+// ICP's only free parameters: a shift along x, a height offset and, for a reference whose datum leans against
+// the sensor's heights, a height tilt about the run's mean x (z + offset + tilt·(x − x̄)). A fused LiDAR map's
+// levelling leans (2.6 mm/m on the simulated road), which a shift alone absorbed as a biased x (b2 off by 10 cm);
+// on an exact reference the tilt is left out, as it trades off with the shift on asymmetric features.
 class WarpShiftXZ : public pcl::registration::WarpPointRigid<Point, Point, float> {
 public:
-    WarpShiftXZ() : WarpPointRigid(2) { transform_matrix_.setIdentity(); }
+    WarpShiftXZ(bool tilt, float x_mean) : WarpPointRigid(tilt ? 3 : 2), x_mean_(x_mean) {
+        transform_matrix_.setIdentity();
+    }
     void setParam(const VectorX& p) override {
         transform_matrix_.setIdentity();
         transform_matrix_(0, 3) = p[0];
-        transform_matrix_(2, 3) = p[1];
+        const float tilt = p.size() > 2 ? p[2] : 0.0f;
+        transform_matrix_(2, 0) = tilt;
+        transform_matrix_(2, 3) = p[1] - tilt * x_mean_;
     }
+
+private:
+    float x_mean_;
 };
 
 // Linear interpolation of the reference at x (NaN outside it).
@@ -91,31 +102,37 @@ double median_of(std::vector<double> v) {
     return v[v.size() / 2];
 }
 
-// Pearson correlation of the samples' heights with the reference shifted by `lag` (samples off it skipped).
-double correlation(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref, double lag) {
-    double n = 0, sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+// Pearson correlation of the samples' heights with the reference shifted by `lag` (samples off it skipped); with
+// `detrend`, the partial correlation given x: a reference leaning against the samples does not move the peak.
+double correlation(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref, double lag,
+                   bool detrend) {
+    double n = 0, sa = 0, sb = 0, sx = 0, saa = 0, sbb = 0, sab = 0, sxx = 0, sxa = 0, sxb = 0;
     for (std::size_t i = 0; i < x.size(); ++i) {
         const double r = ref.at(x[i] + lag);
         if (std::isnan(r)) continue;
         n += 1;
-        sa += z[i];
-        sb += r;
-        saa += z[i] * z[i];
-        sbb += r * r;
-        sab += z[i] * r;
+        sa += z[i], sb += r, sx += x[i];
+        saa += z[i] * z[i], sbb += r * r, sab += z[i] * r;
+        sxx += x[i] * x[i], sxa += x[i] * z[i], sxb += x[i] * r;
     }
     if (n < 3) return -1.0;
-    const double va = saa - sa * sa / n, vb = sbb - sb * sb / n;
-    return va > 0 && vb > 0 ? (sab - sa * sb / n) / std::sqrt(va * vb) : -1.0;
+    const double va = saa - sa * sa / n, vb = sbb - sb * sb / n, cab = sab - sa * sb / n;
+    if (!(va > 0 && vb > 0)) return -1.0;
+    const double rab = cab / std::sqrt(va * vb);
+    const double vx = sxx - sx * sx / n;
+    if (!detrend || !(vx > 0)) return rab;
+    const double rxa = (sxa - sx * sa / n) / std::sqrt(vx * va), rxb = (sxb - sx * sb / n) / std::sqrt(vx * vb);
+    const double den = (1.0 - rxa * rxa) * (1.0 - rxb * rxb);
+    return den > 0 ? (rab - rxa * rxb) / std::sqrt(den) : -1.0;
 }
 
 // The lag of the correlation's peak on a grid of the reference step, refined by a parabola through its neighbours.
 double xcorr_shift(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref, double guess,
-                   double search) {
+                   double search, bool detrend) {
     const int k = static_cast<int>(std::ceil(search / kReferenceStep_m));
     std::vector<double> c(static_cast<std::size_t>(2 * k + 1));
-    for (int i = -k; i <= k; ++i) c[static_cast<std::size_t>(i + k)] = correlation(x, z, ref,
-        guess + i * kReferenceStep_m);
+    for (int i = -k; i <= k; ++i)
+        c[static_cast<std::size_t>(i + k)] = correlation(x, z, ref, guess + i * kReferenceStep_m, detrend);
     const auto best = static_cast<std::size_t>(std::max_element(c.begin(), c.end()) - c.begin());
     double frac = 0.0;
     if (best > 0 && best + 1 < c.size()) {
@@ -126,16 +143,20 @@ double xcorr_shift(const std::vector<double>& x, const std::vector<double>& z, c
 }
 
 struct IcpFit {
-    double shift = 0.0, z_offset = 0.0, fitness = std::numeric_limits<double>::infinity();
+    double shift = 0.0, z_offset = 0.0, tilt = 0.0, x_mean = 0.0, fitness = std::numeric_limits<double>::infinity();
+    // A sample's height residual over the reference: NaN off it.
+    double residual(double x, double z, const Reference& ref) const {
+        return z + z_offset + tilt * (x - x_mean) - ref.at(x + shift);
+    }
 };
 
-// Mean squared height residual of the samples over the reference, shifted by (shift, z_offset).
-double height_mse(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref, double shift,
-                  double z_offset) {
+// Mean squared height residual of the samples over the reference, registered by `fit`.
+double height_mse(const std::vector<double>& x, const std::vector<double>& z, const Reference& ref,
+                  const IcpFit& fit) {
     double sse = 0.0;
     std::size_t n = 0;
     for (std::size_t i = 0; i < x.size(); ++i) {
-        const double r = z[i] + z_offset - ref.at(x[i] + shift);
+        const double r = fit.residual(x[i], z[i], ref);
         if (std::isnan(r)) continue;
         sse += r * r;
         ++n;
@@ -144,11 +165,11 @@ double height_mse(const std::vector<double>& x, const std::vector<double>& z, co
 }
 
 IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::search::KdTree<Point>::Ptr& tree,
-                double start, double z0, double scale, double max_corr) {
+                double start, double z0, bool tilt, double x_mean, double scale, double max_corr) {
     pcl::IterativeClosestPoint<Point, Point> icp;
     icp.setSearchMethodTarget(tree, true);  // one tree for every start
     auto estimation = pcl::make_shared<pcl::registration::TransformationEstimationLM<Point, Point, float>>();
-    estimation->setWarpFunction(pcl::make_shared<WarpShiftXZ>());
+    estimation->setWarpFunction(pcl::make_shared<WarpShiftXZ>(tilt, static_cast<float>(x_mean)));
     icp.setTransformationEstimation(estimation);
     icp.setInputSource(source);
     icp.setInputTarget(target);
@@ -166,15 +187,17 @@ IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::s
     fit.fitness = 0.0;
     const Eigen::Matrix4f T = icp.getFinalTransformation();
     fit.shift = T(0, 3);
-    fit.z_offset = T(2, 3) / scale;
+    fit.tilt = T(2, 0) / scale;
+    fit.x_mean = x_mean;
+    fit.z_offset = (T(2, 3) + T(2, 0) * static_cast<float>(x_mean)) / scale;
     return fit;
 }
 
 }  // namespace
 
 RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m,
-    const std::vector<double>& ref_x_m,
-                      const std::vector<double>& ref_z_m, double guess_m, double search_m) {
+                      const std::vector<double>& ref_x_m, const std::vector<double>& ref_z_m, double guess_m,
+                      double search_m, bool fit_tilt) {
     if (ref_x_m.size() < 2 || ref_x_m.size() != ref_z_m.size())
         throw std::invalid_argument("the reference profile needs 2 or more (x, z) points of equal count");
     for (std::size_t i = 1; i < ref_x_m.size(); ++i)
@@ -193,6 +216,7 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
         z_icp.push_back(z_m[i]);
     }
     const Cloud::Ptr source = cloud_of(x_icp, z_icp, scale);
+    const double x_mean = std::accumulate(x_icp.begin(), x_icp.end(), 0.0) / static_cast<double>(x_icp.size());
     std::vector<double> on_ref;
     for (std::size_t i = 0; i < x_m.size(); ++i)
         if (!std::isnan(ref.at(x_m[i] + guess_m))) on_ref.push_back(ref.at(x_m[i] + guess_m) - z_m[i]);
@@ -205,8 +229,9 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
     IcpFit best;
     for (int k = 0; k < kStarts; ++k) {
         const double start = guess_m + search_m * (2.0 * k / (kStarts - 1) - 1.0);
-        IcpFit fit = icp_from(source, target, tree, start, z0, scale, 2.0 * search_m / (kStarts - 1));
-        if (std::isfinite(fit.fitness)) fit.fitness = height_mse(x_m, z_m, ref, fit.shift, fit.z_offset);
+        IcpFit fit = icp_from(source, target, tree, start, z0, fit_tilt, x_mean, scale,
+                              2.0 * search_m / (kStarts - 1));
+        if (std::isfinite(fit.fitness)) fit.fitness = height_mse(x_m, z_m, ref, fit);
         if (fit.fitness < best.fitness) best = fit;
     }
     if (!std::isfinite(best.fitness)) throw std::invalid_argument("ICP did not converge for this run");
@@ -215,7 +240,7 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
     out.z_offset_m = best.z_offset;
     double sse = 0.0, leverage = 0.0;
     for (std::size_t i = 0; i < x_m.size(); ++i) {
-        const double r = z_m[i] + best.z_offset - ref.at(x_m[i] + best.shift);
+        const double r = best.residual(x_m[i], z_m[i], ref);
         if (std::isnan(r)) continue;
         sse += r * r;
         const double g = ref.slope(x_m[i] + best.shift);
@@ -224,7 +249,7 @@ RunShift register_run(const std::vector<double>& x_m, const std::vector<double>&
     }
     out.rms_m = std::sqrt(sse / std::max<double>(1.0, static_cast<double>(out.samples)));
     out.shift_sigma_m = leverage > 0 ? out.rms_m / std::sqrt(leverage) : std::numeric_limits<double>::infinity();
-    out.xcorr_shift_m = xcorr_shift(x_m, z_m, ref, guess_m, search_m);
+    out.xcorr_shift_m = xcorr_shift(x_m, z_m, ref, guess_m, search_m, fit_tilt);
     return out;
 }
 
@@ -288,7 +313,7 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
         const ReferenceProfile& ref = references.size() == 1 ? references[0] : references[r];
         RunShift shift;
         try {
-            shift = register_run(x, z, ref.x_m, ref.z_m, guess_m, search_m);
+            shift = register_run(x, z, ref.x_m, ref.z_m, guess_m, search_m, ref.leaning_datum);
         } catch (const std::invalid_argument& e) {
             throw std::invalid_argument(run_names[r] + ": " + e.what());
         }

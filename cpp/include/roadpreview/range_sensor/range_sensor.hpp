@@ -206,10 +206,13 @@ std::vector<RangeSample> read_range_samples(const std::string& readings_path, co
 /// A known profile along the track: x increasing (m, where the axle is at the motion's start = 0), z (m).
 struct ReferenceProfile {
     std::vector<double> x_m, z_m;
+    /// The profile's heights may lean against the sensor's (a fused LiDAR map, levelled by its own datum): the
+    /// registration then fits a height tilt too, so the lean is not taken for a shift.
+    bool leaning_datum = false;
 };
 
 /// Offset calibration of one sensor from runs over a known profile: per run the ICP shift (PCL, translation
-/// along x plus a height offset) and the cross-correlation shift, then the weighted least-squares line
+/// along x plus a height offset, and a height tilt for a leaning_datum) and the cross-correlation shift, then the weighted least-squares line
 /// shift = b1·v + b2. `runs[i]` are that sensor's samples placed with b1 = b2 = 0 (s_m: where the axle was,
 /// plus the pitch's share of d's change); `references` holds one profile for all runs or one per run.
 /// Shifts are searched within guess_m ± search_m (guess: the layout's geometric foot, x_m + h·tan pitch).
@@ -232,8 +235,8 @@ double geometric_foot_m(const RangeSensor& s);
 
 /// One run's shift by ICP and by cross-correlation (see calibrate_offset); speed_mps is left 0.
 RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m,
-    const std::vector<double>& ref_x_m,
-                      const std::vector<double>& ref_z_m, double guess_m, double search_m);
+                      const std::vector<double>& ref_x_m, const std::vector<double>& ref_z_m, double guess_m,
+                      double search_m, bool fit_tilt = false);
 
 struct RangeProfilerConfig {
     double frame_length_m = 40.0;  ///< a window's length along the track
