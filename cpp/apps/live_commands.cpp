@@ -54,12 +54,6 @@ int replay(const ReplayArgs& a) {
     return 0;
 }
 
-double percentile(std::vector<double> v, double q) {
-    std::sort(v.begin(), v.end());
-    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
-    return v[std::min(k, v.size() - 1)];
-}
-
 }  // namespace
 
 std::function<int()> add_replay_command(CLI::App& app) {
@@ -90,7 +84,7 @@ void add_live_options(CLI::App* run, LiveRunOptions& o) {
 
 void LiveStats::add(const rp::Frame& f) {
     ++frames_;
-    if (f.arrival_s > 0.0) latency_ms_.push_back(1e3 * (rp::steady_now_s() - f.arrival_s));
+    if (f.arrival_s > 0.0) latency_ms_.add(1e3 * (rp::steady_now_s() - f.arrival_s));
     const rp::FrameDiagnostics& d = f.diagnostics;
     affected_ += d.lost_packets || d.late_packets || d.missing_columns;
     lost_ += d.lost_packets;
@@ -116,7 +110,6 @@ void LiveStats::print(const rp::SourceInfo& info) const {
                  static_cast<long long>(missing_columns_));
     if (!latency_ms_.empty())
         std::fprintf(stderr, "; latency last packet → result p50 %.2f ms, p99 %.2f ms, max %.2f ms",
-                     percentile(latency_ms_, 0.5), percentile(latency_ms_, 0.99),
-                     *std::max_element(latency_ms_.begin(), latency_ms_.end()));
+                     latency_ms_.percentile(0.5), latency_ms_.percentile(0.99), latency_ms_.max());
     std::fprintf(stderr, "\n");
 }

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bounded_sample.hpp"
 #include "roadpreview/roadpreview.hpp"
 
 /// Adds the `replay` subcommand; returns the action to run when it was parsed (exit status).
@@ -30,6 +31,6 @@ public:
     static std::string describe(const roadpreview::FrameDiagnostics& d);  ///< ", 3 packets lost, ..." or empty
 
 private:
-    std::vector<double> latency_ms_;
+    BoundedSample latency_ms_;
     std::int64_t frames_ = 0, affected_ = 0, lost_ = 0, late_ = 0, duplicate_ = 0, missing_columns_ = 0;
 };

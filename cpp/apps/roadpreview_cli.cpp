@@ -16,6 +16,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bounded_sample.hpp"
 #include "live_commands.hpp"
 #include "python_commands.hpp"
 #include "range_commands.hpp"
@@ -161,30 +162,26 @@ void report_source(const rp::SourceInfo& s) {
 // What the summary line at the end of a run counts: classes, why classes were declined, the vehicle's IRI.
 struct RunSummary {
     std::map<std::string, int> classes, declined;
-    std::vector<double> ms, iri_m_per_km;
+    BoundedSample ms, iri_m_per_km;
 
     void add(const rp::Result& r) {
         ++classes[class_of(r.vehicle)];
         for (const rp::Roughness* x : {&r.left.roughness, &r.right.roughness, &r.vehicle})
             if (!x->iso_class)
                 ++declined[x->reason == rp::RoughnessReason::None ? "no reason given" : rp::to_string(x->reason)];
-        if (r.vehicle.iri.value) iri_m_per_km.push_back(*r.vehicle.iri.value);
-        ms.push_back(r.timing_ms.total);
-    }
-
-    static double median(std::vector<double> v) {
-        std::sort(v.begin(), v.end());
-        return v[v.size() / 2];
+        if (r.vehicle.iri.value) iri_m_per_km.add(*r.vehicle.iri.value);
+        ms.add(r.timing_ms.total);
     }
 
     void print() const {
-        std::fprintf(stderr, "roadpreview: %zu frame(s), pipeline median %.2f ms, max %.2f ms; vehicle classes:",
-                     ms.size(), median(ms), *std::max_element(ms.begin(), ms.end()));
+        std::fprintf(stderr, "roadpreview: %llu frame(s), pipeline median %.2f ms, max %.2f ms; vehicle classes:",
+                     static_cast<unsigned long long>(ms.count()), ms.median(), ms.max());
         for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
         if (iri_m_per_km.empty()) std::fprintf(stderr, "; vehicle IRI: none");
         else
-            std::fprintf(stderr, "; vehicle IRI median %.2f m/km (%zu of %zu frames)", median(iri_m_per_km),
-                         iri_m_per_km.size(), ms.size());
+            std::fprintf(stderr, "; vehicle IRI median %.2f m/km (%llu of %llu frames)", iri_m_per_km.median(),
+                         static_cast<unsigned long long>(iri_m_per_km.count()),
+                         static_cast<unsigned long long>(ms.count()));
         if (!declined.empty()) std::fprintf(stderr, "; declined classes (L, R, vehicle):");
         const char* separator = " ";
         for (const auto& [reason, n] : declined)
