@@ -30,12 +30,14 @@ public:
     std::uint64_t count() const { return count_; }
     double max() const { return max_; }
     /// The value below which a fraction q of them lie (the ⌈q·n⌉-th smallest); median(): the (n/2 + 1)-th.
+    /// NaN before the first value.
     double percentile(double q) const {
+        if (empty()) return std::numeric_limits<double>::quiet_NaN();
         const std::vector<double> v = sorted();
         const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
         return v[std::min(k, v.size() - 1)];
     }
-    double median() const { return sorted()[values_.size() / 2]; }
+    double median() const { return empty() ? std::numeric_limits<double>::quiet_NaN() : sorted()[values_.size() / 2]; }
 
 private:
     std::vector<double> sorted() const {

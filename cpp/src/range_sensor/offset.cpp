@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Offset calibration x = b1·v + b2 (docs/method.md §11.4): each run registered onto the known profile by PCL's
-// ICP (translation along x and a height offset), checked by cross-correlation, then a line over the runs.
+// ICP (translation along x and a height offset; a height tilt too against a LiDAR map), checked by
+// cross-correlation, then a line over the runs.
 #include <algorithm>
-#include <numeric>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 
 #include <pcl/point_types.h>

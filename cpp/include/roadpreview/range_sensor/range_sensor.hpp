@@ -212,8 +212,8 @@ struct ReferenceProfile {
 };
 
 /// Offset calibration of one sensor from runs over a known profile: per run the ICP shift (PCL, translation
-/// along x plus a height offset, and a height tilt for a leaning_datum) and the cross-correlation shift, then the weighted least-squares line
-/// shift = b1·v + b2. `runs[i]` are that sensor's samples placed with b1 = b2 = 0 (s_m: where the axle was,
+/// along x plus a height offset, and a height tilt for a leaning_datum) and the cross-correlation shift, then
+/// the weighted least-squares line shift = b1·v + b2. `runs[i]` are that sensor's samples placed with b1 = b2 = 0 (s_m: where the axle was,
 /// plus the pitch's share of d's change); `references` holds one profile for all runs or one per run.
 /// Shifts are searched within guess_m ± search_m (guess: the layout's geometric foot, x_m + h·tan pitch).
 /// Throws std::invalid_argument for fewer than two distinct speeds (they must differ by 10 % of the larger),
