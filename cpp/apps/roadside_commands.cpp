@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -45,7 +46,7 @@ struct RoadsideOptions {
 // Round-trips exactly through the helper's command line.
 std::string number(double v) {
     std::ostringstream s;
-    s.precision(17);
+    s.precision(std::numeric_limits<double>::max_digits10);
     s << v;
     return s.str();
 }

@@ -2,8 +2,8 @@
 // Built-in camera detection for users without a detector of their own: a video's frames through OpenCV's HOG
 // people detector (Dalal & Triggs) and any Viola–Jones cascades, as the paper's pole camera did (docs/method.md
 // "Roadside", "Camera"). Its own library, roadpreview::roadside_video (OpenCV's video I/O and object detection
-// load ~145 shared libraries, FFmpeg's among them: programs that do not read video should not pay for them); the
-// CLI runs it as the helper program `roadpreview-video`.
+// would add ~200 shared libraries to the CLI, FFmpeg's and GDAL's among them: programs that do not read video
+// should not pay for them); the CLI runs it as the helper program `roadpreview-video`.
 #pragma once
 
 #include <functional>
