@@ -12,7 +12,8 @@ Real: the six KITTI seq 00 frames (three in tests/data/semantickitti, three in t
 ground-truth poses, and the bundled OS1-128 recording with its poses: per-beam offsets, and the vehicle class of
 every frame before and after (single frame and fused).
 
-Usage: ``python bench/calibration.py [--quick] [--frames N]``; prints Markdown, progress on stderr.
+Usage: ``python bench/calibration.py [--quick] [--frames N] [--cell M]`` (default 20 frames, a 19 m drive, and the
+calibration's default 0.2 m cells); prints Markdown, progress on stderr.
 """
 
 from __future__ import annotations
@@ -69,7 +70,7 @@ def gauge_free_error(c, truth_deg: np.ndarray, reach: np.ndarray) -> np.ndarray:
     return np.asarray(c.elevation_offset_deg)[d] - (t - basis @ np.linalg.lstsq(basis, t, rcond=None)[0])
 
 
-def simulated(name: str, errors: dict, frames: int, quick: bool) -> list:
+def simulated(name: str, errors: dict, frames: int, quick: bool, cell_m: float) -> list:
     lidar = sim.hdl_64e(height_m=SENSOR_HEIGHT_M, calibration_seed=80, columns=1024 if quick else 2083, **errors)
     scene = sim.Scene(sim.Road.iso8608("B", seed=80), ())
     start = time.perf_counter()
@@ -79,7 +80,8 @@ def simulated(name: str, errors: dict, frames: int, quick: bool) -> list:
     poses = [(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in drive]
     cfg = rp.Config(extrinsics=lidar.extrinsics())
     start = time.perf_counter()
-    c = rp.calibrate_beams([(f.points, beams) for f in drive], poses=poses, config=cfg, beam_count=lidar.beams)
+    c = rp.calibrate_beams([(f.points, beams) for f in drive], poses=poses, config=cfg, beam_count=lidar.beams,
+                           cell_m=cell_m)
     seconds = time.perf_counter() - start
     # reach per beam (the gauge) as the estimator saw it: level sensor, flat road
     elevations = np.radians(np.asarray(lidar.elevations_deg))
@@ -96,7 +98,7 @@ def simulated(name: str, errors: dict, frames: int, quick: bool) -> list:
                      "–" if label == "before" else f"{np.sqrt(np.mean(error ** 2)):.4f}",
                      "–" if label == "before" else f"{int(np.sum(np.abs(error) <= 0.005))}",
                      "–" if label == "before" else f"{np.nanmedian(np.asarray(c.elevation_sigma_deg)):.4f}",
-                     " ".join(vehicle_classes(pts, single)), vehicle_classes(pts, fused)[-1],
+                     " ".join(vehicle_classes(pts, single)), " ".join(vehicle_classes(pts, fused)),
                      "–" if label == "before" else f"{seconds:.1f}"])
     return rows
 
@@ -127,16 +129,17 @@ def os1_frames():
     return frames, [(m[0, 3], m[1, 3], float(np.arctan2(m[1, 0], m[0, 0]))) for m in rows]
 
 
-def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, **open_kwargs) -> tuple[list, list]:
+def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, cell_m: float,
+         **open_kwargs) -> tuple[list, list]:
     cfg = rp.Config(sensor_height=height)
     source = rp.io.open(open_kwargs.pop("path")) if "path" in open_kwargs else None
     if source is not None:
         numbered = [(f.points.copy(), np.asarray(f.beams).copy()) for f in source]
-        c = rp.calibrate_beams(numbered, poses=poses, config=cfg, beam_count=source.info["beams"])
+        c = rp.calibrate_beams(numbered, poses=poses, config=cfg, beam_count=source.info["beams"], cell_m=cell_m)
         c.sensor_model, c.serial = source.info["sensor_model"], source.info["serial"]
         corrected = [c.apply(p, b) for p, b in numbered]
     else:
-        c = rp.calibrate_beams(frames, poses=poses, config=cfg)
+        c = rp.calibrate_beams(frames, poses=poses, config=cfg, cell_m=cell_m)
         path = tmp / f"{name}.yaml"
         c.save(str(path))
         corrected = [f.points.copy() for f in rp.io.open([str(p) for p in open_kwargs["files"]],
@@ -158,7 +161,8 @@ def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, *
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a short, coarse drive (smoke test)")
-    parser.add_argument("--frames", type=int, default=10, help="frames of each simulated drive")
+    parser.add_argument("--frames", type=int, default=20, help="frames of each simulated drive")
+    parser.add_argument("--cell", type=float, default=0.2, help="road cell of the calibration, m (rp.calibrate_beams)")
     parser.add_argument("--shared", type=Path, default=SHARED, help="the shared data folder (KITTI frames 3-5, poses)")
     args = parser.parse_args(argv)
     start = time.perf_counter()
@@ -167,14 +171,14 @@ def main(argv=None) -> int:
     for name, errors in (("beams off by 0.03° (1σ)", {"elevation_error_deg": 0.03}),
                          ("uniform offsets up to 0.1°", {"beam_errors_deg": tuple(
                              np.random.default_rng(5).uniform(-0.1, 0.1, 64))})):
-        rows += simulated(name, errors, frames, args.quick)
+        rows += simulated(name, errors, frames, args.quick, args.cell)
     print("# roadpreview beam calibration benchmark\n")
     print(f"- load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; Python {platform.python_version()}, "
           f"roadpreview {rp.__version__}\n")
-    print(f"## Simulated HDL-64E, class B road, {frames} frames at {SPEED_MPS:g} m/s\n")
+    print(f"## Simulated HDL-64E, class B road, {frames} frames at {SPEED_MPS:g} m/s, cells of {args.cell:g} m\n")
     print(md_table(["beams", "calibration", "determined", "max |error| °", "RMS error °", "within 0.005°",
                     "median σ °",
-                    "vehicle class per frame", "fused class (last frame)", "calibration s"], rows) + "\n")
+                    "vehicle class per frame", "fused class per frame", "calibration s"], rows) + "\n")
     if not args.quick:
         import tempfile
         summaries, classes = [], []
@@ -182,12 +186,12 @@ def main(argv=None) -> int:
             kitti, kitti_poses = kitti_frames(args.shared)
             if kitti is not None:
                 files = kitti_files(args.shared)
-                s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, 8.6, Path(tmp),
+                s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, 8.6, Path(tmp), args.cell,
                             files=files)
                 summaries.append(s)
                 classes += c
             os1, os1_poses = os1_frames()
-            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, 2.5, Path(tmp), path=OS1_PCAP)
+            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, 2.5, Path(tmp), args.cell, path=OS1_PCAP)
             summaries.append(s)
             classes += c
         print("## Real recordings: per-beam offsets\n")

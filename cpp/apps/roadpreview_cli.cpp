@@ -49,7 +49,7 @@ struct RunOptions {
     double alpha = 0.0;
     std::string poses_file;
     int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
-    double cell = 0.1;    // calibrate: road cell, m
+    double cell = 0.2;    // calibrate: road cell, m
     double max_sigma = 0.01;  // calibrate: deg
     std::vector<double> segment_lengths_m;  // --segments
     std::string segments_file;              // --segments-csv
@@ -638,7 +638,7 @@ int main(int argc, char** argv) {
     cal_cmd->add_option("--config", c.config_file, "JSON or YAML config file with the fields of rp.Config");
     cal_cmd->add_option("--beams", c.beams, "Beams of a sensor whose files do not number them (default 64, HDL-64E)")
         ->check(CLI::PositiveNumber);
-    cal_cmd->add_option("--cell", c.cell, "Road cell in which beams are compared, m (default 0.1)")->check(CLI::PositiveNumber);
+    cal_cmd->add_option("--cell", c.cell, "Road cell in which beams are compared, m (default 0.2)")->check(CLI::PositiveNumber);
     cal_cmd->add_option("--max-sigma", c.max_sigma, "A beam less certain than this (deg) is not determined (default 0.01)")
         ->check(CLI::PositiveNumber);
     cal_cmd->add_option("-o,--output", c.output, "Beams file to write (YAML)")->required();

@@ -49,7 +49,7 @@ def _integrated_poses(times: list, speed: float, yaw_rate: float, frame_rate_hz:
 
 def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate: float = 0.0,
                     poses: Optional[Sequence] = None, config: Optional[Config] = None,
-                    beam_count: Optional[int] = None, frame_rate_hz: float = 10.0, cell_m: float = 0.1,
+                    beam_count: Optional[int] = None, frame_rate_hz: float = 10.0, cell_m: float = 0.2,
                     max_sigma_deg: float = 0.01, min_observations: int = 100):
     """Per-beam offsets from a drive, estimated in C++ (as ``roadpreview calibrate``).
 

@@ -73,6 +73,33 @@ def test_reference_rejects_a_static_or_short_drive(drive):
         cal.calibrate_beams([(f.points, beams) for f in frames], [(0.0, 0.0, 0.0)] * 2, 64)
 
 
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_exact_beams_read_no_offset_at_the_default_cell_size():
+    """method.md §8 step 1: range noise moves a point along its ray, so on a steep beam the cell it falls in depends
+    on its height error; small cells turn that into a bias of the near beams. A sensor with exact beams reads every
+    offset within the 0.005° target with the default cells, and the steep beams stray beyond it with 5 cm cells."""
+    lidar = sim.hdl_64e(height_m=1.8, columns=1024)  # 2 cm range noise, no offsets
+    frames = sim.drive(sim.Scene(sim.Road.iso8608("B", seed=4), ()), lidar, SPEED_MPS, 0.0, 12, seed=4)
+    steep = ring_reach(lidar) < 6.0
+    offsets = {}
+    for cell in (None, 0.05):
+        c = rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames],
+                               poses=[(f.pose.x_m, f.pose.y_m, f.pose.yaw_rad) for f in frames],
+                               config=rp.Config(extrinsics=lidar.extrinsics()), beam_count=lidar.beams,
+                               **({} if cell is None else {"cell_m": cell}))
+        d = np.asarray(c.determined)
+        assert d.sum() >= 45
+        offsets[cell] = np.where(d, np.asarray(c.elevation_offset_deg), 0.0)
+    assert np.abs(offsets[None]).max() <= 0.005
+    assert np.abs(offsets[0.05][steep]).max() > 0.008
+
+
+def ring_reach(lidar) -> np.ndarray:
+    """Each beam's horizontal range to a level road (inf for beams that never meet it)."""
+    elevation = np.radians(np.asarray(lidar.elevations_deg))
+    return np.where(elevation < 0, lidar.height_m / np.tan(-np.minimum(elevation, -1e-9)), np.inf)
+
+
 def run_cli(*args):
     return subprocess.run([cli(), *map(str, args)], capture_output=True, text=True, timeout=300)
 

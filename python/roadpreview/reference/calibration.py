@@ -29,7 +29,7 @@ class CalibrationError(ValueError):
 
 @dataclass
 class CalibrationOptions:
-    cell_m: float = 0.1  #: road cells whose heights the beams are compared in
+    cell_m: float = 0.2  #: road cells whose heights the beams are compared in (smaller: steep beams biased)
     min_frames: int = 2
     min_travel_m: float = 0.3  #: the vehicle must move at least this far over the drive
     max_sigma_deg: float = 0.01  #: a beam whose offset is less certain than this is not determined

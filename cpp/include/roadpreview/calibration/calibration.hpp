@@ -23,7 +23,9 @@ public:
 };
 
 struct CalibrationOptions {
-    double cell_m = 0.1;               ///< road cells in which the beams' heights are compared
+    /// Road cells in which the beams' heights are compared. Smaller cells bias the steep beams: range noise moves
+    /// a point along its ray, so which cell it falls in depends on its height error (method.md §8).
+    double cell_m = 0.2;
     int min_frames = 2;
     double min_travel_m = 0.3;         ///< the vehicle must move at least this far over the drive
     double max_sigma_deg = 0.01;       ///< a beam whose offset is less certain than this is not determined
