@@ -199,3 +199,36 @@ def test_the_default_overlap_lets_ema_fusion_settle_to_the_serial_profiles(tmp_p
 
     assert worst_difference_m(batch.DEFAULT_OVERLAP_FRAMES) < 1e-6
     assert worst_difference_m(5) > 1e-3
+
+
+def test_row_groups_are_bounded_by_frames_and_by_bytes(tmp_path, monkeypatch):
+    """A part's row groups close at ROW_GROUP_FRAMES frames or once their output lines reach ROW_GROUP_BYTES,
+    whichever comes first, and reading it back gives every frame in order."""
+    import pyarrow.parquet as pq
+
+    folder = tmp_path / "drive"
+    folder.mkdir()
+    for k in range(9):
+        (folder / f"{k:06d}.bin").symlink_to(SEQ00[k % len(SEQ00)])
+    config = dict(CONFIG, obstacles={"enabled": False})
+
+    def groups(out):
+        (part,) = (out / "frames").glob("recording=d/part-*.parquet")
+        meta = pq.ParquetFile(part).metadata
+        assert [x["frame"] for x in batch.read_frames(out, "d", ["frame"]).to_pylist()] == list(range(9))
+        return [meta.row_group(g).num_rows for g in range(meta.num_row_groups)]
+
+    batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "a"))
+    assert groups(tmp_path / "a") == [9]  # 9 KITTI lines are far below both bounds
+    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 4)
+    batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "b"))
+    assert groups(tmp_path / "b") == [4, 4, 1]
+    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 3)  # no empty group after the last full one
+    batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "e"))
+    assert groups(tmp_path / "e") == [3, 3, 3]
+    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 128)
+    line_bytes = len(batch.read_frames(tmp_path / "a", "d", ["line"]).column("line")[0].as_py())
+    monkeypatch.setattr(batch, "ROW_GROUP_BYTES", 2 * line_bytes)  # lines differ a little: 2 or 3 frames a group
+    batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "c"))
+    sizes = groups(tmp_path / "c")
+    assert sum(sizes) == 9 and len(sizes) >= 3 and max(sizes) <= 3
