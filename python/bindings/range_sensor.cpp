@@ -204,6 +204,27 @@ void bind_range_sensor(py::module_& m) {
         }
         return z;
     }, py::arg("estimator"), py::arg("x"), py::arg("y"), "Fused map heights (m, NaN where empty) at odometry x, y");
+    m.def("fusion_map_cells", [](const rp::Estimator& est, DoubleArray x, DoubleArray y) {
+        const rp::TemporalFusion* fusion = est.fusion();
+        if (!fusion) throw std::invalid_argument("the estimator has no fusion map (fusion.method is \"none\")");
+        if (x.size() != y.size()) throw std::invalid_argument("x and y must have the same length");
+        py::array_t<double> out({x.size(), py::ssize_t{3}});
+        auto o = out.mutable_unchecked<2>();
+        const rp::ElevationMap& map = fusion->map();
+        for (py::ssize_t i = 0; i < x.size(); ++i) {
+            const std::int64_t k = map.slot(x.data()[i], y.data()[i]);
+            const rp::MapCell* c = k < 0 ? nullptr : &map.cell(k);
+            const bool seen = c && c->observations > 0;
+            const auto centre = k < 0 ? std::array<double, 2>{0.0, 0.0} : map.centre(k);
+            const double nan = std::numeric_limits<double>::quiet_NaN();
+            o(i, 0) = seen ? centre[0] + c->dx : nan;
+            o(i, 1) = seen ? centre[1] + c->dy : nan;
+            o(i, 2) = seen ? c->height : nan;
+        }
+        return out;
+    }, py::arg("estimator"), py::arg("x"), py::arg("y"),
+       "The fused map's cells at odometry x, y: (N, 3) of where each cell's height lies (x, y: its centre plus the "
+       "fused points' offset) and the height, m; NaN rows where empty");
     m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z,
         DoubleArray variance) {
         if (x.size() != y.size() || x.size() != z.size() || x.size() != variance.size())

@@ -56,19 +56,21 @@ def samples(readings: PathLike, sensors: PathLike, *, calibration: Optional[Path
 
 
 def map_profile(estimator, y_m: float, x_from_m: float, x_to_m: float) -> np.ndarray:
-    """(x, z) of an estimator's fused LiDAR map along the odometry line y = y_m: one point per cell, at the cell's
-    centre (a cell holds the mean of [k·c, (k+1)·c); read at its edges it would shift the profile by up to half
-    a cell), empty cells bridged linearly, the ends trimmed to observed cells."""
+    """(x, z) of an estimator's fused LiDAR map along the odometry line y = y_m: one point per cell, where the cell's
+    height lies — the mean x of the points fused into it (a LiDAR ring crosses a cell at one place; read at the
+    cell's centre, the profile sits up to half a cell off the road it holds) —, empty cells bridged linearly at
+    their centres, the ends trimmed to observed cells."""
     cell = estimator.config.fusion.cell_m
     x = (np.arange(np.floor(x_from_m / cell), np.ceil(x_to_m / cell)) + 0.5) * cell
-    z = core().fusion_map_heights(estimator._impl, x, np.full_like(x, y_m))
-    ok = np.isfinite(z)
+    cells = core().fusion_map_cells(estimator._impl, x, np.full_like(x, y_m))
+    ok = np.isfinite(cells[:, 2])
     if ok.sum() < 2:
         raise ValueError(f"the fused map holds fewer than 2 cells along y = {y_m} m "
                          f"between x = {x_from_m} and {x_to_m} m")
     first, last = np.flatnonzero(ok)[[0, -1]]
-    x, z, ok = x[first:last + 1], z[first:last + 1], ok[first:last + 1]
-    return np.column_stack([x, np.interp(x, x[ok], z[ok])])
+    cells, x, ok = cells[first:last + 1], x[first:last + 1], ok[first:last + 1]
+    x = np.where(ok, cells[:, 0], x)  # each fused x lies inside its cell: the order is kept
+    return np.column_stack([x, np.interp(x, x[ok], cells[ok, 2])])
 
 
 def fuse_into(estimator, x_m, y_m, z_m, sigma_m) -> int:

@@ -111,7 +111,7 @@ TEST(ElevationMap, DefaultsCoverThePreviewAndDocumentTheirMemory) {
     rp::ElevationMap map(cfg.fusion.cell_m, cfg.fusion.map_length_m);
     EXPECT_EQ(map.side(), 1000);
     EXPECT_EQ(map.bytes(), 1000u * 1000u * sizeof(rp::MapCell));
-    EXPECT_EQ(sizeof(rp::MapCell), 20u);  // docs/method.md §7 quotes 20 MB
+    EXPECT_EQ(sizeof(rp::MapCell), 28u);  // docs/method.md §7 quotes 28 MB
 }
 
 TEST(Motion, IntegratesArcsAndLines) {
@@ -470,4 +470,42 @@ TEST(Fusion, TwoPointsThatAgreeWeighNoMoreThanTheirBandAllows) {
     // The band's point variance is 2e-4 m² (pairs ±1 cm): the agreeing pair's median gets half of it, not 1e-12.
     EXPECT_NEAR(fusion.map().at(3.05, 1.55)->variance, 1e-4, 1e-6);
     EXPECT_NEAR(fusion.map().at(3.05, 0.05)->variance, 1e-4, 1e-6);
+}
+
+TEST(Fusion, ACellRemembersWhereInItItsPointsLay) {
+    // Points at the near quarter of each 0.1 m cell (as a ring crosses it), then at its far quarter: the first
+    // frame sets the offset, the second moves it by the Kalman gain, as it moves the height.
+    rp::Config cfg = fusion_config(rp::FusionMethod::Kalman);
+    cfg.fusion.align = false;
+    rp::TemporalFusion fusion(cfg);
+    const auto quarter = [](double at, double z) {
+        scenes::Cloud cloud(4, 3);
+        for (int i = 0; i < 4; ++i) cloud.row(i) << float(5.0 + at + 0.002 * i), float(0.05 + 0.002 * i), float(z);
+        return cloud;
+    };
+    fuse_at(fusion, quarter(0.017, 0.01), {}, 0.0);
+    const rp::MapCell* c = fusion.map().at(5.05, 0.05);
+    ASSERT_TRUE(c && c->observations == 1);
+    EXPECT_NEAR(c->dx, -0.03, 1e-6);  // mean x 5.02 in the cell [5.0, 5.1)
+    EXPECT_NEAR(c->dy, 0.003, 1e-6);  // mean y 0.053 in [0.0, 0.1)
+    const double p = c->variance;
+    fuse_at(fusion, quarter(0.067, 0.03), {}, 0.1);
+    ASSERT_EQ(c->observations, 2);
+    const double gain = (c->height - 0.01) / (0.03 - 0.01);  // the height's Kalman gain
+    EXPECT_GT(gain, 0.0);
+    EXPECT_LT(gain, 1.0);
+    EXPECT_NEAR(c->dx, -0.03 + gain * 0.05, 1e-6);
+    EXPECT_LT(c->variance, p);
+}
+
+TEST(Fusion, RangeSamplesPlaceTheirCellByTheirWeightedMean) {
+    rp::TemporalFusion fusion(fusion_config(rp::FusionMethod::Kalman));
+    rp::FusionStatus status;
+    fusion.advance(0.0, 0.0, {0.0, rp::Pose2{}}, status);
+    // Two samples in the cell [2.0, 2.1) × [0.8, 0.9), the one at x = 2.01 four times the weight of the other.
+    ASSERT_EQ(fusion.fuse_samples({{2.01, 0.85, 0.0, 1e-6}, {2.09, 0.85, 0.0, 4e-6}}), 1u);
+    const rp::MapCell* c = fusion.map().at(2.05, 0.85);
+    ASSERT_TRUE(c && c->observations == 1);
+    EXPECT_NEAR(c->dx, (4 * 2.01 + 2.09) / 5 - 2.05, 1e-6);
+    EXPECT_NEAR(c->dy, 0.0, 1e-6);
 }

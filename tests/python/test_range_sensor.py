@@ -238,22 +238,33 @@ def test_range_samples_enter_the_fusion_map_and_its_profiles():
         rp.range_sensor.fuse_into(rp.Estimator(rp.Config(sensor_height=1.8)), x, 0.8, z, 0.001)
 
 
-def test_the_maps_profile_sits_where_the_road_is():
-    """A map holding a known relief (1.5 m waves) reads it back along the sensor's line without a shift: its cells
-    are read at their centres (read at cell edges half of the time, the profile moved by ~25 mm, which the offset
-    self-calibration took for b2)."""
+def best_shift_m(xz, relief):
+    """The shift of the relief that best matches the profile (1 mm steps), and the RMS at it."""
+    shifts = np.arange(-0.05, 0.0505, 0.001)
+    rms = [np.sqrt(np.mean((xz[:, 1] - relief(xz[:, 0] + sh)) ** 2)) for sh in shifts]
+    return shifts[int(np.argmin(rms))], min(rms)
+
+
+@pytest.mark.parametrize("first, last", [(0.0, 0.1), (0.01, 0.03)], ids=["evenly", "a quarter of each cell"])
+def test_the_maps_profile_sits_where_the_road_is(first, last):
+    """A map holding a known relief (1.5 m waves) reads it back along the sensor's line without a shift, whether
+    the samples fill each cell or, as a LiDAR ring crossing it, only its near quarter: the profile's x is where each
+    cell's samples lay (read at the cells' centres the second map would sit 30 mm off, and read at their edges half
+    of the time the first moved by ~25 mm — either taken by the offset self-calibration for b2)."""
     est = rp.Estimator(rp.Config(sensor_height=1.8, fusion={"method": "kalman"}))
     est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)
-    x = np.arange(0.0, 20.0, 0.002)
+    x = np.arange(0.0, 20.0, 0.001)
+    x = x[((x % 0.1) >= first) & ((x % 0.1) < last)]
     relief = lambda u: 0.02 * np.sin(2 * np.pi * u / 1.5)
     rp.range_sensor.fuse_into(est, x, 0.8, relief(x), 0.001)
     xz = rp.range_sensor.map_profile(est, 0.8, -5.0, 30.0)
-    assert xz[0, 0] == pytest.approx(0.05) and xz[-1, 0] == pytest.approx(19.95)
-    assert np.allclose(np.diff(xz[:, 0]), 0.1)
-    shifts = np.arange(-0.05, 0.0505, 0.001)
-    rms = [np.sqrt(np.mean((xz[:, 1] - relief(xz[:, 0] + sh)) ** 2)) for sh in shifts]
-    assert abs(shifts[int(np.argmin(rms))]) <= 0.002
-    assert min(rms) < 0.0005  # the cell means of 1.5 m waves: 0.7 % below their peaks
+    assert len(xz) == 200 and np.all(np.diff(xz[:, 0]) > 0)
+    assert xz[0, 0] == pytest.approx(np.mean(x[x < 0.1]), abs=1e-6)
+    shift, rms = best_shift_m(xz, relief)
+    assert abs(shift) <= 0.002
+    assert rms < 0.0005  # the cell means of 1.5 m waves: 0.7 % below their peaks
+    at_centres = np.column_stack([(np.arange(200) + 0.5) * 0.1, xz[:, 1]])
+    assert abs(best_shift_m(at_centres, relief)[0]) == pytest.approx(0.05 - (first + last) / 2, abs=0.002)
 
 
 def test_a_real_road_profile_read_by_simulated_lasers_keeps_its_iri(tmp_path):

@@ -42,19 +42,27 @@ std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_
 
 std::int64_t wrap(std::int64_t i, std::int64_t n) { return ((i % n) + n) % n; }
 
-void fuse_cell(MapCell& c, double z, double r, std::int32_t points, std::int32_t frame, const FusionConfig& cfg) {
+// One observation of a cell: height z with variance r, from points whose mean offset from the cell's centre is
+// (dx, dy); the offset takes the height's weight.
+void fuse_cell(MapCell& c, double z, double r, double dx, double dy, std::int32_t points, std::int32_t frame,
+               const FusionConfig& cfg) {
+    double weight = 1.0;  // of the new observation
     if (c.observations == 0) {
         c.height = static_cast<float>(z);
         c.variance = static_cast<float>(r);
     } else if (cfg.method == FusionMethod::Ema) {
         const double a = cfg.alpha, h = c.height, p = c.variance;
+        weight = a;
         c.height = static_cast<float>(a * z + (1.0 - a) * h);
         c.variance = static_cast<float>(a * a * r + (1.0 - a) * (1.0 - a) * p);
     } else {  // Kalman: a static height observed with variance r
-        const double p = c.variance, gain = p / (p + r);
-        c.height = static_cast<float>(c.height + gain * (z - c.height));
+        const double p = c.variance;
+        weight = p / (p + r);
+        c.height = static_cast<float>(c.height + weight * (z - c.height));
         c.variance = static_cast<float>(p * r / (p + r));
     }
+    c.dx = static_cast<float>(c.dx + weight * (dx - c.dx));
+    c.dy = static_cast<float>(c.dy + weight * (dy - c.dy));
     ++c.observations;
     c.points += points;
     c.last_update = frame;
@@ -192,6 +200,7 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
 void TemporalFusion::reserve_cells(std::size_t cells) {
     touched_.reserve(cells);
     for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
+    offsets_.reserve(cells);
     counts_.reserve(cells);
     bands_.reserve(cells);
     // no cell lies farther from the vehicle than the map's half-diagonal, less than its side
@@ -208,12 +217,15 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     touched.clear();
     reserve_cells(static_cast<std::size_t>(points.rows()));
     z_.resize(static_cast<std::size_t>(points.rows()));
+    xy_.resize(static_cast<std::size_t>(points.rows()));
     variance_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [x, y, z] = L.apply(points(i, 0), points(i, 1), points(i, 2));
-        const std::int64_t k = map_.slot(pose_.x_m + cos_yaw * x - sin_yaw * y, pose_.y_m + sin_yaw * x + cos_yaw * y);
+        const std::array<double, 2> xy{pose_.x_m + cos_yaw * x - sin_yaw * y, pose_.y_m + sin_yaw * x + cos_yaw * y};
+        const std::int64_t k = map_.slot(xy[0], xy[1]);
         if (k < 0) continue;
+        xy_[static_cast<std::size_t>(i)] = xy;
         auto& head = head_[static_cast<std::size_t>(k)];
         if (head < 0) touched.push_back(k);
         next_[static_cast<std::size_t>(i)] = head;
@@ -226,15 +238,18 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     std::vector<double>&medians = medians_, &spreads = spreads_, &cell_z = cell_z_;
     medians.resize(cells);
     spreads.resize(cells);
+    offsets_.resize(cells);
     counts_.resize(cells);
     bands_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
-        double variance_sum = 0.0;
+        double variance_sum = 0.0, x_sum = 0.0, y_sum = 0.0;
         auto& head = head_[static_cast<std::size_t>(touched[c])];
         for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) {
             cell_z.push_back(z_[static_cast<std::size_t>(i)]);
             variance_sum += variance_[static_cast<std::size_t>(i)];
+            x_sum += xy_[static_cast<std::size_t>(i)][0];
+            y_sum += xy_[static_cast<std::size_t>(i)][1];
         }
         head = -1;
         counts_[c] = static_cast<std::int32_t>(cell_z.size());
@@ -242,6 +257,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
                                         : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
         const auto [x, y] = map_.centre(touched[c]);
+        const double n = static_cast<double>(cell_z.size());
+        offsets_[c] = {x_sum / n - x, y_sum / n - y};
         const double dx = x - pose_.x_m, dy = y - pose_.y_m;  // sqrt, not hypot: metres, and every cell of a frame
         bands_[c] = static_cast<std::int32_t>(std::sqrt(dx * dx + dy * dy) / kPoolBandM);
     }
@@ -260,13 +277,14 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     }
     if (cfg_.fusion.align) align(touched, variances_, medians);
     for (std::size_t c = 0; c < cells; ++c)
-        fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], counts_[c], frame_, cfg_.fusion);
+        fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], offsets_[c][0], offsets_[c][1], counts_[c], frame_,
+                  cfg_.fusion);
     ++fused_;
 }
 
 std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) {
     struct Sum {
-        double weight = 0.0, weighted_z = 0.0;
+        double weight = 0.0, weighted_z = 0.0, weighted_x = 0.0, weighted_y = 0.0;
         std::int32_t count = 0;
     };
     std::map<std::int64_t, Sum> cells;
@@ -277,10 +295,15 @@ std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) 
         Sum& sum = cells[k];
         sum.weight += w;
         sum.weighted_z += w * m.z_m;
+        sum.weighted_x += w * m.x_m;
+        sum.weighted_y += w * m.y_m;
         ++sum.count;
     }
-    for (const auto& [k, sum] : cells)
-        fuse_cell(map_.cell(k), sum.weighted_z / sum.weight, 1.0 / sum.weight, sum.count, frame_, cfg_.fusion);
+    for (const auto& [k, sum] : cells) {
+        const auto [x, y] = map_.centre(k);
+        fuse_cell(map_.cell(k), sum.weighted_z / sum.weight, 1.0 / sum.weight, sum.weighted_x / sum.weight - x,
+                  sum.weighted_y / sum.weight - y, sum.count, frame_, cfg_.fusion);
+    }
     return cells.size();
 }
 

@@ -50,6 +50,10 @@ struct MapSample {
 struct MapCell {
     float height = 0.0f;           ///< m, fused height (levelled frames)
     float variance = 0.0f;         ///< m², estimated variance of `height`
+    /// m, where in the cell that height lies: the offset from the cell's centre of the points it was fused from,
+    /// fused with the same weights. A cell's points are rarely spread evenly (a LiDAR ring crosses it at one
+    /// place), and on a slope its height belongs there, not at the centre (docs/method.md §7).
+    float dx = 0.0f, dy = 0.0f;
     std::int32_t observations = 0; ///< frames fused into the cell; 0 = empty
     std::int32_t points = 0;       ///< points fused into the cell
     std::int32_t last_update = 0;  ///< frame number of the last update (age = current frame − this)
@@ -152,9 +156,11 @@ private:
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
     std::vector<float> variance_;  // this frame's point height variances, by point (reused)
+    std::vector<std::array<double, 2>> xy_;  // this frame's points in the odometry frame, by point (reused)
     // Per cell of the frame (reused): its slot, median, spread, count, variance, and the heights of one cell.
     std::vector<std::int64_t> touched_;
     std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_;
+    std::vector<std::array<double, 2>> offsets_;  // each touched cell's points' mean offset from its centre
     std::vector<std::int32_t> counts_, bands_;
     PoolBuffers pool_buffers_;
     std::vector<Eigen::Vector3d> align_v_;  // align's scratch
