@@ -194,16 +194,6 @@ void bind_range_sensor(py::module_& m) {
         }
         return lines;
     });
-    m.def("fusion_map_heights", [](const rp::Estimator& est, DoubleArray x, DoubleArray y) {
-        const rp::TemporalFusion* fusion = est.fusion();
-        if (!fusion) throw std::invalid_argument("the estimator has no fusion map (fusion.method is \"none\")");
-        py::array_t<double> z(x.size());
-        for (py::ssize_t i = 0; i < x.size(); ++i) {
-            const rp::MapCell* c = fusion->map().at(x.data()[i], y.data()[i]);
-            z.mutable_at(i) = c && c->observations > 0 ? c->height : std::numeric_limits<double>::quiet_NaN();
-        }
-        return z;
-    }, py::arg("estimator"), py::arg("x"), py::arg("y"), "Fused map heights (m, NaN where empty) at odometry x, y");
     m.def("fusion_map_cells", [](const rp::Estimator& est, DoubleArray x, DoubleArray y) {
         const rp::TemporalFusion* fusion = est.fusion();
         if (!fusion) throw std::invalid_argument("the estimator has no fusion map (fusion.method is \"none\")");

@@ -225,9 +225,11 @@ def test_range_samples_enter_the_fusion_map_and_its_profiles():
     x = np.arange(1.0, 3.0, 0.01)
     z = 0.02 * np.sin(2 * np.pi * x)
     assert rp.range_sensor.fuse_into(est, x, 0.8, z, 0.001) == 20
-    cells = rp._native.core().fusion_map_heights(est._impl, np.array([1.55, 2.25]), np.array([0.8, 0.8]))
+    cells = rp._native.core().fusion_map_cells(est._impl, np.array([1.55, 2.25, 7.05]), np.array([0.8, 0.8, 0.8]))
     expect = [np.mean(z[(x >= 1.5) & (x < 1.6)]), np.mean(z[(x >= 2.2) & (x < 2.3)])]
-    assert np.allclose(cells, expect, atol=1e-6)
+    assert np.allclose(cells[:2, 2], expect, atol=1e-6)
+    assert np.allclose(cells[:2, 0], [1.545, 2.245], atol=1e-6)  # the samples' mean x in each cell
+    assert np.isnan(cells[2]).all()  # no sample there
     res = est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)  # no ground: the map's
     left = np.asarray(res.left.z)
     s = np.asarray(res.left.s)
