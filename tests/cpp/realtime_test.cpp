@@ -105,6 +105,22 @@ TEST(Realtime, SimulatedFrameAllocatesNothingOnceWarmWithEmaFusion) {
     expect_no_allocations(frame_allocations({simulated_frame()}, kitti_config(rp::FusionMethod::Ema), 5, 12), 5);
 }
 
+// Range-sensor samples fused into the map between frames (a preview sensor's window, README "Range sensors"):
+// once its per-slot lists have grown, a batch of samples allocates nothing either.
+TEST(Realtime, RangeSamplesEnterTheMapWithoutAllocatingOnceWarm) {
+    rp::Estimator est(kitti_config(rp::FusionMethod::Kalman));
+    rp::Result out;
+    est.process(kitti_frames()[0], 5.0, 0.0, motion_at(0), out);
+    std::vector<rp::MapSample> samples;
+    for (int i = 0; i < 2000; ++i) samples.push_back({1.0 + 0.005 * i, 0.8, 0.01 * std::sin(0.1 * i), 1e-6});
+    EXPECT_EQ(est.fuse_samples(samples), 100u);  // 10 m at 5 mm: 100 cells of 0.1 m
+    long n = -1;
+    std::size_t cells = 0;
+    for (int pass = 0; pass < 3; ++pass) n = allocations_in([&] { cells = est.fuse_samples(samples); });
+    EXPECT_EQ(cells, 100u);
+    EXPECT_EQ(n, 0);
+}
+
 // A Result reused across frames (and across frames that have no profiles) holds exactly what a fresh one would.
 TEST(Realtime, AReusedResultEqualsAFreshOne) {
     const std::vector<rp::Frame> kitti = kitti_frames();

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include <Eigen/Cholesky>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "core/median.hpp"
 #include "roadpreview/roughness/support.hpp"
@@ -282,29 +282,37 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     ++fused_;
 }
 
+// Samples binned by the per-slot lists fuse() uses (no map, no allocation once next_ and touched_ have grown),
+// then one inverse-variance weighted observation per cell.
 std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) {
-    struct Sum {
-        double weight = 0.0, weighted_z = 0.0, weighted_x = 0.0, weighted_y = 0.0;
-        std::int32_t count = 0;
-    };
-    std::map<std::int64_t, Sum> cells;
-    for (const MapSample& m : samples) {
+    if (samples.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+        throw std::invalid_argument("fuse_samples: more than 2^31 - 1 samples (" + std::to_string(samples.size()) + ")");
+    next_.assign(samples.size(), -1);
+    std::vector<std::int64_t>& touched = touched_;
+    touched.clear();
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        const MapSample& m = samples[i];
         const std::int64_t k = map_.slot(m.x_m, m.y_m);
         if (k < 0 || !std::isfinite(m.z_m) || !(m.variance_m2 >= 0)) continue;
-        const double w = 1.0 / std::max(m.variance_m2, kMinVariance);
-        Sum& sum = cells[k];
-        sum.weight += w;
-        sum.weighted_z += w * m.z_m;
-        sum.weighted_x += w * m.x_m;
-        sum.weighted_y += w * m.y_m;
-        ++sum.count;
+        auto& head = head_[static_cast<std::size_t>(k)];
+        if (head < 0) touched.push_back(k);
+        next_[i] = head;
+        head = static_cast<std::int32_t>(i);
     }
-    for (const auto& [k, sum] : cells) {
-        const auto [x, y] = map_.centre(k);
-        fuse_cell(map_.cell(k), sum.weighted_z / sum.weight, 1.0 / sum.weight, sum.weighted_x / sum.weight - x,
-                  sum.weighted_y / sum.weight - y, sum.count, frame_, cfg_.fusion);
+    for (const std::int64_t k : touched) {
+        double weight = 0.0, z = 0.0, x = 0.0, y = 0.0;
+        std::int32_t count = 0;
+        auto& head = head_[static_cast<std::size_t>(k)];
+        for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)], ++count) {
+            const MapSample& m = samples[static_cast<std::size_t>(i)];
+            const double w = 1.0 / std::max(m.variance_m2, kMinVariance);
+            weight += w, z += w * m.z_m, x += w * m.x_m, y += w * m.y_m;
+        }
+        head = -1;
+        const auto [cx, cy] = map_.centre(k);
+        fuse_cell(map_.cell(k), z / weight, 1.0 / weight, x / weight - cx, y / weight - cy, count, frame_, cfg_.fusion);
     }
-    return cells.size();
+    return touched.size();
 }
 
 void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
