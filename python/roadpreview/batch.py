@@ -229,7 +229,7 @@ def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, 
 
 
 ROW_GROUP_FRAMES = 128  # a Parquet row group holds at most this many frames,
-ROW_GROUP_BYTES = 2 << 20  # or this many bytes of output lines (an HDL-64E frame's line is ~59 kB: 35 frames)
+ROW_GROUP_BYTES = 2 << 20  # or this many bytes of output lines (a KITTI HDL-64E frame's line is ~59 kB: 36 frames)
 
 
 def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) -> int:
