@@ -209,6 +209,13 @@ void TemporalFusion::reserve_cells(std::size_t cells) {
     shared_.reserve(cells);
 }
 
+void TemporalFusion::link(std::int64_t slot, std::size_t i) {
+    auto& head = head_[static_cast<std::size_t>(slot)];
+    if (head < 0) touched_.push_back(slot);
+    next_[i] = head;
+    head = static_cast<std::int32_t>(i);
+}
+
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                           const std::vector<float>* height_variances) {
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
@@ -225,11 +232,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         const std::array<double, 2> xy{pose_.x_m + cos_yaw * x - sin_yaw * y, pose_.y_m + sin_yaw * x + cos_yaw * y};
         const std::int64_t k = map_.slot(xy[0], xy[1]);
         if (k < 0) continue;
+        link(k, static_cast<std::size_t>(i));
         xy_[static_cast<std::size_t>(i)] = xy;
-        auto& head = head_[static_cast<std::size_t>(k)];
-        if (head < 0) touched.push_back(k);
-        next_[static_cast<std::size_t>(i)] = head;
-        head = static_cast<std::int32_t>(i);
         z_[static_cast<std::size_t>(i)] = z;
         if (height_variances) variance_[static_cast<std::size_t>(i)] = (*height_variances)[static_cast<std::size_t>(i)];
     }
@@ -293,11 +297,7 @@ std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) 
     for (std::size_t i = 0; i < samples.size(); ++i) {
         const MapSample& m = samples[i];
         const std::int64_t k = map_.slot(m.x_m, m.y_m);
-        if (k < 0 || !std::isfinite(m.z_m) || !(m.variance_m2 >= 0)) continue;
-        auto& head = head_[static_cast<std::size_t>(k)];
-        if (head < 0) touched.push_back(k);
-        next_[i] = head;
-        head = static_cast<std::int32_t>(i);
+        if (k >= 0 && std::isfinite(m.z_m) && m.variance_m2 >= 0) link(k, i);
     }
     for (const std::int64_t k : touched) {
         double weight = 0.0, z = 0.0, x = 0.0, y = 0.0;

@@ -136,6 +136,8 @@ private:
     /// disagreement to the variances (method.md §7); the first time, half of it to the map's cells.
     void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances, std::vector<double>& medians);
     void reserve_cells(std::size_t cells);
+    // Puts item `i` (a point of fuse(), a sample of fuse_samples()) on the list of `slot`, noting a slot new this call.
+    void link(std::int64_t slot, std::size_t i);
     void sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked, std::size_t& ahead,
                 std::size_t& ahead_now, Profile& p) const;
 
