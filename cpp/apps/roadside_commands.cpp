@@ -173,6 +173,13 @@ int run(const RoadsideOptions& o) {
         return a.time_s + offset(a) < b.time_s + offset(b);
     });
     rs::Processor processor(site);
+    if (std::any_of(scans.begin(), scans.end(), [](const rs::LaserScan& s) { return s.pose.has_value(); })) {
+        processor.learn_world(scans);  // a moving scanner: its background is the world its log saw
+        const rs::WorldBackground& w = *processor.world();
+        if (!o.quiet)
+            std::fprintf(stderr, "world background from the scans with poses: %d × %d cells of %.2f m, scan period %.3f s\n",
+                         w.width_cells(), w.height_cells(), site.settings.world.cell_m, w.scan_period_s());
+    }
     if (!o.detections.empty()) processor.add_detections(rs::read_detections(o.detections));
     if (!o.camera.video.empty()) processor.add_detections(detect_in_video(o.camera, site, o.quiet));
     std::ofstream file;

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Bindings of the roadside library (roadpreview.roadside wraps them): scan readers, telegram decoding, the
 // stages (labelling, L-shape, assignment) for cross-checks, and the cycle processor (JSON lines out).
+#include <cmath>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -50,6 +52,18 @@ rs::LaserScan scan_from(double time_s, int scanner, double start_angle_rad, doub
     return s;
 }
 
+// A scan dict of the Python package (roadpreview.roadside.read_scans): pose None or (x, y, yaw).
+rs::LaserScan scan_from_dict(const py::dict& d) {
+    rs::LaserScan s = scan_from(d["time_s"].cast<double>(), d["scanner"].cast<int>(), d["start_angle_rad"].cast<double>(),
+                                d["step_rad"].cast<double>(), d["ranges_m"].cast<FloatArray>(),
+                                d.contains("source") ? d["source"].cast<std::string>() : "python scan");
+    if (d.contains("pose") && !d["pose"].is_none()) {
+        const auto [x, y, yaw] = d["pose"].cast<std::tuple<double, double, double>>();
+        s.pose = rs::Pose2{x, y, yaw};
+    }
+    return s;
+}
+
 std::vector<rs::Point2> points_from(const DoubleArray& xy) {
     if (xy.ndim() != 2 || xy.shape(1) != 2) throw std::invalid_argument("points must be an (N, 2) array of x, y");
     std::vector<rs::Point2> pts(static_cast<std::size_t>(xy.shape(0)));
@@ -82,11 +96,23 @@ py::dict telegram_dict(const rs::SickScanTelegram& t) {
 class PyProcessor {
 public:
     explicit PyProcessor(const std::string& site_yaml, const std::string& where) : p_(rs::parse_site(site_yaml, where)) {}
-    std::vector<std::string> push(double time_s, int scanner, double start_angle_rad, double step_rad,
-                                  const FloatArray& ranges) {
-        const rs::LaserScan s = scan_from(time_s, scanner, start_angle_rad, step_rad, ranges, "python scan");
+    std::vector<std::string> push(const py::dict& scan) {
+        const rs::LaserScan s = scan_from_dict(scan);
         py::gil_scoped_release release;
         return lines(p_.push(s));
+    }
+    void learn_world(const py::list& scans) {
+        std::vector<rs::LaserScan> all;
+        for (const auto& d : scans) all.push_back(scan_from_dict(d.cast<py::dict>()));
+        py::gil_scoped_release release;
+        p_.learn_world(all);
+    }
+    // Foreground flags of a scan with a pose against the learned world background.
+    py::array_t<bool> world_foreground(const py::dict& scan) {
+        const std::vector<bool> fg = p_.world_foreground(scan_from_dict(scan));
+        py::array_t<bool> out(static_cast<py::ssize_t>(fg.size()));
+        for (std::size_t i = 0; i < fg.size(); ++i) out.mutable_data()[i] = fg[i];
+        return out;
     }
     void add_detections(const std::vector<std::tuple<double, double, double, double, double, std::string, double>>& d) {
         std::vector<rs::CameraDetection> out;
@@ -147,6 +173,8 @@ void bind_roadside(py::module_& parent) {
     py::class_<PyProcessor>(m, "Processor")
         .def(py::init<const std::string&, const std::string&>(), py::arg("site_yaml"), py::arg("where") = "site")
         .def("push", &PyProcessor::push)
+        .def("learn_world", &PyProcessor::learn_world)
+        .def("world_foreground", &PyProcessor::world_foreground)
         .def("add_detections", &PyProcessor::add_detections)
         .def("finish", &PyProcessor::finish);
 }

@@ -10,7 +10,9 @@
     cycles[-1]["objects"][0]["lat_deg"]                            # exactly the CLI's output line, as a dict
 
 A scan is a dict: time_s, scanner (index into the site's scanners), counter, start_angle_rad, step_rad (scanner
-frame: 0 = straight ahead, counter-clockwise), ranges_m (float32, NaN = no return), intensities, pose, source.
+frame: 0 = straight ahead, counter-clockwise), ranges_m (float32, NaN = no return), intensities, pose (None, or
+x, y, yaw of a moving scanner in its log's world frame: such scans are classified against a world background
+learned from the whole log, docs/method.md "Roadside"), source.
 """
 
 from __future__ import annotations
@@ -136,6 +138,15 @@ def wgs84_to_site(site: str, lat_deg: float, lon_deg: float) -> tuple[float, flo
     return _rs().wgs84_to_site(_site_text(site), lat_deg, lon_deg)
 
 
+def _native_scan(scan: dict) -> dict:
+    """The keys the C++ processor reads, typed (a scan dict may come from any reader or the simulator)."""
+    pose = scan.get("pose")
+    return dict(time_s=float(scan["time_s"]), scanner=int(scan["scanner"]),
+                start_angle_rad=float(scan["start_angle_rad"]), step_rad=float(scan["step_rad"]),
+                ranges_m=np.asarray(scan["ranges_m"], np.float32), source=str(scan.get("source") or "python scan"),
+                pose=None if pose is None else tuple(float(v) for v in pose))
+
+
 def _site_text(site: PathLike) -> str:
     s = str(site)
     return Path(s).read_text() if "\n" not in s and Path(s).exists() else s
@@ -155,9 +166,16 @@ class Processor:
 
     def push(self, scan: dict) -> list[dict]:
         """Adds one scan; returns the cycles it completed (each exactly the CLI's output line, as a dict)."""
-        lines = self._p.push(float(scan["time_s"]), int(scan["scanner"]), float(scan["start_angle_rad"]),
-                             float(scan["step_rad"]), np.asarray(scan["ranges_m"], np.float32))
-        return [json.loads(line) for line in lines]
+        return [json.loads(line) for line in self._p.push(_native_scan(scan))]
+
+    def learn_world(self, scans: Iterable[dict]) -> None:
+        """Learns the world background of the scans with a pose (a moving scanner, e.g. a CARMEN log): call
+        before pushing them; `run` does when any scan has one."""
+        self._p.learn_world([_native_scan(s) for s in scans if s.get("pose") is not None])
+
+    def world_foreground(self, scan: dict) -> np.ndarray:
+        """Per beam of a scan with a pose: foreground against the learned world background (bool array)."""
+        return self._p.world_foreground(_native_scan(scan))
 
     def finish(self) -> list[dict]:
         return [json.loads(line) for line in self._p.finish()]
@@ -168,6 +186,9 @@ class Processor:
         when the site file's offsets are not yet known)."""
         if detections:
             self.add_detections(detections)
+        scans = list(scans)
+        if any(s.get("pose") is not None for s in scans):
+            self.learn_world(scans)
         cycles = []
         for s in sorted(scans, key=lambda s: s["time_s"] + (time_offsets_s[s["scanner"]] if time_offsets_s else 0)):
             cycles += self.push(s)

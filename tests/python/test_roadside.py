@@ -2,7 +2,9 @@
 """Roadside perception: C++ stages against the numpy/scipy reference (labelling, L-shape, assignment, Kalman),
 the simulated paper scenarios through the processor, real recordings (SICK dumps, the people bag), bad input."""
 
+import json
 import math
+import subprocess
 
 import numpy as np
 import pytest
@@ -12,10 +14,12 @@ from hypothesis import strategies as st
 import roadpreview as rp
 from roadpreview.reference import roadside as ref
 from roadpreview.sim import roadside as sr
-from paths import SHARED_DATA
+from paths import DATA, SHARED_DATA, cli
 
 SICK = SHARED_DATA / "laserscan2d" / "sick_scan_xd"
 PEOPLE_BAG = SHARED_DATA / "laserscan2d" / "leg_tracker" / "demo_stationary_simple_environment.bag"
+CARMEN_LOG = SHARED_DATA / "laserscan2d" / "carmen_freiburg_campus" / "freiburg-campus-corrected.log.gz"
+CARMEN_SITE = DATA / "roadside" / "carmen_freiburg_campus_site.yaml"
 
 
 def same_partition(a: np.ndarray, b: np.ndarray) -> bool:
@@ -153,3 +157,83 @@ def test_people_bag_gives_moving_people():
     cycles = rp.roadside.Processor(site).run(scans)
     movers = {o["id"] for c in cycles for o in c["objects"] if o["speed_mps"] > 0.3 and o["age_s"] > 1.0}
     assert 3 <= len(movers) <= 60, len(movers)
+
+
+def tracks_of(cycles: list[dict]) -> dict[int, list[tuple[float, dict]]]:
+    out: dict[int, list[tuple[float, dict]]] = {}
+    for c in cycles:
+        for o in c["objects"]:
+            out.setdefault(o["id"], []).append((c["t_s"], o))
+    return out
+
+
+def test_a_moving_scanner_tracks_the_pedestrian_it_passes():
+    run = sr.simulate_moving_scanner(seed=1)
+    tracks = tracks_of(rp.roadside.Processor(run.site_yaml).run(run.scans))
+    assert len(tracks) == 1, sorted(tracks)  # the pedestrian, nothing of the buildings and poles driven past
+    (track,) = tracks.values()
+    seen = [(t, o, run.truth_at(t)) for t, o in track if run.truth_at(t)]  # then it coasts a little
+    assert len(seen) >= 50
+    for t, o, (truth,) in seen:
+        assert math.hypot(o["x_m"] - truth["x_m"], o["y_m"] - truth["y_m"]) < 0.3, (t, o["x_m"], o["y_m"], truth)
+    assert seen[-1][1]["speed_mps"] == pytest.approx(1.4, abs=0.15)
+
+
+def test_world_background_matches_the_reference():
+    run = sr.simulate_moving_scanner(seed=2, rate_hz=5.0)
+    proc = rp.roadside.Processor(run.site_yaml)
+    proc.learn_world(run.scans)
+    grid = ref.world_background(run.scans, [s["pose"] for s in run.scans])
+    returns = agree = walker = walker_flagged = 0
+    for s in run.scans:
+        ours = proc.world_foreground(s)
+        theirs = ref.world_foreground(s, s["pose"], grid, max_hit_scans=20)  # 4 s at 5 Hz
+        finite = np.isfinite(s["ranges_m"])
+        returns += finite.sum()
+        agree += (ours == theirs)[finite].sum()
+        for truth in run.truth_at(s["time_s"]):
+            xy = ref.scan_points(s["ranges_m"], s["start_angle_rad"], s["step_rad"], s["pose"])
+            on = np.hypot(xy[:, 0] - truth["x_m"], xy[:, 1] - truth["y_m"]) < 0.3
+            in_range = np.hypot(xy[:, 0] - s["pose"][0], xy[:, 1] - s["pose"][1]) <= 30.0
+            walker += (on & in_range).sum()
+            walker_flagged += ours[finite][on & in_range].sum()
+    assert agree >= 0.999 * returns, (agree, returns)
+    assert walker > 50 and walker_flagged >= 0.9 * walker, (walker, walker_flagged)
+
+
+def test_scans_with_poses_need_a_world_background():
+    run = sr.simulate_moving_scanner(seed=3, rate_hz=2.0)
+    proc = rp.roadside.Processor(run.site_yaml)
+    with pytest.raises(RuntimeError, match="vehicle#0.*carries a pose"):
+        proc.push(run.scans[0])
+    with pytest.raises(ValueError, match="none has one"):
+        proc.learn_world([dict(s, pose=None) for s in run.scans])  # the Python side drops unposed scans
+    with pytest.raises(RuntimeError, match="max_speed_mps must be"):
+        rp.roadside.Processor(run.site_yaml.replace("confirm_hits: 3", "confirm_hits: 3, max_speed_mps: -1"))
+    with pytest.raises(RuntimeError, match="processing.world: unknown key 'cell'"):
+        rp.roadside.Processor(run.site_yaml.replace("confirm_hits: 3", "confirm_hits: 3, world: {cell: 0.2}"))
+
+
+@pytest.mark.skipif(not CARMEN_LOG.exists(), reason="shared data absent")
+def test_carmen_log_gives_moving_objects_against_its_world_background():
+    """The robot drives 1.75 km over the campus: what moved is what its log saw only briefly where it mostly saw
+    open ground. Its scans carry no times; the site file's rate (0.8 Hz) is an upper bound from the log's PARAMs."""
+    scans = rp.roadside.read_scans(CARMEN_LOG, scanner=0, rate_hz=0.8)
+    proc = rp.roadside.Processor(CARMEN_SITE)
+    proc.learn_world(scans)
+    fg = sum(int(proc.world_foreground(s).sum()) for s in scans)
+    near = sum(int((s["ranges_m"] <= 30.0).sum()) for s in scans)
+    assert 0.002 * near < fg < 0.03 * near, (fg, near)  # walls, trees and hedges are background
+    cycles = rp.roadside.Processor(CARMEN_SITE).run(scans)
+    tracks = tracks_of(cycles)
+    moving = [v for v in tracks.values()
+              if len(v) >= 4 and math.hypot(v[-1][1]["x_m"] - v[0][1]["x_m"], v[-1][1]["y_m"] - v[0][1]["y_m"]) >= 2.0]
+    assert 20 <= len(moving) <= 200, len(moving)
+    pace = np.median([np.median([o["speed_mps"] for _, o in v]) for v in moving])
+    assert 0.5 < pace < 3.0, pace  # people walking, at the assumed scan rate
+    # The CLI learns the same world background by itself and writes the same cycles.
+    done = subprocess.run([cli(), "roadside", "run", "--site", str(CARMEN_SITE), "--scan-rate", "0.8", str(CARMEN_LOG)],
+                          capture_output=True, text=True, check=True)
+    assert "world background from the scans with poses" in done.stderr
+    untimed = lambda cs: [{k: v for k, v in c.items() if k != "process_ms"} for c in cs]  # noqa: E731
+    assert untimed(json.loads(line) for line in done.stdout.splitlines()) == untimed(cycles)

@@ -22,6 +22,7 @@ TrackerSettings tracker_settings(const RoadsideSettings& s) {
     t.gate_chi2 = s.gate_chi2;
     t.max_coast_s = s.max_coast_s;
     t.confirm_hits = s.confirm_hits;
+    t.max_speed_mps = s.max_speed_mps;
     return t;
 }
 
@@ -57,7 +58,8 @@ Processor::Processor(Site site)
 
 Processor::~Processor() = default;
 
-std::vector<Cycle> Processor::push(const LaserScan& input) {
+// Returns at or beyond the scanner's range (or ≤ 0, NaN) become no return.
+LaserScan Processor::checked(const LaserScan& input, std::int64_t* invalid_ranges) const {
     if (input.scanner < 0 || input.scanner >= static_cast<int>(site_.scanners.size()))
         throw std::runtime_error(input.source + ": scanner " + std::to_string(input.scanner) + " is not in the site file " +
                                  site_.path + " (" + std::to_string(site_.scanners.size()) + " scanners)");
@@ -67,9 +69,44 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     scan.time_s += where.time_offset_s;
     for (auto& r : scan.ranges_m)
         if (!(r > 0.0f) || r >= where.max_range_m) {
-            if (std::isfinite(r)) ++status_[static_cast<std::size_t>(scan.scanner)].invalid_ranges;
+            if (invalid_ranges && std::isfinite(r)) ++*invalid_ranges;
             r = NAN;
         }
+    return scan;
+}
+
+void Processor::learn_world(const std::vector<LaserScan>& scans) {
+    std::vector<LaserScan> posed;
+    std::vector<Pose2> poses;
+    for (const auto& input : scans) {
+        if (!input.pose) continue;
+        posed.push_back(checked(input));
+        poses.push_back(site_pose(input));
+    }
+    if (posed.empty()) throw std::invalid_argument(site_.path + ": a world background needs scans with poses; none has one");
+    world_.emplace(posed, poses, site_.settings.world);
+}
+
+Pose2 Processor::site_pose(const LaserScan& scan) const {
+    const Pose2& mount = site_.scanners[static_cast<std::size_t>(scan.scanner)].pose;
+    return scan.pose ? compose(*scan.pose, mount) : mount;
+}
+
+std::vector<bool> Processor::world_foreground(const LaserScan& input) const {
+    if (!world_) throw std::invalid_argument("no world background learned (Processor::learn_world first)");
+    if (!input.pose) throw std::invalid_argument(input.source + ": the scan has no pose");
+    const LaserScan scan = checked(input);
+    return world_->foreground(scan, site_pose(scan));
+}
+
+std::vector<Cycle> Processor::push(const LaserScan& input) {
+    std::int64_t invalid = 0;
+    LaserScan scan = checked(input, &invalid);
+    status_[static_cast<std::size_t>(scan.scanner)].invalid_ranges += invalid;
+    const ScannerSite& where = site_.scanners[static_cast<std::size_t>(scan.scanner)];
+    if (scan.pose && !world_)
+        throw std::runtime_error(scan.source + ": the scan carries a pose (a moving scanner): learn the world "
+                                 "background from the log first (Processor::learn_world; `roadside run` does)");
     if (!started_) first_time_s_ = scan.time_s, started_ = true;
     auto& st = status_[static_cast<std::size_t>(scan.scanner)];
     if (st.last_scan_s >= 0.0 && scan.time_s + 1e-9 < st.last_scan_s)
@@ -78,7 +115,7 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     ++st.scans;
     std::vector<Cycle> done;
     BackgroundModel& bg = background_[static_cast<std::size_t>(scan.scanner)];
-    if (!bg.frozen()) {
+    if (!scan.pose && !bg.frozen()) {
         // Each scanner learns over its own first seconds, so a scanner that starts late still gets a background.
         double& start = learn_start_s_[static_cast<std::size_t>(scan.scanner)];
         if (bg.learned_scans() == 0) start = scan.time_s;
@@ -109,10 +146,10 @@ Cycle Processor::run_cycle(double t_end_s) {
     std::vector<Pose2> poses(site_.scanners.size());
     double t_sum = 0.0;
     for (const auto& scan : pending_) {
-        const Pose2& mount = site_.scanners[static_cast<std::size_t>(scan.scanner)].pose;
-        const Pose2 pose = scan.pose ? compose(*scan.pose, mount) : mount;
+        const Pose2 pose = site_pose(scan);
         poses[static_cast<std::size_t>(scan.scanner)] = pose;
-        const auto fg = background_[static_cast<std::size_t>(scan.scanner)].foreground(scan, site_.settings.background_margin_m);
+        const auto fg = scan.pose ? world_->foreground(scan, pose)
+                                  : background_[static_cast<std::size_t>(scan.scanner)].foreground(scan, site_.settings.background_margin_m);
         scan_points(scan, pose, fg, points);
         t_sum += scan.time_s;
     }

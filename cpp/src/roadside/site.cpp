@@ -111,12 +111,37 @@ CameraSite read_camera(const YAML::Node& node, const std::string& where) {
     return c;
 }
 
+WorldBackgroundSettings read_world_settings(const YAML::Node& node, const std::string& where) {
+    WorldBackgroundSettings w;
+    if (!node) return w;
+    check_keys(node, {"cell_m", "free_margin_m", "max_range_m", "min_free_scans", "hit_radius_cells", "max_hit_ratio",
+                      "max_hit_s"}, where);
+    w.cell_m = number(node, "cell_m", w.cell_m, where);
+    w.free_margin_m = number(node, "free_margin_m", w.free_margin_m, where);
+    w.max_range_m = number(node, "max_range_m", w.max_range_m, where);
+    w.max_hit_ratio = number(node, "max_hit_ratio", w.max_hit_ratio, where);
+    w.max_hit_s = number(node, "max_hit_s", w.max_hit_s, where);
+    const double min_free = number(node, "min_free_scans", w.min_free_scans, where);
+    const double radius = number(node, "hit_radius_cells", w.hit_radius_cells, where);
+    if (!(w.cell_m >= 0.01)) fail(where, "cell_m must be ≥ 0.01 m");
+    if (!(w.free_margin_m >= 0.0) || !(w.max_range_m > w.free_margin_m) || w.max_range_m > 1000.0)
+        fail(where, "need 0 ≤ free_margin_m < max_range_m ≤ 1000 m");
+    if (!(w.max_hit_ratio > 0.0) || !(w.max_hit_s > 0.0)) fail(where, "max_hit_ratio and max_hit_s must be > 0");
+    if (min_free < 1 || min_free > 1e6) fail(where, "min_free_scans must be 1 … 10⁶");
+    if (radius < 0 || radius > 50) fail(where, "hit_radius_cells must be 0..50");
+    w.min_free_scans = static_cast<int>(min_free);
+    w.hit_radius_cells = static_cast<int>(radius);
+    return w;
+}
+
 RoadsideSettings read_settings(const YAML::Node& node, const std::string& where) {
     RoadsideSettings s;
     if (!node) return s;
     check_keys(node, {"cell_m", "dilation_cells", "min_points", "background_s", "background_margin_m", "cycle_s",
                       "accel_sigma_mps2", "position_sigma_m", "gate_chi2", "confirm_hits", "max_coast_s",
-                      "camera_gate_m", "camera_weight_position", "camera_weight_heading", "scanner_timeout_s"}, where);
+                      "camera_gate_m", "camera_weight_position", "camera_weight_heading", "scanner_timeout_s", "max_speed_mps",
+                      "world"},
+               where);
     auto set = [&](const char* key, double& field) {
         field = number(node, key, field, where);
         positive(field, key, where);
@@ -131,6 +156,8 @@ RoadsideSettings read_settings(const YAML::Node& node, const std::string& where)
     set("max_coast_s", s.max_coast_s);
     set("camera_gate_m", s.camera_gate_m);
     set("scanner_timeout_s", s.scanner_timeout_s);
+    s.max_speed_mps = number(node, "max_speed_mps", s.max_speed_mps, where);
+    if (s.max_speed_mps < 0.0) fail(where, "max_speed_mps must be ≥ 0 (0: no limit)");
     s.camera_weight_position = number(node, "camera_weight_position", s.camera_weight_position, where);
     s.camera_weight_heading = number(node, "camera_weight_heading", s.camera_weight_heading, where);
     const double dilation = number(node, "dilation_cells", s.dilation_cells, where);
@@ -142,6 +169,7 @@ RoadsideSettings read_settings(const YAML::Node& node, const std::string& where)
     s.min_points = static_cast<int>(min_points);
     s.confirm_hits = static_cast<int>(confirm);
     if (s.cell_m < 0.01) fail(where, "cell_m must be ≥ 0.01 m");
+    s.world = read_world_settings(node["world"], where + ": processing.world");
     return s;
 }
 

@@ -135,6 +135,11 @@ double Tracker::measurement_variance(const Measurement& m) const {
 // predicted centre and its visible centre against the predicted one less the last offset (so that neither the
 // correction switching on nor a side coming into view breaks the track).
 double Tracker::cost(const Track& t, const Measurement& m) const {
+    constexpr double kCentreJumpM = 1.0;  // a partly seen object's centre moves by about its size between views
+    if (s_.max_speed_mps > 0.0 &&
+        std::hypot(m.object.centroid_x_m - t.last_object.centroid_x_m, m.object.centroid_y_m - t.last_object.centroid_y_m) >
+            s_.max_speed_mps * (m.t_s - t.last_update_s) + kCentreJumpM)
+        return INFINITY;
     const Eigen::Matrix2d S_inv = (t.P.topLeftCorner<2, 2>() + measurement_variance(m) * Eigen::Matrix2d::Identity()).inverse();
     const Box b = measured_box(t, m);
     const Eigen::Vector2d d1 = measured_centre(t, m) - t.x.head<2>();

@@ -112,3 +112,70 @@ def kalman_update(x: np.ndarray, P: np.ndarray, z, sigma_m: float = 0.08):
     S = H @ P @ H.T + sigma_m ** 2 * np.eye(2)
     K = P @ H.T @ np.linalg.inv(S)
     return x + K @ (np.asarray(z, float) - H @ x), (np.eye(4) - K @ H) @ P
+
+
+def world_background(scans, poses, cell_m: float = 0.2, free_margin_m: float = 0.3, max_range_m: float = 30.0,
+                     hit_radius_cells: int = 3):
+    """§13.3, a moving scanner: (x0, y0, free, hits) of the world grid, counts per cell (rows y, columns x).
+    A cell is free for a scan when its centre lies inside the scan's fan: within the beams' angular span and on
+    the scanner's side of the straight edge between the two shortened beam ends around its bearing."""
+    poses = np.asarray(poses, np.float64).reshape(-1, 3)
+    reach = max_range_m + cell_m
+    x0, y0 = poses[:, 0].min() - reach, poses[:, 1].min() - reach
+    width = int(math.ceil((np.ptp(poses[:, 0]) + 2 * reach) / cell_m))
+    height = int(math.ceil((np.ptp(poses[:, 1]) + 2 * reach) / cell_m))
+    free = np.zeros((height, width), np.int32)
+    hits = np.zeros((height, width), np.int32)
+    cx = x0 + (np.arange(width) + 0.5) * cell_m
+    cy = y0 + (np.arange(height) + 0.5) * cell_m
+    for scan, (px, py, yaw) in zip(scans, poses):
+        r = np.asarray(scan["ranges_m"], np.float64)
+        n = len(r)
+        returned = np.isfinite(r) & (r > 0) & (r <= max_range_m)
+        reach_m = np.where(returned, np.maximum(r - free_margin_m, 0.0), max_range_m)
+        angles = yaw + scan["start_angle_rad"] + scan["step_rad"] * np.arange(n)
+        ends = np.column_stack([px + reach_m * np.cos(angles), py + reach_m * np.sin(angles)])
+        # Cells near the scanner, their bearing as a fractional beam index.
+        cols = np.flatnonzero(np.abs(cx - px) <= max_range_m + cell_m)
+        rows = np.flatnonzero(np.abs(cy - py) <= max_range_m + cell_m)
+        gx, gy = np.meshgrid(cx[cols], cy[rows])
+        bearing = np.arctan2(gy - py, gx - px) - yaw - scan["start_angle_rad"]
+        beam = np.mod(bearing, 2 * math.pi) / scan["step_rad"]
+        i = np.floor(beam).astype(int)
+        inside_span = (i >= 0) & (i < n - 1)
+        i = np.clip(i, 0, n - 2)
+        ax, ay = ends[i, 0] - px, ends[i, 1] - py
+        bx, by = ends[i + 1, 0] - px, ends[i + 1, 1] - py
+        qx, qy = gx - px, gy - py
+        # The cell and the scanner on the same side of the edge a→b (or on it).
+        edge = (bx - ax) * (qy - ay) - (by - ay) * (qx - ax)
+        scanner_side = (bx - ax) * (0 - ay) - (by - ay) * (0 - ax)
+        inside = inside_span & (edge * scanner_side >= 0)
+        free[np.ix_(rows, cols)] += inside
+        # Cells within the hit radius of a return, once per scan.
+        ex = px + r[returned] * np.cos(angles[returned])
+        ey = py + r[returned] * np.sin(angles[returned])
+        mark = np.zeros((height, width), bool)
+        hc, hr = np.floor((ex - x0) / cell_m).astype(int), np.floor((ey - y0) / cell_m).astype(int)
+        for dr in range(-hit_radius_cells, hit_radius_cells + 1):
+            for dc in range(-hit_radius_cells, hit_radius_cells + 1):
+                rr, cc = hr + dr, hc + dc
+                ok = (rr >= 0) & (rr < height) & (cc >= 0) & (cc < width)
+                mark[rr[ok], cc[ok]] = True
+        hits += mark
+    return x0, y0, free, hits
+
+
+def world_foreground(scan, pose, grid, cell_m: float = 0.2, max_range_m: float = 30.0, min_free_scans: int = 10,
+                     max_hit_ratio: float = 0.1, max_hit_scans: int = 40) -> np.ndarray:
+    """§13.3: per beam, a return in a cell mostly seen free and hit by few scans."""
+    x0, y0, free, hits = grid
+    r = np.asarray(scan["ranges_m"], np.float64)
+    px, py, yaw = pose
+    a = yaw + scan["start_angle_rad"] + scan["step_rad"] * np.arange(len(r))
+    returned = np.isfinite(r) & (r > 0) & (r <= max_range_m)
+    rs = np.where(returned, r, 0.0)
+    col = np.floor((px + rs * np.cos(a) - x0) / cell_m).astype(int)
+    row = np.floor((py + rs * np.sin(a) - y0) / cell_m).astype(int)
+    f, h = free[row, col], hits[row, col]
+    return returned & (f >= min_free_scans) & (h <= np.minimum(max_hit_ratio * f, max_hit_scans))

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "roadpreview/roadside/scan.hpp"
 #include "roadpreview/roadside/site.hpp"
 #include "roadpreview/roadside/tracking.hpp"
+#include "roadpreview/roadside/world_background.hpp"
 
 namespace roadpreview::roadside {
 
@@ -66,6 +68,13 @@ public:
     /// Adds a scan (scanner index into the site); returns the cycles it completed (usually 0 or 1). Scans must
     /// come in non-decreasing site time; a scan whose layout disagrees with the site throws std::runtime_error.
     std::vector<Cycle> push(const LaserScan& scan);
+    /// Learns the world background of the scans that carry a pose (a moving scanner, placed by its pose composed
+    /// with its site mount) from all of them at once: call before pushing them. Posed scans are classified against
+    /// it instead of a per-beam background. Throws std::invalid_argument when no scan carries a pose.
+    void learn_world(const std::vector<LaserScan>& scans);
+    const std::optional<WorldBackground>& world() const { return world_; }
+    /// Foreground flags of a scan with a pose against the world background (std::invalid_argument without either).
+    std::vector<bool> world_foreground(const LaserScan& scan) const;
     /// Camera detections (any time order; they are used by the cycle whose interval holds their time).
     void add_detections(const std::vector<CameraDetection>& detections);
     /// Completes the last cycle.
@@ -74,11 +83,15 @@ public:
 
 private:
     Cycle run_cycle(double t_end_s);
+    /// The scan on the site clock, its layout checked, invalid ranges made no return (and counted, if asked).
+    LaserScan checked(const LaserScan& input, std::int64_t* invalid_ranges = nullptr) const;
+    Pose2 site_pose(const LaserScan& scan) const;  ///< the scanner's pose: its logged pose (if any) ∘ its mount
     void associate_camera(double t0_s, double t1_s, Cycle& cycle);
     OutputObject output(const Track& t, double t_s) const;
     Site site_;
     SiteGeodesy geo_;
     std::vector<BackgroundModel> background_;
+    std::optional<WorldBackground> world_;
     std::vector<ScannerStatus> status_;
     std::vector<double> learn_start_s_;
     Tracker tracker_;

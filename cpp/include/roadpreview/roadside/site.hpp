@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "roadpreview/roadside/scan.hpp"
+#include "roadpreview/roadside/world_background.hpp"
 
 namespace roadpreview::roadside {
 
@@ -49,9 +50,11 @@ struct RoadsideSettings {
     double gate_chi2 = 13.8;           ///< association gate (χ², 2 dof, 99.9 %)
     int confirm_hits = 6;              ///< a track is output after this many updates (0.16 s at 37.5 Hz)
     double max_coast_s = 1.2;          ///< a track not updated for longer is dropped (occlusion by a pole)
+    double max_speed_mps = 0.0;        ///< no assignment implying a faster object (0: no limit; for slow logs)
     double camera_gate_m = 2.5;        ///< camera–track association gate (position distance)
     double camera_weight_position = 1.0, camera_weight_heading = 1.0;  ///< cost: w_p·d/gate + w_h·|Δθ|/π
     double scanner_timeout_s = 0.2;    ///< a scanner silent for longer is reported as dropped out
+    WorldBackgroundSettings world;     ///< the background of scans with poses (a moving scanner)
 };
 
 struct Site {

@@ -46,6 +46,9 @@ struct TrackerSettings {
     double accel_sigma_mps2 = 3.0, position_sigma_m = 0.08, gate_chi2 = 13.8, max_coast_s = 1.2;
     double sigma_per_range = 0.005;  ///< measurement σ grows by this per metre of range (beam spacing, few points)
     int confirm_hits = 6;
+    /// The fastest an object may move: a measurement whose centre lies farther from a track's last one than
+    /// max_speed_mps · dt + 1 m is never assigned to it (0: no limit). Matters when scans are seconds apart.
+    double max_speed_mps = 0.0;
     /// Smallest extent (length, width) of each class, m: the visible-corner correction of a car seen only from
     /// its front uses the car's, not the 10 cm of it the scanners saw.
     std::map<std::string, std::pair<double, double>> class_extent_m = {
