@@ -179,6 +179,8 @@ void bind_results(py::module_& m) {
         .def_readonly("frame", &rp::Result::frame)
         .def_readonly("source", &rp::Result::source)
         .def_readonly("timestamp", &rp::Result::timestamp)
+        .def_readonly("speed_mps", &rp::Result::speed_mps, "the motion the paths were planned from")
+        .def_readonly("yaw_rate_rps", &rp::Result::yaw_rate_rps)
         .def_property_readonly("ground_mask", [](py::object self) {
             return view_of(self.cast<const rp::Result&>().ground_mask, self, py::dtype("bool"));
         }, "bool per input row")
@@ -218,7 +220,10 @@ void bind_results(py::module_& m) {
             d["time_ms"] = r.timing_ms.fusion;
             return d;
         }, "the temporal fusion's state after this frame (docs/output.md), or None without fusion")
-        .def("to_json", &rp::result_to_json, "The CLI's output line for this frame")
+        .def("to_json", [](const rp::Result& r, std::optional<std::int64_t> frame, bool timing) {
+            return rp::result_to_json(r, rp::LineOptions{frame, timing});
+        }, py::arg("frame") = py::none(), py::arg("timing") = true,
+           "The CLI's output line for this frame; `frame` restates its number, timing=False leaves the times out")
         .def("to_dict", [](const rp::Result& r) { return py::module_::import("json").attr("loads")(rp::result_to_json(r)); },
              "The CLI's output line for this frame, parsed")
         .def("__repr__", &result_repr);

@@ -161,31 +161,22 @@ def _write_atomically(path: Path, write):
 # ---------------------------------------------------------------------------------------------------------
 # Tasks (run on the Dask workers; plain functions of plain arguments).
 
-def _class(r) -> Optional[str]:
-    return r.get("class") if r else None
-
-
-def frame_row(rid: str, index: int, line: dict, pose=None) -> dict:
-    """One Parquet row: the columns people filter on, and the whole output line (without timing) as JSON.
-    ``frame`` is the frame's index in its recording, also where a task started the estimator later."""
-    line = dict(line, frame=index)
-    timing = line.pop("timing_ms", None) or {}
-    if line.get("fusion"):  # its time, like the stages', differs from run to run: kept beside the line
-        line["fusion"] = dict(line["fusion"])
-        timing = dict(timing, fusion=line["fusion"].pop("time_ms", None))
-    rough = line.get("roughness") or {}
-    row = {"recording": rid, "frame": index, "source": line.get("source"), "timestamp": line.get("timestamp"),
-           "speed_mps": (line.get("motion") or {}).get("speed"),
-           "yaw_rate_rps": (line.get("motion") or {}).get("yaw_rate"), "reason": line.get("reason")}
-    for side in ("left", "right", "vehicle"):
-        r = rough.get(side) or {}
-        row[f"{side}_class"] = _class(r)
-        row[f"{side}_gd_n0_m3"] = r.get("gd_n0")
-        row[f"{side}_iri_m_per_km"] = (r.get("iri") or {}).get("value")
+def frame_row(rid: str, index: int, result, pose=None) -> dict:
+    """One Parquet row of a Result: the columns people filter on, and the whole output line (without timing: it
+    must repeat from run to run) as JSON. ``frame`` is the frame's index in its recording, also where a task
+    started the estimator later. Read from the Result's fields: parsing and re-encoding the ~60 kB line of a KITTI
+    frame cost as much as a third of a batch task."""
+    row = {"recording": rid, "frame": index, "source": result.source, "timestamp": result.timestamp,
+           "speed_mps": result.speed_mps, "yaw_rate_rps": result.yaw_rate_rps, "reason": result.reason}
+    for side, rough in (("left", result.left.roughness), ("right", result.right.roughness),
+                        ("vehicle", result.vehicle)):
+        row[f"{side}_class"] = rough.iso_class
+        row[f"{side}_gd_n0_m3"] = rough.gd_n0
+        row[f"{side}_iri_m_per_km"] = rough.iri.value
     row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"] = pose if pose is not None else (None, None, None)
-    row["line"] = json.dumps(line, sort_keys=True)
-    row["timing_total_ms"] = timing.get("total")
-    row["timing_fusion_ms"] = timing.get("fusion")
+    row["line"] = result.to_json(frame=index, timing=False)
+    row["timing_total_ms"] = result.timing_ms["total"]
+    row["timing_fusion_ms"] = result.fusion["time_ms"] if result.fusion else None
     return row
 
 
@@ -244,7 +235,7 @@ def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) 
         for k, result in enumerate(drive.run(inputs, cfg, frames=(chunk.first, chunk.last), **opts)):
             index = chunk.first + k
             if index >= chunk.keep_from:
-                rows.append(frame_row(rid, index, result.to_dict(), poses[index] if poses else None))
+                rows.append(frame_row(rid, index, result, poses[index] if poses else None))
                 row_bytes += len(rows[-1]["line"])
             if len(rows) == ROW_GROUP_FRAMES or row_bytes >= ROW_GROUP_BYTES:
                 writer.write_table(pa.Table.from_pylist(rows, schema=schema))

@@ -162,6 +162,27 @@ TEST(Pipeline, JsonLineHasTheDocumentedFields) {
     for (const char* key : {"ground", "path", "profile", "roughness", "total"}) EXPECT_TRUE(j["timing_ms"].contains(key));
 }
 
+// A batch's lines restate the recording's frame number and leave the times out, so that they repeat run to run.
+TEST(Pipeline, JsonLineWithoutTimingRepeatsAndRestatesTheFrame) {
+    rp::Config cfg = kitti_like();
+    cfg.fusion.method = rp::FusionMethod::Kalman;
+    rp::Estimator a(cfg), b(cfg);
+    const rp::Result r = a.process(road_scene(), 5.0, 0.3), q = b.process(road_scene(), 5.0, 0.3);
+    const auto j = nlohmann::json::parse(rp::result_to_json(r, rp::LineOptions{41, false}));
+    EXPECT_EQ(j["frame"], 41);
+    EXPECT_FALSE(j.contains("timing_ms"));
+    ASSERT_TRUE(j["fusion"].is_object());
+    EXPECT_FALSE(j["fusion"].contains("time_ms"));
+    EXPECT_EQ(j["fusion"]["method"], "kalman");
+    EXPECT_EQ(rp::result_to_json(r, rp::LineOptions{41, false}), rp::result_to_json(q, rp::LineOptions{41, false}));
+    auto timed = nlohmann::json::parse(rp::result_to_json(r));  // the full line: the same but for those
+    EXPECT_EQ(timed["frame"], 0);
+    timed.erase("timing_ms");
+    timed["fusion"].erase("time_ms");
+    timed["frame"] = 41;
+    EXPECT_EQ(timed, j);
+}
+
 // The ROI is ordered by cell inside the pipeline, whatever the order of the rows: a reversed cloud gives the
 // same ground, clusters and profiles, row for row.
 TEST(Pipeline, RowOrderDoesNotChangeTheResult) {

@@ -120,11 +120,13 @@ json mounting_json(const Result& r) {
     return out;
 }
 
-json fusion_json(const std::optional<FusionStatus>& f, double time_ms) {
+json fusion_json(const std::optional<FusionStatus>& f, double time_ms, bool timing) {
     if (!f) return nullptr;
-    return {{"method", to_string(f->method)}, {"frames", f->frames}, {"coverage", f->coverage},
-            {"frame_coverage", f->frame_coverage}, {"reset", f->reset.empty() ? json(nullptr) : json(f->reset)},
-            {"pose", {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}}, {"time_ms", time_ms}};
+    json out = {{"method", to_string(f->method)}, {"frames", f->frames}, {"coverage", f->coverage},
+                {"frame_coverage", f->frame_coverage}, {"reset", f->reset.empty() ? json(nullptr) : json(f->reset)},
+                {"pose", {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}}};
+    if (timing) out["time_ms"] = time_ms;
+    return out;
 }
 
 }  // namespace
@@ -134,9 +136,11 @@ nlohmann::ordered_json profile_to_json(const Profile& p) { return profile_json(p
 nlohmann::ordered_json roughness_to_json(const Roughness& r) { return roughness_json(r); }
 }  // namespace detail
 
-std::string result_to_json(const Result& r) {
-    const json line = {
-        {"frame", r.frame},
+std::string result_to_json(const Result& r) { return result_to_json(r, LineOptions{}); }
+
+std::string result_to_json(const Result& r, const LineOptions& options) {
+    json line = {
+        {"frame", options.frame ? *options.frame : static_cast<std::int64_t>(r.frame)},
         {"source", r.source},
         {"timestamp", r.timestamp ? number(*r.timestamp) : json(nullptr)},
         {"motion", {{"speed", r.speed_mps}, {"yaw_rate", r.yaw_rate_rps}, {"status", to_string(r.path.status)}}},
@@ -152,11 +156,12 @@ std::string result_to_json(const Result& r) {
                        {"right", roughness_json(r.right.roughness)},
                        {"vehicle", roughness_json(r.vehicle)}}},
         {"reason", r.status == FrameStatus::Ok ? json(nullptr) : json(to_string(r.status))},
-        {"fusion", fusion_json(r.fusion, r.timing_ms.fusion)},
-        {"timing_ms", {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
-                       {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},
-                       {"total", r.timing_ms.total}}},
+        {"fusion", fusion_json(r.fusion, r.timing_ms.fusion, options.timing)},
     };
+    if (options.timing)
+        line["timing_ms"] = {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
+                             {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},
+                             {"total", r.timing_ms.total}};
     return line.dump();
 }
 

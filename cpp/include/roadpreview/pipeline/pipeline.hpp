@@ -154,6 +154,15 @@ private:
 /// One output line (JSON object, no newline) as documented in docs/output.md.
 std::string result_to_json(const Result& r);
 
+/// What an output line may leave out or restate.
+struct LineOptions {
+    std::optional<std::int64_t> frame;  ///< the frame's number instead of the estimator's count (a recording's index)
+    bool timing = true;                 ///< false: no `timing_ms` and no `fusion.time_ms` (lines that must repeat)
+};
+
+/// The output line with `options` applied.
+std::string result_to_json(const Result& r, const LineOptions& options);
+
 /// A wheel's roughness (§4) and IRI (§6) from its profile, as the pipeline rates each wheel.
 void rate_profile(Profile& p, const Config& cfg);
 
