@@ -170,7 +170,8 @@ def sick_seeds():
     site = (b"origin: {lat_deg: 49.0, lon_deg: 8.4, height_m: 110, heading_deg: 90}\n"
             b"scanners:\n  - {name: a, x_m: 0, y_m: 0, yaw_deg: 90, beams: 361, step_deg: 0.5}\n"
             b"camera:\n  points: [[0, 480, 0, 5], [720, 480, 5, 5], [720, 200, 5, 30], [0, 200, -5, 30]]\n"
-            b"processing: {cell_m: 0.1, dilation_cells: 2}\n")
+            b"processing: {cell_m: 0.1, dilation_cells: 2, max_speed_mps: 3,\n"
+            b"             world: {cell_m: 0.2, max_range_m: 30, min_free_scans: 10, max_hit_s: 4}}\n")
     return {"cola_b": b"\x00" + cola_b, "cola_a": b"\x00" + cola_a, "stream": b"\x01xx" + cola_b + cola_a + cola_b,
             "site": b"\x02" + site, "scan_csv": b"\x03t,scanner,angle_deg,range_m\n0,0,-90,5\n0,0,-89.5,\n",
             "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n",

@@ -42,9 +42,17 @@ class KillOnce(distributed.WorkerPlugin):
 
 @pytest.fixture(scope="module")
 def client():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c:
+    with batch.local_cluster(2) as c:  # the cluster `roadpreview batch` starts
         with distributed.Client(c) as cl:
             yield cl
+
+
+def test_the_local_cluster_keeps_its_housekeeping_rare(client):
+    """The settings reach the worker processes, where the profiler would otherwise sample every 10 ms."""
+    import dask
+
+    seen = client.run(lambda: {k: dask.config.get(k) for k in batch.LOCAL_CLUSTER_CONFIG})
+    assert len(seen) == 2 and all(v == batch.LOCAL_CLUSTER_CONFIG for v in seen.values()), seen
 
 
 @pytest.fixture()
