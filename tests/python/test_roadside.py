@@ -201,6 +201,31 @@ def test_world_background_matches_the_reference():
     assert walker > 50 and walker_flagged >= 0.9 * walker, (walker, walker_flagged)
 
 
+@settings(max_examples=8, deadline=None)
+@given(st.floats(-20, 20), st.floats(-6, 6), st.floats(-math.pi, math.pi), st.floats(0.5, 3.0), st.integers(0, 99))
+def test_a_static_world_has_no_foreground_whatever_the_drive(x0, y0, heading, speed, seed):
+    """Buildings and poles seen from any straight drive through the intersection: nothing passed, nothing is
+    foreground; and the counts do not depend on the order the scans are learned in."""
+    rng = np.random.default_rng(seed)
+    scans = []
+    for k in range(60):
+        x, y = x0 + speed * 0.2 * k * math.cos(heading), y0 + speed * 0.2 * k * math.sin(heading)
+        if min(abs(x), abs(y)) > 7.5:
+            break  # inside a building
+        s = sr.scan(sr.Scanner(x, y, heading), k, 0.2 * k, [], rng)
+        scans.append(dict(s, scanner=0, pose=(x, y, heading), source=f"drive#{k}"))
+    assert len(scans) >= 2
+    site = ("origin: {lat_deg: 0, lon_deg: 0}\nscanners: [{name: v, max_range_m: 80}]\n"
+            "processing: {world: {min_free_scans: 3}}\n")
+    ordered, shuffled = rp.roadside.Processor(site), rp.roadside.Processor(site)
+    ordered.learn_world(scans)
+    shuffled.learn_world([scans[i] for i in rng.permutation(len(scans))])
+    for s in scans:
+        flags = ordered.world_foreground(s)
+        assert not flags.any(), (s["source"], np.flatnonzero(flags)[:10])
+        assert (shuffled.world_foreground(s) == flags).all()
+
+
 def test_scans_with_poses_need_a_world_background():
     run = sr.simulate_moving_scanner(seed=3, rate_hz=2.0)
     proc = rp.roadside.Processor(run.site_yaml)

@@ -132,7 +132,7 @@ def _ray_segments(ox, oy, dx, dy, segs: np.ndarray) -> np.ndarray:
     ax, ay = segs[:, 0] - ox, segs[:, 1] - oy
     ex, ey = segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]
     den = dx[:, None] * ey[None, :] - dy[:, None] * ex[None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # parallel: no hit, masked below
         t = (ax[None, :] * ey[None, :] - ay[None, :] * ex[None, :]) / den
         u = (ax[None, :] * dy[:, None] - ay[None, :] * dx[:, None]) / den
     hit = (np.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
