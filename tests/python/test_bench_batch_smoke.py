@@ -15,7 +15,8 @@ def test_batch_bench_quick_prints_speedup_and_memory_tables():
     speed = out.split("## Speedup")[1].split("## Segments step")[0]
     for workers in (1, 2):
         assert re.search(rf"\| {workers} \| 4 × 3 \| \d+\.\d \(\d+\.\d–\d+\.\d\) \| \d+\.\d \| \d+\.\d \|", speed)
-    assert re.search(r"Speedup 2 workers vs 1: \*\*\d+\.\d\d×\*\* \(target ≥ 1\.8×: (met|not met)\)", speed)
+    assert re.search(r"Speedup 2 workers vs 1: \*\*\d+\.\d\d×\*\* \(target ≥ 1\.8×: (met|not met)\): the median of \d+ "
+                     r"pairs' ratios \(\d+\.\d\d–\d+\.\d\d\), the ratio of the medians \d+\.\d\d×", speed)
     segments = out.split("## Segments step")[1].split("## Worker memory")[0]
     for name in ("numpy reference Route", "C\\+\\+ RouteBuilder"):
         assert re.search(rf"\| {name} \| 4 × 3 \| \d+\.\d{{3}} \(\d+\.\d{{3}}–\d+\.\d{{3}}\) \|", segments)
