@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Bindings of the roadside library (roadpreview.roadside wraps them): scan readers, telegram decoding, the
 // stages (labelling, L-shape, assignment) for cross-checks, and the cycle processor (JSON lines out).
-#include <cmath>
-
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>

@@ -139,9 +139,8 @@ RoadsideSettings read_settings(const YAML::Node& node, const std::string& where)
     if (!node) return s;
     check_keys(node, {"cell_m", "dilation_cells", "min_points", "background_s", "background_margin_m", "cycle_s",
                       "accel_sigma_mps2", "position_sigma_m", "gate_chi2", "confirm_hits", "max_coast_s",
-                      "camera_gate_m", "camera_weight_position", "camera_weight_heading", "scanner_timeout_s", "max_speed_mps",
-                      "world"},
-               where);
+                      "camera_gate_m", "camera_weight_position", "camera_weight_heading", "scanner_timeout_s",
+                      "max_speed_mps", "world"}, where);
     auto set = [&](const char* key, double& field) {
         field = number(node, key, field, where);
         positive(field, key, where);

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Roadside perception, docs/method.md §13, in plain numpy/scipy: background, grid labelling, L-shape boxes,
-gated assignment and the constant-velocity Kalman step. The test oracle for roadpreview::roadside."""
+"""Roadside perception, docs/method.md §13, in plain numpy/scipy: background (and the world background of a moving
+scanner), grid labelling, L-shape boxes, gated assignment and the constant-velocity Kalman step. The test oracle
+for roadpreview::roadside."""
 
 from __future__ import annotations
 
