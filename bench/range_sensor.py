@@ -6,7 +6,7 @@ Simulated throughout (roadpreview.sim.range_sensor, every draw seeded):
     0.15–0.6 m × 20 readings, clean and with 2 % gross errors (±2–5 cm); a1 and a2 errors against the truth;
   * offset calibration: laser (8 ms latency) and ultrasonic (12 ms, 12° cone) 0.3 m ahead of the axle, 0.25 m up:
     on the 3 m bench track at 0.2 and 1.0 m/s; and on a class C road against the fused LiDAR map (simulated
-    OS1-128 1.8 m up, Kalman fusion, 10 frames per run) at 5 and 20 m/s; b1 and b2 errors by ICP and by
+    OS1-128 1.8 m up, Kalman fusion, 20 frames per run) at 5 and 20 m/s; b1 and b2 errors by ICP and by
     cross-correlation;
   * profile RMSE after calibration on the bench (detrended error against the true track) and the ultrasonic
     footprint bias by the track's slope;
@@ -273,7 +273,7 @@ def main() -> None:
         print(md_table(["bench", "seeds", "a1 error %", "a2 error mm", "residual RMS mm", "rejected", "met"],
                        distance_rows(2 if args.quick else 10)))
         bench_rows, runs = bench_offset(work)
-        road_rows = [] if args.quick else road_offset(work, 10)
+        road_rows = [] if args.quick else road_offset(work, 20)  # 2 s of LiDAR: README, Range sensors
         print("\n**Offset calibration** (error against the truth; target b1 within 2 ms, b2 within 5 mm)\n")
         print(md_table(["reference", "sensor", "speeds m/s", "ICP b1 error ms", "ICP b2 error mm",
                         "cross-correlation b1 error ms", "cross-correlation b2 error mm", "met (ICP)"],
