@@ -98,7 +98,7 @@ TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {
     EXPECT_FLOAT_EQ(f.points(1, 1), 5.5f);
     expect_error(written("words.pcd", pcd_header("2", "2", "ascii") + "1 2 3\nfoo bar baz\n"), "'foo bar baz'");
     expect_error(written("short.pcd", pcd_header("3", "3", "ascii") + "1 2 3\n4 5 6\n"), "holds 2 lines");
-    expect_error(written("columns.pcd", pcd_header("1", "1", "ascii") + "1 2\n"), "not 3 numbers");
+    expect_error(written("ascii_columns.pcd", pcd_header("1", "1", "ascii") + "1 2\n"), "not 3 numbers");
 }
 
 TEST(CloudFiles, CompressedPcdSizesAreChecked) {
