@@ -26,6 +26,17 @@ void check_settings(const WorldBackgroundSettings& s) {
 }
 
 // The median interval between consecutive scan times; the scans must advance.
+// A polygon vertex in fixed point: cv::fillPoly fills the pixels whose centres (cell + 0.5) lie inside.
+template <class Position>
+cv::Point vertex(const Position& g) {
+    return {static_cast<int>(std::lround((g.col - 0.5) * (1 << kShift))), static_cast<int>(std::lround((g.row - 0.5) * (1 << kShift)))};
+}
+
+template <class Position>
+cv::Point cell_of(const Position& g) {
+    return {static_cast<int>(std::floor(g.col)), static_cast<int>(std::floor(g.row))};
+}
+
 double scan_period(const std::vector<LaserScan>& scans) {
     std::vector<double> t, dt;
     for (const auto& s : scans) t.push_back(s.time_s);
@@ -77,22 +88,18 @@ WorldBackground::WorldBackground(const std::vector<LaserScan>& scans, const std:
         const LaserScan& scan = scans[i];
         const Pose2& pose = poses[i];
         // The scan's polygon: its origin and every beam shortened by the margin (no return: out to the range limit).
-        polygon.assign(1, cv::Point(static_cast<int>(std::lround(((pose.x_m - x0_m_) / s_.cell_m - 0.5) * (1 << kShift))),
-                                    static_cast<int>(std::lround(((pose.y_m - y0_m_) / s_.cell_m - 0.5) * (1 << kShift)))));
+        polygon.assign(1, vertex(grid_position(pose.x_m, pose.y_m)));
         returns.clear();
         for (std::size_t b = 0; b < scan.ranges_m.size(); ++b) {
             const double range = scan.ranges_m[b], a = pose.yaw_rad + scan.angle_rad(b);
             const bool hit = std::isfinite(range) && range > 0.0 && range <= s_.max_range_m;
             const double free_m = hit ? std::max(0.0, range - s_.free_margin_m) : s_.max_range_m;
-            const double u = (pose.x_m + free_m * std::cos(a) - x0_m_) / s_.cell_m - 0.5;
-            const double v = (pose.y_m + free_m * std::sin(a) - y0_m_) / s_.cell_m - 0.5;
-            polygon.emplace_back(static_cast<int>(std::lround(u * (1 << kShift))), static_cast<int>(std::lround(v * (1 << kShift))));
-            if (hit)
-                returns.emplace_back(static_cast<int>(std::floor((pose.x_m + range * std::cos(a) - x0_m_) / s_.cell_m)),
-                                     static_cast<int>(std::floor((pose.y_m + range * std::sin(a) - y0_m_) / s_.cell_m)));
+            polygon.push_back(vertex(grid_position(pose.x_m + free_m * std::cos(a), pose.y_m + free_m * std::sin(a))));
+            if (hit) returns.push_back(cell_of(grid_position(pose.x_m + range * std::cos(a), pose.y_m + range * std::sin(a))));
         }
         // Each count on a window around the scan (the grid reaches max_range_m + a cell beyond every pose).
-        const int cx = static_cast<int>((pose.x_m - x0_m_) / s_.cell_m), cy = static_cast<int>((pose.y_m - y0_m_) / s_.cell_m);
+        const cv::Point centre = cell_of(grid_position(pose.x_m, pose.y_m));
+        const int cx = centre.x, cy = centre.y;
         const int half = static_cast<int>(std::ceil(s_.max_range_m / s_.cell_m)) + 1;
         const cv::Rect window = cv::Rect(cx - half, cy - half, 2 * half + 1, 2 * half + 1) & cv::Rect(0, 0, width_, height_);
         cv::Mat mask = cv::Mat::zeros(window.size(), CV_8U);
@@ -111,8 +118,13 @@ WorldBackground::WorldBackground(const std::vector<LaserScan>& scans, const std:
     }
 }
 
+WorldBackground::GridPosition WorldBackground::grid_position(double x_m, double y_m) const {
+    return {(x_m - x0_m_) / s_.cell_m, (y_m - y0_m_) / s_.cell_m};
+}
+
 long long WorldBackground::cell_index(double x_m, double y_m) const {
-    const double c = std::floor((x_m - x0_m_) / s_.cell_m), r = std::floor((y_m - y0_m_) / s_.cell_m);
+    const GridPosition g = grid_position(x_m, y_m);
+    const double c = std::floor(g.col), r = std::floor(g.row);
     if (!(c >= 0.0 && c < width_ && r >= 0.0 && r < height_)) return -1;
     return static_cast<long long>(r) * width_ + static_cast<long long>(c);
 }

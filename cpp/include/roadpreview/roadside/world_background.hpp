@@ -40,6 +40,10 @@ public:
     int height_cells() const { return height_; }
 
 private:
+    struct GridPosition {
+        double col, row;  ///< in cells from the grid's corner, fractional
+    };
+    GridPosition grid_position(double x_m, double y_m) const;
     long long cell_index(double x_m, double y_m) const;  ///< −1 off the grid
     WorldBackgroundSettings s_;
     double x0_m_ = 0.0, y0_m_ = 0.0, period_s_ = 0.0;
