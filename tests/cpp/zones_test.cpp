@@ -78,6 +78,27 @@ TEST(Zones, LeaveAWallBesideTheRoad) {
     expect_ground_is_the_road(surface([](double, double) { return 0.0; }, wall));
 }
 
+// A reflection or multipath return metres under the road (KITTI frames hold a few 9–10 m down, an OS-0-128
+// capture one 9 m down in a wheel's path): the method paper keeps every point below its plane, but no wheel rolls
+// on these.
+TEST(Zones, LeaveReturnsFromUnderTheRoad) {
+    scenes::Cloud under(4, 3);
+    under << 11.0f, -0.8f, -9.2f, 11.1f, -0.8f, -9.0f, 25.0f, 3.0f, -2.5f, 6.0f, 1.0f, -6.7f;
+    expect_ground_is_the_road(surface([](double x, double) { return 0.03 * std::max(x - 15.0, 0.0); }, under));
+}
+
+TEST(Ground, PcaLeavesReturnsFromUnderTheRoad) {
+    scenes::Cloud under(2, 3);
+    under << 11.0f, -0.8f, -9.2f, 20.0f, 2.0f, -3.0f;
+    const Scene s = surface([](double, double) { return 0.0; }, under);
+    rp::GroundConfig cfg;
+    cfg.method = rp::GroundMethod::Pca;
+    const rp::GroundFit fit = rp::fit_ground(rp::points_view(s.points.data(), s.points.rows(), 3), cfg);
+    ASSERT_TRUE(fit.plane);
+    for (std::size_t i = 0; i < fit.mask.size(); ++i) ASSERT_EQ(fit.mask[i], i < s.road ? 1 : 0) << i;
+    EXPECT_EQ(fit.count, static_cast<std::int64_t>(s.road));
+}
+
 TEST(Zones, PatchesAreRingsBySectors) {
     rp::GroundConfig cfg;
     cfg.zone_ring_edges_m = {1.0, 5.0, 10.0};

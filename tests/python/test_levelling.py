@@ -117,10 +117,15 @@ def spurious_returns_frame():
     return np.vstack([road, below]).astype(np.float32), len(road)
 
 
+# The ground stage now leaves returns more than ground.max_depth_m (2 m) under the road (method.md §1); with the
+# paper's rule (every point below the plane is ground: a depth beyond them) the levelling must still cope.
+KEEP_RETURNS_UNDER_THE_ROAD = {"max_depth_m": 10.0}
+
+
 @pytest.mark.parametrize("process", ["native", "reference"])
 def test_spurious_returns_below_the_road_do_not_tilt_a_band(process):
     points, road = spurious_returns_frame()
-    cfg = Config(obstacles={"enabled": False})
+    cfg = Config(obstacles={"enabled": False}, ground=KEEP_RETURNS_UNDER_THE_ROAD)
     if process == "native":
         result = rp.Estimator(cfg).process(points, 5.0, 0.0)
     else:
@@ -135,8 +140,19 @@ def test_one_fit_per_band_is_tilted_by_them(monkeypatch):
 
     monkeypatch.setattr(profile, "LEVEL_REFITS", 0)
     points, _ = spurious_returns_frame()
-    result = rp.reference.process(points, 5.0, 0.0, Config(obstacles={"enabled": False}))
+    result = rp.reference.process(points, 5.0, 0.0, Config(obstacles={"enabled": False},
+                                                           ground=KEEP_RETURNS_UNDER_THE_ROAD))
     assert max(np.nanmax(np.abs(result.left.z)), np.nanmax(np.abs(result.right.z))) > 0.02
+
+
+@pytest.mark.parametrize("process", ["native", "reference"])
+def test_by_default_the_ground_leaves_returns_from_under_the_road(process):
+    points, road = spurious_returns_frame()
+    cfg = Config(obstacles={"enabled": False})
+    result = (rp.Estimator(cfg).process(points, 5.0, 0.0) if process == "native"
+              else rp.reference.process(points, 5.0, 0.0, cfg))
+    mask = np.asarray(result.ground_mask)
+    assert mask[:road].all() and not mask[road:].any()
 
 
 def short_far_band_frame():

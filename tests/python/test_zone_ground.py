@@ -7,7 +7,7 @@ import pytest
 
 import roadpreview as rp
 import roadpreview.native
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OUSTER
 from roadpreview.config import Config
 
 STEP_M = 0.25  # grid spacing of the synthetic scenes
@@ -83,6 +83,15 @@ def sparse_rings():
     return road, np.ones(len(road), dtype=bool)
 
 
+# Returns metres under the road (a reflection, multipath): KITTI frames hold a few 9–10 m down, the OS-0-128
+# capture one 9 m down in a wheel's path. The method paper keeps every point below its plane.
+UNDER_THE_ROAD = np.array([[11.0, -0.8, -9.2], [11.1, -0.8, -9.0], [25.0, 3.0, -2.5], [6.0, 1.0, -6.7]])
+
+
+def returns_from_under_the_road():
+    return with_extra(road_grid(grade), UNDER_THE_ROAD)
+
+
 def surface_scene(height):
     road = road_grid(height)
     return road, np.ones(len(road), dtype=bool)
@@ -97,6 +106,7 @@ SCENES = {
     "overhead canopy": canopy_scene,
     "car beside a camera": car_beside_a_camera,
     "rings of a sparse sensor": sparse_rings,
+    "returns from under the road": returns_from_under_the_road,
 }
 
 
@@ -119,6 +129,26 @@ def test_one_plane_cannot_follow_a_grade_or_crest(impl, height):
     xyz = road_grid(height)
     assert np.count_nonzero(~impl.fit_ground(xyz, Config(ground={"method": "pca"}))[0]) > 0.05 * len(xyz)
     assert impl.fit_ground(xyz, Config(ground={"method": "zones"}))[0].all()
+
+
+@pytest.mark.parametrize("method", ["zones", "pca"])
+def test_returns_deeper_than_max_depth_under_the_road_are_not_ground(impl, method):
+    xyz, road = with_extra(road_grid(lambda x, y: 0.0 * x), UNDER_THE_ROAD)
+    mask, _ = impl.fit_ground(xyz, Config(ground={"method": method}))
+    np.testing.assert_array_equal(mask, road)
+    # The paper's rule (points below the plane are ground) comes back with a depth beyond them.
+    mask, _ = impl.fit_ground(xyz, Config(ground={"method": method, "max_depth_m": 20.0}))
+    assert mask.all()
+
+
+def test_a_return_from_under_the_road_in_a_wheel_path_is_no_profile_bin():
+    """The bundled OS-0-128 capture holds one return 9.2 m under the road 11 m ahead in the right wheel's path: it
+    made a profile bin, the gap filling drew a slope down to it and the right wheel read class H."""
+    frame = next(iter(rp.io.open(OUSTER / "OS-0-128-U1_v2.3.0_1024x10.pcap")))
+    res = rp.Estimator(rp.Config(sensor_height=1.97)).process(frame.points, 5.0, 0.0)
+    for wheel in (res.left, res.right):
+        z = wheel.z[np.isfinite(wheel.z)]
+        assert len(z) > 50 and np.abs(z).max() < 0.2
 
 
 def wall_only():

@@ -46,7 +46,7 @@ void from_json(const json& j, GroundMethod& m) {
     throw std::invalid_argument("ground.method must be \"pca\", \"ransac\" or \"zones\", got \"" + name + "\"");
 }
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GroundConfig, method, roi_x_min_m, roi_x_max_m, roi_y_abs_max_m,
-                                                pca_iterations, pca_threshold_m, ransac_distance_m,
+                                                pca_iterations, pca_threshold_m, max_depth_m, ransac_distance_m,
                                                 ransac_max_iterations, ransac_seed, max_tilt_deg,
                                                 zone_ring_edges_m, zone_sectors, zone_root_m, zone_min_points, zone_seed_points,
                                                 zone_max_step_m, zone_max_flatness_m, zone_min_breadth_m)
@@ -233,6 +233,7 @@ void validate(const Config& c) {
     require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
     require(g.pca_iterations >= 1, "ground.pca_iterations must be >= 1");
     require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
+    require(positive(g.max_depth_m), "ground.max_depth_m must be > 0");
     require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
     require(positive(g.max_tilt_deg) && g.max_tilt_deg < 90.0, "ground.max_tilt_deg must be in (0, 90)");
     require(g.ransac_max_iterations >= 1, "ground.ransac_max_iterations must be >= 1");

@@ -16,6 +16,7 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kMaxMountingTiltRad = 15.0 / kRadToDeg;  // beyond it the "ground" is more likely a wall
+constexpr double kMinSensorHeightM = 0.1;  // below it the cloud's origin sits on its ground: a base frame already
 
 std::string format(const char* pattern, double a, double b, double c) {
     char text[160];
@@ -77,7 +78,7 @@ void DriveFrames::estimate_mounting_from(const Frame& f) {
     }
     const std::string figures = format("height %.2f m, roll %.2f°, pitch %.2f°", m->height_m,
                                        m->roll_rad * kRadToDeg, m->pitch_rad * kRadToDeg);
-    if (m->height_m <= 0.0 || std::abs(m->roll_rad) > kMaxMountingTiltRad ||
+    if (m->height_m < kMinSensorHeightM || std::abs(m->roll_rad) > kMaxMountingTiltRad ||
         std::abs(m->pitch_rad) > kMaxMountingTiltRad) {
         note(true, missing + "the ground in " + frame_label(f) + " gives no plausible mounting (" + figures +
              "): the points are taken as base-frame points");

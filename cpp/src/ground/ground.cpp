@@ -43,7 +43,9 @@ std::optional<Plane> plane_from(const Moments& m) {
 
 Eigen::Vector3d row(PointsView pts, Eigen::Index i) { return pts.row(i).cast<double>().transpose(); }
 
-// The paper's method: fit, drop points more than `threshold` above the plane, repeat.
+// The paper's method: fit, drop points more than `threshold` above the plane, repeat. Points more than
+// `max_depth_m` below the last plane are then not ground either: they took part in the fits, as in the paper (the
+// first plane, fitted to every point, may lie metres above the road), but no wheel rolls on them.
 void pca_ground(PointsView pts, const GroundConfig& cfg, GroundFit& fit) {
     fit.status = GroundStatus::Found;
     fit.plane.reset();
@@ -64,8 +66,18 @@ void pca_ground(PointsView pts, const GroundConfig& cfg, GroundFit& fit) {
             }
         }
     }
-    fit.count = fit.plane ? kept.count : 0;
-    if (!fit.plane) std::fill(fit.mask.begin(), fit.mask.end(), 0);
+    if (!fit.plane) {
+        fit.count = 0;
+        std::fill(fit.mask.begin(), fit.mask.end(), 0);
+        return;
+    }
+    fit.count = kept.count;
+    for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+        if (fit.mask[i] && height_above(*fit.plane, pts(i, 0), pts(i, 1), pts(i, 2)) < -cfg.max_depth_m) {
+            fit.mask[i] = 0;
+            --fit.count;
+        }
+    }
 }
 
 // PCL's up-axis-constrained plane model; subclassed only to set the seed of its sampler.

@@ -26,7 +26,8 @@ void group_by_patch(std::int32_t patches, ZoneScratch& z) {
         if (z.patch[i] >= 0) z.order[static_cast<std::size_t>(z.next[static_cast<std::size_t>(z.patch[i])]++)] = static_cast<std::int32_t>(i);
 }
 
-// The paper's fit on a point set: fit, keep the points at most pca_threshold_m above, pca_iterations times.
+// The paper's fit on a point set: fit, keep the points at most pca_threshold_m above (and max_depth_m below),
+// pca_iterations times.
 // `kept` enters as the set the first fit uses and leaves as the points the last fit keeps.
 std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std::vector<std::uint8_t>& kept,
                                     const GroundConfig& cfg) {
@@ -40,7 +41,8 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
         m = Moments{};
         bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
-            const bool keep = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z()) <= cfg.pca_threshold_m;
+            const double h = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z());
+            const bool keep = h <= cfg.pca_threshold_m && h >= -cfg.max_depth_m;
             changed = changed || keep != static_cast<bool>(kept[i]);
             kept[i] = keep;
             if (keep) m.add(pts[i]);
@@ -105,26 +107,30 @@ struct PatchResult {
 // the mean of the lowest seed points (heights above the reference, and never more than `threshold` above the
 // reference), the paper's fit from them, then the breadth, uprightness, elevation and flatness tests. A patch with
 // too few points or seeds for a fit, or whose fit fails a test, keeps the reference: its points at most
-// `threshold` above it are ground.
+// `threshold` above it are ground. Points more than max_depth_m below the reference are neither.
 PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScratch& z) {
     const auto& pts = z.pts;
     z.heights.resize(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i)
         z.heights[i] = height_above(reference, pts[i].x(), pts[i].y(), pts[i].z());
+    const double floor_h = -cfg.max_depth_m;  // deeper: a return from under the road (a reflection, multipath)
     const auto inherit = [&](bool too_steep) {  // no plane of its own: the inner ground goes on
         z.ground.resize(pts.size());
-        for (std::size_t i = 0; i < pts.size(); ++i) z.ground[i] = z.heights[i] <= cfg.pca_threshold_m;
+        for (std::size_t i = 0; i < pts.size(); ++i) z.ground[i] = z.heights[i] <= cfg.pca_threshold_m && z.heights[i] >= floor_h;
         return PatchResult{std::nullopt, too_steep};
     };
-    if (static_cast<int>(pts.size()) < cfg.zone_min_points) return inherit(false);
-    const auto lowest = std::min<std::size_t>(static_cast<std::size_t>(cfg.zone_seed_points), pts.size());
-    z.low.assign(z.heights.begin(), z.heights.end());
+    z.low.clear();
+    for (const double h : z.heights)
+        if (h >= floor_h) z.low.push_back(h);
+    if (static_cast<int>(z.low.size()) < cfg.zone_min_points) return inherit(false);
+    const auto lowest = std::min<std::size_t>(static_cast<std::size_t>(cfg.zone_seed_points), z.low.size());
     std::nth_element(z.low.begin(), z.low.begin() + static_cast<std::ptrdiff_t>(lowest - 1), z.low.end());
     double low_mean = 0.0;
     for (std::size_t i = 0; i < lowest; ++i) low_mean += z.low[i];
     low_mean = std::min(low_mean / static_cast<double>(lowest), 0.0);  // never seeds above the reference's band
     z.ground.resize(pts.size());
-    for (std::size_t i = 0; i < pts.size(); ++i) z.ground[i] = z.heights[i] <= low_mean + cfg.pca_threshold_m;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        z.ground[i] = z.heights[i] <= low_mean + cfg.pca_threshold_m && z.heights[i] >= floor_h;
     const auto fit = iterate_fit(pts, z.ground, cfg);
     if (!fit) return inherit(false);
     const bool upright = within_tilt(fit->plane, cfg.max_tilt_deg);

@@ -115,7 +115,8 @@ def ground_model(base_xyz, cfg: Config | None = None) -> GroundModel:
 
 
 def _pca_ground(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
-    """The paper's method: refit and drop points too far ABOVE the plane, `pca_iterations` times."""
+    """The paper's method: refit and drop points too far ABOVE the plane, `pca_iterations` times; then the
+    points more than max_depth_m below the last plane (they took part in the fits) are not ground either."""
     g = cfg.ground
     if g.pca_iterations < 1:
         raise ValueError(f"ground.pca_iterations must be >= 1, got {g.pca_iterations}")
@@ -123,6 +124,7 @@ def _pca_ground(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
     for _ in range(g.pca_iterations):
         plane = fit_plane(xyz[kept])
         kept = kept[height_above(xyz[kept], plane) <= g.pca_threshold_m]
+    kept = kept[height_above(xyz[kept], plane) >= -g.max_depth_m]
     if len(kept) < 3:
         raise DegenerateFit("fewer than 3 ground points")
     return kept, plane

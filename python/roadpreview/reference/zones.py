@@ -28,12 +28,13 @@ def patch_rings_sectors(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.nd
 
 def paper_fit(xyz: np.ndarray, start: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The paper's iteration from the points `start` selects: (plane of the last fit, the points that fit was
-    made on, the points it keeps — at most pca_threshold_m above it)."""
+    made on, the points it keeps — at most pca_threshold_m above it and max_depth_m below)."""
     kept = start
     for _ in range(cfg.ground.pca_iterations):
         fitted = kept
         plane = fit_plane(xyz[fitted])
-        kept = height_above(xyz, plane) <= cfg.ground.pca_threshold_m
+        h = height_above(xyz, plane)
+        kept = (h <= cfg.ground.pca_threshold_m) & (h >= -cfg.ground.max_depth_m)
     return plane, fitted, kept
 
 
@@ -78,15 +79,16 @@ def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
     """(plane, ground mask, too steep) of one patch; the plane is None when it has no plane of its own (too few
     points or seeds for a fit, a fit on a line of points, or a fit that failed a test: then the points at most
     pca_threshold_m above the reference are ground), and `too steep` says whether its fit failed the
-    uprightness test."""
+    uprightness test. Points more than max_depth_m below the reference are never ground nor seeds."""
     g = cfg.ground
     above_reference = height_above(xyz, reference)
-    inherited = above_reference <= g.pca_threshold_m  # the inner ground goes on
-    if len(xyz) < g.zone_min_points:
+    not_under = above_reference >= -g.max_depth_m  # deeper: a return from under the road
+    inherited = not_under & (above_reference <= g.pca_threshold_m)  # the inner ground goes on
+    if not_under.sum() < g.zone_min_points:
         return None, inherited, False
     # Seeds: up to the threshold above the lowest points, and never above the threshold over the reference.
-    lowest = min(np.sort(above_reference)[:g.zone_seed_points].mean(), 0.0)
-    seeds = above_reference <= lowest + g.pca_threshold_m
+    lowest = min(np.sort(above_reference[not_under])[:g.zone_seed_points].mean(), 0.0)
+    seeds = not_under & (above_reference <= lowest + g.pca_threshold_m)
     try:
         plane, fitted, ground = paper_fit(xyz, seeds, cfg)
     except DegenerateFit:  # too few seeds for a plane of its own
