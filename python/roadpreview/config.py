@@ -37,8 +37,8 @@ class GroundConfig:
     roi_y_abs_max_m: float = 10.0
     pca_iterations: int = 3
     pca_threshold_m: float = 0.20  #: points farther than this above the plane are not ground
-    #: every method: points farther than this below the plane (pca: the last one; zones: the patch's reference
-    #: or its plane) are not ground — returns from under the road (a reflection, multipath)
+    #: points farther than this below the ground model (pca: the last plane; zones: the patch's reference and
+    #: planes; ransac's band is two-sided) are not ground — returns from under the road (a reflection, multipath)
     max_depth_m: float = 2.0
     ransac_distance_m: float = 0.20
     ransac_max_iterations: int = 200

@@ -116,7 +116,8 @@ PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScrat
     const double floor_h = -cfg.max_depth_m;  // deeper: a return from under the road (a reflection, multipath)
     const auto inherit = [&](bool too_steep) {  // no plane of its own: the inner ground goes on
         z.ground.resize(pts.size());
-        for (std::size_t i = 0; i < pts.size(); ++i) z.ground[i] = z.heights[i] <= cfg.pca_threshold_m && z.heights[i] >= floor_h;
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            z.ground[i] = z.heights[i] <= cfg.pca_threshold_m && z.heights[i] >= floor_h;
         return PatchResult{std::nullopt, too_steep};
     };
     z.low.clear();

@@ -25,18 +25,20 @@ void check_settings(const WorldBackgroundSettings& s) {
                                     "max_hit_ratio > 0, max_hit_s > 0)");
 }
 
-// The median interval between consecutive scan times; the scans must advance.
 // A polygon vertex in fixed point: cv::fillPoly fills the pixels whose centres (cell + 0.5) lie inside.
 template <class Position>
 cv::Point vertex(const Position& g) {
-    return {static_cast<int>(std::lround((g.col - 0.5) * (1 << kShift))), static_cast<int>(std::lround((g.row - 0.5) * (1 << kShift)))};
+    const auto fixed = [](double cells) { return static_cast<int>(std::lround((cells - 0.5) * (1 << kShift))); };
+    return {fixed(g.col), fixed(g.row)};
 }
 
+// The cell holding a grid position.
 template <class Position>
 cv::Point cell_of(const Position& g) {
     return {static_cast<int>(std::floor(g.col)), static_cast<int>(std::floor(g.row))};
 }
 
+// The median interval between consecutive scan times; the scans must advance.
 double scan_period(const std::vector<LaserScan>& scans) {
     std::vector<double> t, dt;
     for (const auto& s : scans) t.push_back(s.time_s);

@@ -29,8 +29,8 @@ struct GroundConfig {
     double roi_y_abs_max_m = 10.0;
     int pca_iterations = 3;         ///< plane fits; each drops points too far above the last plane
     double pca_threshold_m = 0.20;  ///< points more than this above the plane are not ground
-    /// Every method: points more than this below the plane (pca: the last one; zones: the patch's reference or
-    /// its plane) are not ground — returns from under the road (a reflection, multipath), no wheel's surface.
+    /// Points more than this below the ground model (pca: the last plane; zones: the patch's reference and planes;
+    /// ransac's band is two-sided) are not ground — returns from under the road (a reflection, multipath).
     double max_depth_m = 2.0;
     double ransac_distance_m = 0.20;
     int ransac_max_iterations = 200;
