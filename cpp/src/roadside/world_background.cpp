@@ -25,16 +25,16 @@ void check_settings(const WorldBackgroundSettings& s) {
                                     "max_hit_ratio > 0, max_hit_s > 0)");
 }
 
+using GridPosition = WorldBackground::GridPosition;
+
 // A polygon vertex in fixed point: cv::fillPoly fills the pixels whose centres (cell + 0.5) lie inside.
-template <class Position>
-cv::Point vertex(const Position& g) {
+cv::Point vertex(const GridPosition& g) {
     const auto fixed = [](double cells) { return static_cast<int>(std::lround((cells - 0.5) * (1 << kShift))); };
     return {fixed(g.col), fixed(g.row)};
 }
 
 // The cell holding a grid position.
-template <class Position>
-cv::Point cell_of(const Position& g) {
+cv::Point cell_of(const GridPosition& g) {
     return {static_cast<int>(std::floor(g.col)), static_cast<int>(std::floor(g.row))};
 }
 
@@ -101,9 +101,9 @@ WorldBackground::WorldBackground(const std::vector<LaserScan>& scans, const std:
         }
         // Each count on a window around the scan (the grid reaches max_range_m + a cell beyond every pose).
         const cv::Point centre = cell_of(grid_position(pose.x_m, pose.y_m));
-        const int cx = centre.x, cy = centre.y;
         const int half = static_cast<int>(std::ceil(s_.max_range_m / s_.cell_m)) + 1;
-        const cv::Rect window = cv::Rect(cx - half, cy - half, 2 * half + 1, 2 * half + 1) & cv::Rect(0, 0, width_, height_);
+        const cv::Rect window =
+            cv::Rect(centre.x - half, centre.y - half, 2 * half + 1, 2 * half + 1) & cv::Rect(0, 0, width_, height_);
         cv::Mat mask = cv::Mat::zeros(window.size(), CV_8U);
         for (auto& p : polygon) p -= cv::Point(window.x << kShift, window.y << kShift);
         cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(1), cv::LINE_8, kShift);

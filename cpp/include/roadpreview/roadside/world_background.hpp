@@ -39,10 +39,11 @@ public:
     int width_cells() const { return width_; }
     int height_cells() const { return height_; }
 
-private:
     struct GridPosition {
         double col, row;  ///< in cells from the grid's corner, fractional
     };
+
+private:
     GridPosition grid_position(double x_m, double y_m) const;
     long long cell_index(double x_m, double y_m) const;  ///< −1 off the grid
     WorldBackgroundSettings s_;
