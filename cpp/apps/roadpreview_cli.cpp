@@ -422,7 +422,8 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
             unnumbered_poses.push_back(*pose);
             continue;
         }
-        if (!calibrator) calibrator.emplace(frames.config(), frames.info().beams, options);
+        // Made again when a later frame gives the mounting: the frames before were compared in the wrong frame.
+        if (!calibrator || in->mounting_estimated) calibrator.emplace(frames.config(), frames.info().beams, options);
         calibrator->add_frame(rp::points_view(in->frame.points.data(), in->frame.points.rows(), 4), in->frame.beams,
                               *pose);
     }

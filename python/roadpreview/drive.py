@@ -5,7 +5,7 @@
         res.vehicle.iso_class, res.to_dict()
 
 The per-frame policy (motion table > given yaw rate > the frame's IMU > 0; timestamps from the recording, else
-index / frame rate; poses; a new file sequence clears the fusion map; the mounting from the first frame's ground
+index / frame rate; poses; a new file sequence clears the fusion map; the mounting from the first frame with ground
 when none is configured) is the C++ DriveRunner's (cpp/src/drive/), the one ``roadpreview run`` and ``rp.run``
 follow. This module adds what Python reads: ROS bags and MCAP files (:mod:`roadpreview.io_bags`, their frames
 fed to the runner from Python), motion tables and poses in memory (a bag's odometry topic, LiDAR odometry).

@@ -15,9 +15,9 @@ PathLike = Union[str, "os.PathLike[str]"]
 class Drive:
     """Iterates a recording's results (``roadpreview.Result``), one frame at a time with constant memory.
 
-    ``.notes``: what the run told the user so far (e.g. the mounting estimated from the first frame; warnings are
-    also issued as RuntimeWarning). ``.config``: the config in force (with an estimated mounting once the first
-    frame gave it). ``.frame``: the frame of the last result. ``.mounting_disagreements``: frames whose ground
+    ``.notes``: what the run told the user so far (e.g. the mounting estimated from the first frame with ground;
+    warnings are also issued as RuntimeWarning). ``.config``: the config in force (with an estimated mounting once
+    a frame gave it). ``.frame``: the frame of the last result. ``.mounting_disagreements``: frames whose ground
     disagreed with the given mounting.
     """
 

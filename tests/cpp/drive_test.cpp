@@ -132,6 +132,65 @@ TEST(Drive, WithoutAMountingTheFirstFrameGivesItAndEveryResultSaysSo) {
     EXPECT_NE(notes[0].second.find("mounting estimated from the ground in f0.bin"), std::string::npos);
 }
 
+// A recording or a live stream may start with part of a rotation that sees no road ahead.
+TEST(Drive, AFrameWithoutGroundLeavesTheMountingToTheFirstFrameThatHasIt) {
+    rp::Frame sky = road_frame("f0.bin");
+    sky.points.col(2).setConstant(3.0f);  // every point above the sensor: no ground below it
+    std::vector<rp::Frame> v{sky, road_frame("f1.bin"), road_frame("f2.bin")};
+    rp::Config cfg;
+    cfg.fusion.method = rp::FusionMethod::Kalman;
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    std::vector<std::pair<bool, std::string>> notes;
+    o.on_note = [&](bool warning, const std::string& text) { notes.emplace_back(warning, text); };
+    rp::DriveRunner runner(std::make_unique<VectorSource>(std::move(v)), cfg, o);
+    std::vector<rp::Result> results;
+    std::vector<bool> estimated_here;
+    while (auto step = runner.next()) {
+        estimated_here.push_back(step->input.mounting_estimated);
+        results.push_back(std::move(step->result));
+    }
+    ASSERT_EQ(results.size(), 3u);
+    EXPECT_EQ(estimated_here, (std::vector<bool>{false, true, false}));
+    EXPECT_EQ(results[0].mounting_source, "none");
+    for (int k : {1, 2}) {
+        EXPECT_EQ(results[static_cast<std::size_t>(k)].mounting_source, "estimated");
+        EXPECT_NEAR(results[static_cast<std::size_t>(k)].extrinsics.z_m, kSensorHeightM, 0.01);
+    }
+    // The map made of base-frame points is dropped; the frame count goes on.
+    ASSERT_TRUE(results[1].fusion && results[2].fusion);
+    EXPECT_EQ(results[1].fusion->reset, "mounting estimated");
+    EXPECT_EQ(results[2].fusion->frames, 2);
+    for (std::size_t k = 0; k < results.size(); ++k) EXPECT_EQ(results[k].frame, static_cast<std::int64_t>(k));
+    ASSERT_EQ(notes.size(), 2u);
+    EXPECT_TRUE(notes[0].first);
+    EXPECT_NE(notes[0].second.find("no ground in f0.bin"), std::string::npos) << notes[0].second;
+    EXPECT_FALSE(notes[1].first);
+    EXPECT_NE(notes[1].second.find("mounting estimated from the ground in f1.bin"), std::string::npos);
+    EXPECT_NE(notes[1].second.find("the frames before it were taken as base-frame points"), std::string::npos);
+}
+
+// A cloud whose origin sits on its ground is in a base frame already: later frames are not asked again.
+TEST(Drive, AGroundAtTheCloudsOriginSettlesTheMountingAsABaseFrame) {
+    std::vector<rp::Frame> v;
+    for (int i = 0; i < 3; ++i) {
+        v.push_back(road_frame("f" + std::to_string(i) + ".bin"));
+        v.back().points.col(2).setConstant(-0.03f);  // the road 3 cm under the origin
+    }
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    std::vector<std::pair<bool, std::string>> notes;
+    o.on_note = [&](bool warning, const std::string& text) { notes.emplace_back(warning, text); };
+    rp::DriveRunner runner(std::make_unique<VectorSource>(std::move(v)), rp::Config{}, o);
+    while (auto step = runner.next()) {
+        EXPECT_EQ(step->result.mounting_source, "none");
+        EXPECT_FALSE(step->input.mounting_estimated);
+    }
+    ASSERT_EQ(notes.size(), 1u);
+    EXPECT_NE(notes[0].second.find("the ground in f0.bin lies at the cloud's origin"), std::string::npos)
+        << notes[0].second;
+}
+
 TEST(Drive, AGivenMountingThatDisagreesWithTheGroundIsNotedOnceAndCounted) {
     rp::DriveOptions o;
     o.speed_mps = 5.0;

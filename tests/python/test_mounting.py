@@ -96,5 +96,22 @@ def test_an_implausible_estimate_is_not_used(tmp_path):
 
     out = tmp_path / "o.jsonl"
     proc = run("run", PCD_FILE, "--speed", 3, "-o", out)
-    assert "gives no plausible mounting" in proc.stderr
+    assert "lies at the cloud's origin" in proc.stderr and "taken as base-frame points" in proc.stderr
     assert json.loads(out.read_text())["mounting"]["source"] == "none"
+
+
+def test_a_first_frame_without_road_ahead_leaves_the_mounting_to_the_next_frame(tmp_path):
+    """The bundled 64-beam Ouster capture starts with 224 columns of a rotation, none of them ahead: its mounting
+    comes from the next, whole frame, and only the first frame is taken as base-frame points."""
+    from paths import OUSTER
+
+    out = tmp_path / "o.jsonl"
+    proc = run("run", OUSTER / "rust-lidar-utils" / "ouster_example.pcap", "--speed", 5, "--fusion", "kalman",
+               "-o", out)
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [line["frame"] for line in lines] == [0, 1, 2]
+    assert [line["mounting"]["source"] for line in lines] == ["none", "estimated", "estimated"]
+    assert lines[1]["mounting"]["extrinsics"][2] == pytest.approx(1.71, abs=0.02)
+    assert lines[1]["fusion"]["reset"] == "mounting estimated"
+    assert "#12072 to estimate the mounting from" in proc.stderr
+    assert "mounting estimated from the ground in" in proc.stderr and "#12073" in proc.stderr

@@ -65,29 +65,38 @@ void DriveFrames::note(bool warning, const std::string& text) const {
     if (options_.on_note) options_.on_note(warning, text);
 }
 
-// With neither sensor_height nor extrinsics, the first frame's ground gives the mounting; a frame without
-// plausible ground leaves the points as base-frame points, and says so.
-void DriveFrames::estimate_mounting_from(const Frame& f) {
-    if (cfg_.sensor_height || cfg_.extrinsics) return;
+// With neither sensor_height nor extrinsics, the first frame whose ground gives a plausible mounting gives it
+// (a recording or a live stream may start with part of a rotation that holds no road ahead); until then the
+// points are taken as base-frame points, and the first frame without one says so. Returns whether this frame
+// gave it. A ground under the cloud's origin settles it: the cloud is in a base frame already.
+bool DriveFrames::estimate_mounting_from(const Frame& f) {
     const auto m = estimate_mounting(points_view(f.points.data(), f.points.rows(), f.points.cols()), cfg_.ground);
     const std::string missing = "no --sensor-height or --extrinsics, and ";
-    if (!m) {
-        note(true, missing + "no ground in " + frame_label(f) +
-             " to estimate the mounting from: the points are taken as base-frame points");
-        return;
-    }
+    const auto try_later = [&](const std::string& why) {
+        if (!mounting_warned_)
+            note(true, missing + why + ": the points are taken as base-frame points until a later frame's ground "
+                                       "gives the mounting");
+        mounting_warned_ = true;
+        return false;
+    };
+    if (!m) return try_later("no ground in " + frame_label(f) + " to estimate the mounting from");
     const std::string figures = format("height %.2f m, roll %.2f°, pitch %.2f°", m->height_m,
                                        m->roll_rad * kRadToDeg, m->pitch_rad * kRadToDeg);
-    if (m->height_m < kMinSensorHeightM || std::abs(m->roll_rad) > kMaxMountingTiltRad ||
-        std::abs(m->pitch_rad) > kMaxMountingTiltRad) {
-        note(true, missing + "the ground in " + frame_label(f) + " gives no plausible mounting (" + figures +
+    if (m->height_m < kMinSensorHeightM) {
+        note(true, missing + "the ground in " + frame_label(f) + " lies at the cloud's origin (" + figures +
              "): the points are taken as base-frame points");
-        return;
+        mounting_settled_ = true;
+        return false;
     }
+    if (std::abs(m->roll_rad) > kMaxMountingTiltRad || std::abs(m->pitch_rad) > kMaxMountingTiltRad)
+        return try_later("the ground in " + frame_label(f) + " gives no plausible mounting (" + figures + ")");
     cfg_.extrinsics = to_extrinsics(*m);
     mounting_source_ = "estimated";
+    mounting_settled_ = true;
     note(false, "no --sensor-height or --extrinsics: mounting estimated from the ground in " + frame_label(f) + ": " +
-         figures + " (mounting.source = \"estimated\" in the output)");
+         figures + " (mounting.source = \"estimated\" in the output" +
+         (mounting_warned_ ? "; the frames before it were taken as base-frame points)" : ")"));
+    return true;
 }
 
 std::optional<DriveFrame> DriveFrames::next() {
@@ -100,7 +109,8 @@ std::optional<DriveFrame> DriveFrames::next() {
     }
     DriveFrame d;
     d.index = read_ - 1;
-    if (!started_) estimate_mounting_from(*frame);
+    if (!mounting_settled_ && !cfg_.sensor_height && !cfg_.extrinsics)
+        d.mounting_estimated = estimate_mounting_from(*frame);
     d.new_sequence = started_ && !frame->sequence_break.empty();
     started_ = true;
     d.at.timestamp_s = frame_time(*frame, d.index, options_.frame_rate_hz);
@@ -138,15 +148,20 @@ DriveRunner::DriveRunner(std::unique_ptr<FrameSource> source, Config cfg, DriveO
 std::optional<DriveStep> DriveRunner::next() {
     std::optional<DriveFrame> input = frames_.next();
     if (!input) return std::nullopt;
-    if (!estimator_) estimator_.emplace(frames_.config());
+    // Made at the first frame, and made again when a later frame gives the mounting: what the estimator (and its
+    // fusion map) held was in the wrong frame.
+    const bool remounted = estimator_ && input->mounting_estimated;
+    if (!estimator_ || remounted) estimator_.emplace(frames_.config());
     if (input->new_sequence) estimator_->reset();
     DriveStep step{std::move(*input), {}};
     const DriveFrame& in = step.input;
     Result& r = step.result;
     r = estimator_->process(in.frame, in.motion.speed_mps, in.motion.yaw_rate_rps, in.at);
+    r.frame = processed_++;  // the drive's count, whichever estimator processed it
     r.yaw_rate_source = in.yaw_rate_source;
     // A frame file that does not continue the previous one's sequence starts the map afresh; the output says why.
     if (in.new_sequence && r.fusion) r.fusion->reset = "new sequence: " + in.frame.sequence_break;
+    if (remounted && r.fusion) r.fusion->reset = "mounting estimated";
     if (!frames_.mounting_source().empty()) r.mounting_source = frames_.mounting_source();
     check_mounting_of(r, in.frame);
     return step;

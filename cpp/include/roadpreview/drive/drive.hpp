@@ -48,10 +48,12 @@ struct DriveFrame {
     Motion motion;                ///< speed and yaw rate
     std::string yaw_rate_source;  ///< "motion", "option", "imu" or "default"
     bool new_sequence = false;    ///< a frame file that does not continue the previous one's sequence
+    bool mounting_estimated = false;  ///< this frame's ground gave the mounting (DriveFrames::config() has it now)
 };
 
-/// A recording's frames in order with their time, motion and pose. The first frame processed gives the sensor's
-/// mounting when the config has neither sensor_height nor extrinsics (estimate_mounting). Throws
+/// A recording's frames in order with their time, motion and pose. When the config has neither sensor_height nor
+/// extrinsics, the first processed frame whose ground gives a plausible mounting gives it (estimate_mounting;
+/// the frames before it stay base-frame points). Throws
 /// std::invalid_argument for options that contradict each other, std::runtime_error naming the file for bad input.
 class DriveFrames {
 public:
@@ -60,16 +62,16 @@ public:
     /// The next frame in [first_frame, last_frame), or nullopt at the end.
     std::optional<DriveFrame> next();
 
-    /// The config with the mounting the first frame gave (before it: the one given).
+    /// The config with the mounting a frame's ground gave (before it: the one given).
     const Config& config() const { return cfg_; }
-    /// "estimated" once the first frame gave the mounting, else empty.
+    /// "estimated" once a frame's ground gave the mounting, else empty.
     const std::string& mounting_source() const { return mounting_source_; }
     SourceInfo info() const { return source_->info(); }
     /// Frames read from the recording so far, skipped ones included.
     std::int64_t frames_read() const { return read_; }
 
 private:
-    void estimate_mounting_from(const Frame& f);
+    bool estimate_mounting_from(const Frame& f);
     void note(bool warning, const std::string& text) const;
 
     std::unique_ptr<FrameSource> source_;
@@ -81,6 +83,8 @@ private:
     std::string mounting_source_;
     std::int64_t read_ = 0;
     bool started_ = false;
+    bool mounting_settled_ = false;  // estimated, or the cloud is in a base frame already
+    bool mounting_warned_ = false;   // a frame without a plausible mounting was noted
 };
 
 /// One processed frame of a drive.
@@ -110,8 +114,9 @@ private:
     std::function<void(bool, const std::string&)> on_note_;
     bool has_poses_file_;
     DriveFrames frames_;
-    std::optional<Estimator> estimator_;  // made at the first frame, which may give the mounting
+    std::optional<Estimator> estimator_;  // made at the first frame, again when a later one gives the mounting
     std::int64_t disagreeing_ = 0;
+    std::int64_t processed_ = 0;
 };
 
 /// A short name of a frame for messages: its file, and its frame id in a pcap.
