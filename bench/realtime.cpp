@@ -2,7 +2,7 @@
 // Benchmark of the real-time API on the bundled KITTI frames: per-frame time of process() returning a new Result
 // against process(..., out) reusing one, and the heap allocations of each per frame (a counting operator new),
 // for the default pipeline (zone ground, obstacles on) with fusion none, EMA and Kalman.
-//   realtime_bench [--frames N] [--warmup W]     (bench/README.md)
+//   realtime_bench [--frames N] [--warmup W] [--fusion none|ema|kalman]     (bench/README.md)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -67,9 +67,11 @@ double load_average() {
 
 int main(int argc, char** argv) {
     int frames = 60, warmup = 5;
+    std::string only;  // one fusion method (a profiler's run), else all three
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--frames")) frames = std::max(1, std::atoi(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--warmup")) warmup = std::max(0, std::atoi(argv[i + 1]));
+        else if (!std::strcmp(argv[i], "--fusion")) only = argv[i + 1];
     }
     std::vector<rp::Frame> kitti;
     for (const char* name : {"000000.bin", "000001.bin", "000002.bin"})
@@ -81,6 +83,7 @@ int main(int argc, char** argv) {
     const std::pair<rp::FusionMethod, const char*> methods[] = {
         {rp::FusionMethod::None, "none"}, {rp::FusionMethod::Ema, "ema"}, {rp::FusionMethod::Kalman, "kalman"}};
     for (const auto& [method, name] : methods) {
+        if (!only.empty() && only != name) continue;
         rp::Config cfg;
         cfg.sensor_height = 1.73;
         cfg.fusion.method = method;

@@ -123,7 +123,7 @@ struct ZoneScratch {
     std::vector<Eigen::Vector3d> pts;        // the patch's points (the root's near points)
     std::vector<std::uint8_t> ground;        // of the patch's points
     std::vector<double> heights, low;        // above the reference
-    std::vector<int> slab_counts;            // the root's height histogram
+    std::vector<int> slab_counts, slab_bins; // the root's height histogram, and each root point's bin
     std::vector<Plane> handed;               // each patch's plane for the next ring
 };
 

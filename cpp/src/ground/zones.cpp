@@ -32,20 +32,19 @@ void group_by_patch(std::int32_t patches, ZoneScratch& z) {
 std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std::vector<std::uint8_t>& kept,
                                     const GroundConfig& cfg) {
     std::optional<PlaneFit> fit;
-    Moments m;  // of the points kept so far, accumulated while they are selected
-    for (std::size_t i = 0; i < pts.size(); ++i)
-        if (kept[i]) m.add(pts[i]);
     for (int k = 0; k < cfg.pca_iterations; ++k) {
+        Moments m;  // of the points kept so far
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            if (kept[i]) m.add(pts[i]);
         fit = plane_fit(m);
         if (!fit) return std::nullopt;
-        m = Moments{};
+        // The selection alone, without moments: the last one (or one that repeats) needs none.
         bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const double h = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z());
             const bool keep = h <= cfg.pca_threshold_m && h >= -cfg.max_depth_m;
-            changed = changed || keep != static_cast<bool>(kept[i]);
+            changed |= keep != static_cast<bool>(kept[i]);
             kept[i] = keep;
-            if (keep) m.add(pts[i]);
         }
         if (!changed) break;  // the same points again: every later fit would be this one
     }
@@ -56,9 +55,9 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
 // the road, whose heights crowd together, where a car's or a wall's side spreads over metres of height. Started
 // from every point, the first fit leaned 10° through a car beside a stereo camera and kept its side as ground.
 // Heights are counted in bins a quarter of the slab thick within ±kSlabSearchM of the level (docs/method.md §1).
-// `count` is the histogram's buffer; `in` receives the mask.
+// `count` and `bin` are the histogram's and each point's bin's buffers; `in` receives the mask.
 void densest_slab(const std::vector<Eigen::Vector3d>& pts, double thickness_m, std::vector<int>& count,
-                  std::vector<std::uint8_t>& in) {
+                  std::vector<int>& bin, std::vector<std::uint8_t>& in) {
     constexpr double kSlabSearchM = 20.0;  // a 10 m mounting plus the tilt limit over the root disc
     constexpr int kBinsPerSlab = 4;
     const double bin_m = thickness_m / kBinsPerSlab;
@@ -68,19 +67,17 @@ void densest_slab(const std::vector<Eigen::Vector3d>& pts, double thickness_m, s
         return at >= 0.0 && at < bins ? static_cast<int>(at) : -1;
     };
     count.assign(static_cast<std::size_t>(bins) + kBinsPerSlab, 0);
-    for (const auto& p : pts)
-        if (const int b = bin_of(p.z()); b >= 0) ++count[static_cast<std::size_t>(b)];
+    in.resize(pts.size());
+    bin.resize(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        if ((bin[i] = bin_of(pts[i].z())) >= 0) ++count[static_cast<std::size_t>(bin[i])];
     int best = 0, most = -1, window = 0;  // window = points in bins [b, b + kBinsPerSlab)
     for (int b = 0; b < kBinsPerSlab; ++b) window += count[static_cast<std::size_t>(b)];
     for (int b = 0; b < bins; ++b) {
         if (window > most) most = window, best = b;  // ties keep the lower slab
         window += count[static_cast<std::size_t>(b + kBinsPerSlab)] - count[static_cast<std::size_t>(b)];
     }
-    in.resize(pts.size());
-    std::transform(pts.begin(), pts.end(), in.begin(), [&](const Eigen::Vector3d& p) {
-        const int b = bin_of(p.z());
-        return b >= best && b < best + kBinsPerSlab;
-    });
+    std::transform(bin.begin(), bin.end(), in.begin(), [&](int b) { return b >= best && b < best + kBinsPerSlab; });
 }
 
 // The reference of the innermost ring: the paper's fit of the points within zone_root_m (the road the vehicle
@@ -93,7 +90,7 @@ std::optional<Plane> root_reference(PointsView points, const GroundConfig& cfg, 
         const Eigen::Vector3d p = row(points, i);
         if (p.x() * p.x() + p.y() * p.y() < r_sq) z.pts.push_back(p);
     }
-    densest_slab(z.pts, cfg.pca_threshold_m, z.slab_counts, z.ground);
+    densest_slab(z.pts, cfg.pca_threshold_m, z.slab_counts, z.slab_bins, z.ground);
     const auto fit = iterate_fit(z.pts, z.ground, cfg);
     return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? std::optional<Plane>(fit->plane) : std::nullopt;
 }

@@ -203,11 +203,39 @@ Cluster describe(PointsView pts, const Members& members) {
     return c;
 }
 
-// The ground points in columns 1 m wide, to find those around a cluster in O(nearby).
-void ground_columns(PointsView pts, const std::vector<std::uint8_t>& ground, ColumnGrid& grid) {
-    grid.rebuild(1.0, [&](std::vector<ColumnGrid::Point>& points) {
-        for (Eigen::Index i = 0; i < pts.rows(); ++i)
-            if (ground[static_cast<std::size_t>(i)]) points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+// The ground points that may lie within `reach` of a cluster's box, in columns 1 m wide, to find those around a
+// cluster in O(nearby). A frame's ground holds tens of thousands of points and its clusters stand on a small part
+// of it: only ground points in a 1 m column that some grown box overlaps are gridded (all of them when those
+// columns would outnumber the points: a huge region of interest).
+void ground_near_clusters(PointsView pts, const std::vector<std::uint8_t>& ground,
+                          const std::vector<Cluster>& clusters, double reach, ObstacleScratch& s) {
+    s.ground_grid.rebuild(1.0, [&](std::vector<ColumnGrid::Point>& points) {
+        if (clusters.empty()) return;
+        double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
+        for (const Cluster& c : clusters) {
+            x0 = std::min(x0, c.aabb_min[0] - reach), x1 = std::max(x1, c.aabb_max[0] + reach);
+            y0 = std::min(y0, c.aabb_min[1] - reach), y1 = std::max(y1, c.aabb_max[1] + reach);
+        }
+        const double columns = (std::floor(x1 - x0) + 1.0) * (std::floor(y1 - y0) + 1.0);
+        const bool filter = columns <= 4.0 * static_cast<double>(pts.rows()) + 4096.0;
+        const auto column = [](double v, double lo) { return static_cast<std::size_t>(v - lo); };  // v ≥ lo
+        const std::size_t ny = filter ? column(y1, y0) + 1 : 0;
+        const auto at = [&](double x, double y) { return column(x, x0) * ny + column(y, y0); };
+        if (filter) {
+            s.near_column.assign(static_cast<std::size_t>(columns), 0);
+            for (const Cluster& c : clusters) {
+                const std::size_t ix1 = column(c.aabb_max[0] + reach, x0), iy1 = column(c.aabb_max[1] + reach, y0);
+                for (std::size_t ix = column(c.aabb_min[0] - reach, x0); ix <= ix1; ++ix)
+                    for (std::size_t iy = column(c.aabb_min[1] - reach, y0); iy <= iy1; ++iy)
+                        s.near_column[ix * ny + iy] = 1;
+            }
+        }
+        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+            if (!ground[static_cast<std::size_t>(i)]) continue;
+            const double x = pts(i, 0), y = pts(i, 1);
+            if (filter && !(x >= x0 && x <= x1 && y >= y0 && y <= y1 && s.near_column[at(x, y)])) continue;
+            points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
+        }
     });
 }
 
@@ -227,12 +255,18 @@ double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster&
 void describe_all(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane,
                   const ObstaclesConfig& cfg, ObstacleScratch& s, Clustering& out) {
     group_members(out.label, s.kept.size(), s);
-    ground_columns(pts, ground, s.ground_grid);
+    const auto members_of = [&](std::size_t g) {
+        return Members{s.members.data() + s.member_start[g], s.members.data() + s.member_start[g + 1]};
+    };
     out.clusters.clear();
     for (std::size_t g = 0; g + 1 < s.member_start.size(); ++g) {
-        const Members members{s.members.data() + s.member_start[g], s.members.data() + s.member_start[g + 1]};
-        Cluster c = describe(pts, members);
-        c.id = static_cast<std::int32_t>(g);
+        out.clusters.push_back(describe(pts, members_of(g)));
+        out.clusters.back().id = static_cast<std::int32_t>(g);
+    }
+    ground_near_clusters(pts, ground, out.clusters, cfg.ground_search_m, s);
+    for (std::size_t g = 0; g < out.clusters.size(); ++g) {
+        const Members members = members_of(g);
+        Cluster& c = out.clusters[g];
         c.ground_offset = local_ground(s.ground_grid, plane, c, cfg.ground_search_m, s.heights);
         double top = -kInf, low = kInf;
         for (const auto i : members) {
@@ -241,7 +275,6 @@ void describe_all(PointsView pts, const std::vector<std::uint8_t>& ground, const
         }
         c.height = top - c.ground_offset;
         c.bottom = low - c.ground_offset;
-        out.clusters.push_back(c);
     }
 }
 

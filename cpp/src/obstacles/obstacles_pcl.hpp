@@ -45,7 +45,8 @@ struct ObstacleScratch {
     std::vector<std::int32_t> candidate_label;
     std::vector<std::uint32_t> member_start;      // each cluster's points
     std::vector<pcl::index_t> members;
-    ColumnGrid ground_grid;
+    ColumnGrid ground_grid;                       // the ground points near some cluster
+    std::vector<std::uint8_t> near_column;        // 1 m columns within reach of some cluster
     std::vector<double> heights;                  // of the ground around one cluster
 };
 
