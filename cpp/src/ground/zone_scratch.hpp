@@ -123,6 +123,7 @@ struct ZoneScratch {
     std::vector<Eigen::Vector3d> pts;        // the patch's points (the root's near points)
     std::vector<std::uint8_t> ground;        // of the patch's points
     std::vector<double> heights, low;        // above the reference
+    std::vector<double> anchor;              // the heights a patch without a plane of its own hands on by
     std::vector<int> slab_counts, slab_bins; // the root's height histogram, and each root point's bin
     std::vector<Plane> handed;               // each patch's plane for the next ring
 };

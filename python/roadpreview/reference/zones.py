@@ -104,6 +104,24 @@ def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
     return None, inherited, not upright  # a rejected fit: the inner ground goes on (its foot is no obstacle)
 
 
+MIN_ANCHOR_POINTS = 3
+
+
+def handed_on(xyz: np.ndarray, reference: np.ndarray, plane, ground: np.ndarray, too_steep: bool, cfg: Config):
+    """What a patch hands on to the next ring: its plane; else (unless too steep) the reference raised or lowered
+    to the median height above it of the patch's ground points within pca_threshold_m of it, when there are at
+    least MIN_ANCHOR_POINTS of them; else the reference unchanged."""
+    if plane is not None:
+        return plane
+    if too_steep:
+        return reference
+    h = height_above(xyz[ground], reference)
+    h = h[np.abs(h) <= cfg.ground.pca_threshold_m]
+    if len(h) < MIN_ANCHOR_POINTS:
+        return reference
+    return reference - np.array([0.0, 0.0, 0.0, np.median(h)])
+
+
 def zone_ground(xyz: np.ndarray, cfg: Config):
     """(ground mask, frame plane or None, too steep): the frame plane is the PCA plane of all the ground points;
     `too steep` says, when there is none, that a patch held a plane beyond the tilt limit."""
@@ -120,13 +138,14 @@ def zone_ground(xyz: np.ndarray, cfg: Config):
     for r, count in enumerate(g.zone_sectors):
         handed = []
         for s in range(count):
-            # The inner patch holding this patch's central azimuth hands on its plane (or its own reference).
+            # The inner patch holding this patch's central azimuth hands on its plane (or its reference, moved to
+            # its ground).
             reference = root if r == 0 else handed_inward[(2 * s + 1) * g.zone_sectors[r - 1] // (2 * count)]
             rows = order[bounds[first[r] + s]:bounds[first[r] + s + 1]]
             plane, mine, steep = fit_patch(xyz[rows], reference, cfg)
             too_steep |= steep
             accepted |= plane is not None
-            handed.append(reference if plane is None else plane)
+            handed.append(handed_on(xyz[rows], reference, plane, mine, steep, cfg))
             if mine is not None:
                 ground[rows[mine]] = True
         handed_inward = handed
