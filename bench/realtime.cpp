@@ -73,6 +73,10 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--warmup")) warmup = std::max(0, std::atoi(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--fusion")) only = argv[i + 1];
     }
+    if (!only.empty() && only != "none" && only != "ema" && only != "kalman") {
+        std::fprintf(stderr, "realtime_bench: --fusion must be none, ema or kalman, got \"%s\"\n", only.c_str());
+        return 2;
+    }
     std::vector<rp::Frame> kitti;
     for (const char* name : {"000000.bin", "000001.bin", "000002.bin"})
         kitti.push_back(rp::read_frame(std::string(ROADPREVIEW_TEST_DATA) + "/semantickitti/" + name));

@@ -436,9 +436,9 @@ Frame OusterDecoder::build_frame() {
         return column_state_[static_cast<std::size_t>(v)] == 1 && range_mm_[static_cast<std::size_t>(u) * W + v] != 0;
     };
     // Each column's time since the frame's first, once per column rather than once per pixel.
-    std::vector<float> column_s(static_cast<std::size_t>(W));
-    for (std::size_t v = 0; v < column_s.size(); ++v)
-        column_s[v] =
+    column_s_.resize(static_cast<std::size_t>(W));
+    for (std::size_t v = 0; v < column_s_.size(); ++v)
+        column_s_[v] =
             static_cast<float>(1e-9 * static_cast<double>(static_cast<std::int64_t>(column_ns_[v] - first_column_ns_)));
     Eigen::Index n = 0;
     for (int u = 0; u < H; ++u)
@@ -455,7 +455,7 @@ Frame OusterDecoder::build_frame() {
             for (int c = 0; c < 3; ++c) f.points(k, c) = lut_.direction[3 * i + c] * r + lut_.offset[3 * i + c];
             f.points(k, 3) = static_cast<float>(reflectivity_[i]);
             f.beams[static_cast<std::size_t>(k)] = u;
-            f.point_times[static_cast<std::size_t>(k)] = column_s[static_cast<std::size_t>(v)];
+            f.point_times[static_cast<std::size_t>(k)] = column_s_[static_cast<std::size_t>(v)];
             ++k;
         }
     }

@@ -100,6 +100,7 @@ private:
     std::vector<std::uint16_t> reflectivity_;
     std::vector<std::uint8_t> column_state_;  // 0 missing, 1 valid, 2 invalid
     std::vector<std::uint64_t> column_ns_;
+    std::vector<float> column_s_;  // each column's time since the frame's first, made when a frame is built
     std::vector<ImuSample> imu_;
 };
 
