@@ -14,7 +14,7 @@ std::atomic<bool> counting{false};
 std::atomic<long> allocations{0};
 // Breakpoints here (gdb: `break on_counted_allocation`, then `bt`) show where a counted allocation comes from, and
 // in which frame (on_frame's argument).
-[[gnu::noinline]] void on_frame(int k) { asm volatile("" : : "r"(k)); }
+[[gnu::noinline, maybe_unused]] void on_frame(int k) { asm volatile("" : : "r"(k)); }
 [[gnu::noinline]] void on_counted_allocation() { allocations.fetch_add(1, std::memory_order_relaxed); }
 
 void* allocate(std::size_t size, std::size_t alignment = 0) {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Live UDP input: one receive thread polls the sensor's sockets and fills a queue bounded in bytes (datagrams
-// beyond it are dropped and counted: the sensor never waits); the reader takes datagrams from the queue and feeds
+// Live UDP input: one receive thread polls the sensor's sockets and fills a queue of fixed size (datagrams that do
+// not fit are dropped and counted: the sensor never waits); the reader takes datagrams from the queue and feeds
 // them to the Ouster or Velodyne decoder like a pcap's.
 #include "roadpreview/io/live.hpp"
 
@@ -15,7 +15,6 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
-#include <deque>
 #include <limits>
 #include <mutex>
 #include <sstream>
@@ -24,6 +23,7 @@
 #include <vector>
 
 #include "roadpreview/io/ouster.hpp"
+#include "io/datagram_queue.hpp"
 #include "pcap_source.hpp"
 #include "udp.hpp"
 
@@ -58,7 +58,7 @@ UdpSocket bind_socket(const std::string& address, int port, int buffer_bytes) {
 class UdpInput : public DatagramInput {
 public:
     UdpInput(const std::string& address, std::vector<int> ports, const LiveOptions& o)
-        : name_(udp_url(address, ports.front())), options_(o), opened_s_(steady_now_s()) {
+        : name_(udp_url(address, ports.front())), options_(o), opened_s_(steady_now_s()), queue_(o.queue_bytes) {
         for (int port : ports) {
             sockets_.push_back(bind_socket(address, port, o.receive_buffer_bytes));
             ports_.push_back(port);
@@ -89,10 +89,7 @@ public:
             }
             arrived_.wait_for(lock, std::chrono::milliseconds(20));
         }
-        out = std::move(queue_.front());
-        queue_.pop_front();
-        queued_bytes_ -= out.payload.size();
-        return true;
+        return queue_.pop(out);
     }
 
     const std::string& name() const override { return name_; }
@@ -146,7 +143,7 @@ private:
                     fail(std::string("receive: ") + std::strerror(errno));
                 return;
             }
-            UdpDatagram d;
+            UdpDatagram d = spare();
             const double wall_s = wall_now_s(), steady_s = steady_now_s();
             d.timestamp = wall_s;
             for (cmsghdr* c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c)) {
@@ -162,6 +159,14 @@ private:
         }
     }
 
+    // A datagram whose payload buffer was used before (the receive thread allocates nothing once warmed up).
+    UdpDatagram spare() {
+        if (spare_.empty()) return {};
+        UdpDatagram d = std::move(spare_.back());
+        spare_.pop_back();
+        return d;
+    }
+
     // Queues the pending datagrams received up to `until_s`, in the order of their receive times.
     void push_until(std::vector<UdpDatagram>& pending, double until_s) {
         const auto by_time = [](const UdpDatagram& a, const UdpDatagram& b) { return a.timestamp < b.timestamp; };
@@ -175,14 +180,10 @@ private:
                 UdpDatagram& d = *it;
                 d.record = ++received_;
                 last_arrival_s_ = std::max(last_arrival_s_, d.arrival_s);
-                if (queued_bytes_ + d.payload.size() > options_.queue_bytes) {
-                    ++dropped_;
-                    continue;
-                }
-                queued_bytes_ += d.payload.size();
-                queue_.push_back(std::move(d));
+                dropped_ += !queue_.push(d);
             }
         }
+        for (auto it = pending.begin(); it != end; ++it) spare_.push_back(std::move(*it));
         pending.erase(pending.begin(), end);
         arrived_.notify_one();
     }
@@ -201,11 +202,11 @@ private:
     std::thread thread_;
     std::atomic<bool> stop_{false};
     std::vector<std::uint8_t> buffer_;  // the receive thread's
+    std::vector<UdpDatagram> spare_;    // the receive thread's: datagrams queued, their buffers kept for reuse
 
     mutable std::mutex mutex_;  // guards what follows
     std::condition_variable arrived_;
-    std::deque<UdpDatagram> queue_;
-    std::size_t queued_bytes_ = 0;
+    DatagramQueue queue_;
     std::int64_t received_ = 0, dropped_ = 0;
     double last_arrival_s_ = 0.0;
     std::string failure_;
