@@ -202,7 +202,8 @@ private:
     std::thread thread_;
     std::atomic<bool> stop_{false};
     std::vector<std::uint8_t> buffer_;  // the receive thread's
-    std::vector<UdpDatagram> spare_;    // the receive thread's: datagrams queued, their buffers kept for reuse
+    // The receive thread's: datagrams queued, their buffers kept for reuse (at most a drained socket buffer's worth)
+    std::vector<UdpDatagram> spare_;
 
     mutable std::mutex mutex_;  // guards what follows
     std::condition_variable arrived_;
