@@ -84,7 +84,8 @@ TEST(DatagramQueue, EmptyPayloadsKeepTheirPlace) {
 }
 
 // Random sizes, pushes and pops against a plain deque: the same datagrams come out, in the same order, and the
-// queue refuses a datagram only when its payloads and the one refused would not fit in the ring together.
+// queue refuses a datagram only when the ring is more than half full (what a wrap leaves unused at the end is
+// less than one datagram).
 TEST(DatagramQueue, MatchesAPlainQueueOverRandomTraffic) {
     constexpr std::size_t kBytes = 64 * 1024;
     rp::DatagramQueue q(kBytes);

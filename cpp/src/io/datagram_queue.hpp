@@ -22,12 +22,11 @@ public:
     /// Queues a copy of `d`; false (and the queue unchanged) when its payload does not fit in the free part of the
     /// ring.
     bool push(const UdpDatagram& d);
-    /// Moves the oldest datagram into `out`; false when the queue is empty.
+    /// Copies the oldest datagram into `out` (reusing its payload's capacity) and removes it; false when empty.
     bool pop(UdpDatagram& out);
 
     bool empty() const { return count_ == 0; }
     std::size_t size() const { return count_; }
-    std::size_t capacity_bytes() const { return capacity_; }
 
 private:
     struct Entry {
