@@ -5,6 +5,15 @@
 
 namespace {
 
+// SourceOptions::roi_columns: the region `config_json` crops to, facing each direction (+1 ahead, -1 behind).
+std::vector<rp::SensorRoi> roi_regions(const std::string& config_json, const std::vector<double>& directions) {
+    if (config_json.empty()) return {};
+    const rp::Config cfg = rp::config_from_json(config_json, "roi_columns");
+    std::vector<rp::SensorRoi> regions;
+    for (const double d : directions) regions.push_back(rp::sensor_roi(cfg, d));
+    return regions;
+}
+
 py::dict info_dict(const rp::SourceInfo& s) {
     py::dict d;
     d["format"] = s.format;
@@ -200,16 +209,20 @@ void bind_io(py::module_& m) {
 
     m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
                             const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets,
-                            int columns, const std::string& beam_calibration) {
+                            int columns, const std::string& beam_calibration, const std::string& roi_config_json,
+                            const std::vector<double>& roi_directions) {
         rp::SourceOptions o{meta,        sensor_model,     calibration, cut_angle_deg,
                             lidar_port,  skip_bad_packets, columns,     beam_calibration};
+        o.roi_columns = roi_regions(roi_config_json, roi_directions);
         return rp::open_frames(inputs, o);
     });
     bind_stereo(m);
     m.def("open_live", [](const std::string& url, const std::string& meta, const std::string& sensor_model,
                           const std::string& calibration, double cut_angle_deg, bool skip_bad_packets,
-                          double timeout_s, double duration_s) {
+                          double timeout_s, double duration_s, const std::string& roi_config_json,
+                          const std::vector<double>& roi_directions) {
         rp::LiveOptions o;
+        o.source.roi_columns = roi_regions(roi_config_json, roi_directions);
         o.source.meta = meta;
         o.source.sensor_model = sensor_model;
         o.source.calibration = calibration;

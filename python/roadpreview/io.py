@@ -37,7 +37,7 @@ def expand(inputs: list[str]) -> list[str]:
 def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = None, *,  # noqa: A001
          sensor_model: Optional[str] = None, calibration: Optional[PathLike] = None, cut_angle_deg: float = 0.0,
          lidar_port: int = 0, skip_bad_packets: bool = False, columns: int = 0,
-         beam_calibration: Optional[PathLike] = None):
+         beam_calibration: Optional[PathLike] = None, roi_columns=None, roi_direction: str = "ahead"):
     """An iterable of frames, decoded one at a time with constant memory (as ``roadpreview run`` reads them).
 
     path: ``.pcap``/``.pcapng`` recordings (several: split recordings of one drive, read in order), or
@@ -57,17 +57,37 @@ def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = N
     that do not decode instead. ``beam_calibration`` is a beams file (``rp.calibrate_beams``, ``roadpreview
     calibrate``) applied while decoding; a file for another sensor raises RuntimeError naming it. Frames also have
     ``.beams`` (int32 beam of each point; empty when the input does not number them).
+
+    ``roi_columns``: a :class:`roadpreview.Config` with the sensor's mounting (``sensor_height`` or
+    ``extrinsics``): an Ouster recording decodes only the columns that can see its region of interest, facing
+    ``roi_direction`` ("ahead", "behind" when reversing, "both"), and each frame ends at the last of them
+    (``roadpreview run --roi-columns``; ``.info["notes"]`` says which). Other inputs raise RuntimeError.
     """
     paths = [path] if isinstance(path, (str, os.PathLike)) else list(path)
     return core().open_frames([os.fspath(p) for p in paths], os.fspath(meta) if meta else "", sensor_model or "",
                               os.fspath(calibration) if calibration else "", float(cut_angle_deg), int(lidar_port),
                               bool(skip_bad_packets), int(columns),
-                              os.fspath(beam_calibration) if beam_calibration else "")
+                              os.fspath(beam_calibration) if beam_calibration else "",
+                              *_roi_regions(roi_columns, roi_direction))
+
+
+_ROI_DIRECTIONS = {"ahead": [1.0], "behind": [-1.0], "both": [1.0, -1.0]}
+
+
+def _roi_regions(config, direction: str) -> tuple[str, list[float]]:
+    """The native arguments of ``roi_columns``: the config as JSON and the directions it faces."""
+    if config is None:
+        return "", []
+    if direction not in _ROI_DIRECTIONS:
+        raise ValueError(f"roi_direction {direction!r}: expected one of {', '.join(_ROI_DIRECTIONS)}")
+    if config.sensor_height is None and config.extrinsics is None:
+        raise ValueError("roi_columns needs the sensor's mounting: a Config with sensor_height or extrinsics")
+    return config.to_json(), _ROI_DIRECTIONS[direction]
 
 
 def open_live(url: str, meta: Optional[PathLike] = None, *, sensor_model: Optional[str] = None,
               calibration: Optional[PathLike] = None, cut_angle_deg: float = 0.0, skip_bad_packets: bool = False,
-              timeout_s: float = 5.0, duration_s: float = 0.0):
+              timeout_s: float = 5.0, duration_s: float = 0.0, roi_columns=None, roi_direction: str = "ahead"):
     """Frames of a live sensor as they complete, from UDP datagrams received on a thread (``roadpreview run
     udp://...``). The same iterable of frames as :func:`open`.
 
@@ -79,11 +99,13 @@ def open_live(url: str, meta: Optional[PathLike] = None, *, sensor_model: Option
     A port in use, a datagram of the wrong size or from another sensor raise RuntimeError naming the address.
     Each frame's ``.arrival_s`` is the :func:`steady_now_s` time of the datagram that completed it, and
     ``.diagnostics`` counts lost, late and duplicate packets and missing columns; ``.info`` counts the datagrams
-    received and dropped by the full receive queue.
+    received and dropped by the full receive queue. ``roi_columns`` and ``roi_direction`` as in :func:`open`:
+    a frame completes when the last column that can see the region of interest arrives.
     """
     return core().open_live(str(url), os.fspath(meta) if meta else "", sensor_model or "",
                             os.fspath(calibration) if calibration else "", float(cut_angle_deg),
-                            bool(skip_bad_packets), float(timeout_s), float(duration_s))
+                            bool(skip_bad_packets), float(timeout_s), float(duration_s),
+                            *_roi_regions(roi_columns, roi_direction))
 
 
 def replay(capture: PathLike, to: str = "127.0.0.1:7502", *, rate: Union[float, str] = 1.0, loops: int = 1,

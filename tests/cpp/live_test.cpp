@@ -64,9 +64,11 @@ int free_port_pair() {
 
 std::string url(int port) { return "udp://127.0.0.1:" + std::to_string(port); }
 
-std::vector<rp::Frame> offline(const std::string& pcap, const std::string& meta) {
+std::vector<rp::Frame> offline(const std::string& pcap, const std::string& meta,
+                               const std::vector<rp::SensorRoi>& roi_columns = {}) {
     rp::SourceOptions o;
     o.meta = meta;
+    o.roi_columns = roi_columns;
     auto source = rp::open_frames({pcap}, o);
     std::vector<rp::Frame> frames;
     while (auto f = source->next()) frames.push_back(std::move(*f));
@@ -80,10 +82,12 @@ struct LiveRun {
 };
 
 // Opens the live source, replays the capture to it from another thread and reads until the stream goes quiet.
-LiveRun live(const std::string& pcap, const std::string& meta, rp::ReplayOptions replay = {}) {
+LiveRun live(const std::string& pcap, const std::string& meta, rp::ReplayOptions replay = {},
+             const std::vector<rp::SensorRoi>& roi_columns = {}) {
     const int port = free_port_pair();
     rp::LiveOptions o;
     o.source.meta = meta;
+    o.source.roi_columns = roi_columns;
     o.timeout_s = 0.5;
     o.duration_s = 30.0;  // a bound, never reached when all goes well
     auto source = rp::open_live(url(port), o);
@@ -161,6 +165,21 @@ void expect_every_recording_whole(const rp::ReplayOptions& replay) {
 TEST(Live, EveryBundledRecordingArrivesWholeAtMaxRate) { expect_every_recording_whole(at_max_rate()); }
 
 TEST(Live, EveryBundledRecordingArrivesWholeAtRecordedSpeed) { expect_every_recording_whole({}); }
+
+TEST(Live, FramesLimitedToTheRegionsColumnsArriveAsOfflineAndEndAtTheirLastColumn) {
+    rp::Config cfg;
+    cfg.sensor_height = 1.97;
+    const std::vector<rp::SensorRoi> ahead = {rp::sensor_roi(cfg, 1.0)};
+    const auto want = offline(kOs1, kOs1Meta, ahead);
+    const LiveRun got = live(kOs1, kOs1Meta, {}, ahead);  // at the recorded speed
+    expect_same_frames(got.frames, want);
+    // The region's columns (261–763 of 1024) span half a rotation: each frame ends 0.05 s after it began, a
+    // quarter rotation before the sensor's last column would have ended it.
+    for (const rp::Frame& f : got.frames) {
+        EXPECT_TRUE(f.diagnostics.complete);
+        EXPECT_LT(*std::max_element(f.point_times.begin(), f.point_times.end()), 0.05);
+    }
+}
 
 TEST(Live, DroppedAndReorderedPacketsAreFlaggedNotFatal) {
     for (const std::string& pcap : {kOs1, kData + "velodyne/hdl32_example.pcap"}) {

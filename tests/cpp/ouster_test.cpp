@@ -2,6 +2,7 @@
 // metadata layouts, mismatches, missing and invalid columns, and XYZ on hand-made packets.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -300,4 +301,126 @@ TEST(Ouster, InvalidColumnsAndZeroRangesAreSkippedAndFramesSplitByFrameId) {
     EXPECT_EQ(d.finish()->frame_id, 2);
     EXPECT_THROW(d.add_packet(tiny_packet(2, 0, 5000).data(), 123, 0.0), std::invalid_argument);
     EXPECT_THROW(add(tiny_packet(2, 600, 5000)), std::invalid_argument);  // beyond 512 columns
+}
+
+namespace {
+
+// The region the pipeline crops to with the defaults (x 1–40 m, |y| ≤ 10 m), the sensor `height_m` up.
+rp::SensorRoi default_roi(double height_m, double direction) {
+    rp::Config cfg;
+    cfg.sensor_height = height_m;
+    return rp::sensor_roi(cfg, direction);
+}
+
+// The frame's points inside the region, in the base frame, in the frame's order.
+std::vector<std::array<double, 3>> points_in(const rp::Frame& f, const rp::SensorRoi& roi) {
+    const rp::RigidTransform T = rp::to_rigid_transform(roi.sensor);
+    std::vector<std::array<double, 3>> in;
+    for (Eigen::Index i = 0; i < f.points.rows(); ++i) {
+        const double p[3] = {f.points(i, 0), f.points(i, 1), f.points(i, 2)};
+        std::array<double, 3> b;
+        rp::transform_point(T, p, b.data());
+        if (b[0] >= roi.x_min_m && b[0] <= roi.x_max_m && std::abs(b[1]) <= roi.y_abs_max_m) in.push_back(b);
+    }
+    return in;
+}
+
+}  // namespace
+
+TEST(OusterRoiColumns, TheWindowSpansTheColumnsWhoseBeamsCrossTheRegion) {
+    // The tiny sensor's column v looks along 360°·(1 − v/512) (beam 2 2° less). The region behind, x ∈ [−40, −1]
+    // m, |y| ≤ 10 m, spans the directions 180° ± atan2(10, 1) = 95.71°…264.29°: columns 137…375, and with beam
+    // 2's offset 134…373 — the window is 134…375 (the region ahead lies across column 0: every column stays).
+    rp::OusterDecoder d(tiny_metadata());
+    const std::string note = d.keep_columns_reaching({default_roi(1.0, -1.0)});
+    EXPECT_EQ(d.metadata().column_window, (std::array<int, 2>{134, 375}));
+    EXPECT_NE(note.find("columns 134–375 decoded, 242 of the 512"), std::string::npos) << note;
+
+    const auto add = [&](std::uint16_t id, std::uint16_t column) {
+        const auto p = tiny_packet(id, column, 5000);
+        return d.add_packet(p.data(), p.size(), 0.0);
+    };
+    for (std::uint16_t v = 0; v < 375; ++v) EXPECT_FALSE(add(1, v));
+    const auto frame = add(1, 375);  // the window's last column ends the frame at once
+    ASSERT_TRUE(frame);
+    EXPECT_EQ(frame->points.rows(), 4 * 242);
+    EXPECT_TRUE(frame->diagnostics.complete);
+    for (std::uint16_t v = 376; v < 512; ++v) EXPECT_FALSE(add(1, v));  // left out, not late
+    std::optional<rp::Frame> second;
+    for (std::uint16_t v = 0; v < 376; ++v)
+        if (auto f = add(2, v)) second = std::move(f);
+    ASSERT_TRUE(second);
+    EXPECT_EQ(second->frame_id, 2);
+    EXPECT_EQ(second->diagnostics.late_packets, 0);
+    EXPECT_FALSE(d.finish());
+    rp::OusterDecoder ahead(tiny_metadata());
+    EXPECT_NE(ahead.keep_columns_reaching({default_roi(1.0, 1.0)}).find("every column decoded"), std::string::npos);
+    EXPECT_EQ(ahead.metadata().column_window, (std::array<int, 2>{0, 511}));
+}
+
+TEST(OusterRoiColumns, LateAndMissingColumnsAreCountedInsideTheWindowOnly) {
+    rp::OusterDecoder d(tiny_metadata());
+    d.keep_columns_reaching({default_roi(1.0, -1.0)});  // columns 134–375
+    const auto add = [&](std::uint16_t id, std::uint16_t column) {
+        const auto p = tiny_packet(id, column, 5000);
+        return d.add_packet(p.data(), p.size(), 0.0);
+    };
+    std::optional<rp::Frame> f;
+    for (std::uint16_t v = 0; v < 512; ++v)
+        if (v < 200 || v >= 260)  // 60 of the window's columns lost
+            if (auto got = add(1, v)) f = std::move(got);
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->diagnostics.missing_columns, 60);
+    EXPECT_FALSE(add(1, 230));  // a column of the frame just returned, late
+    EXPECT_FALSE(add(1, 500));  // outside the window: neither late nor missing
+    for (std::uint16_t v = 134; v < 376; ++v) f = add(2, v);
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->diagnostics.late_packets, 1);
+    EXPECT_EQ(f->diagnostics.missing_columns, 0);
+}
+
+TEST(OusterRoiColumns, ARegionNoColumnCanSeeIsAnErrorNamingTheMetadata) {
+    rp::OusterMetadata meta = tiny_metadata();
+    meta.column_window = {0, 100};  // the sensor sends the directions 0°…−70° only
+    rp::OusterDecoder d(meta);
+    const std::string err = error_of([&] { d.keep_columns_reaching({default_roi(1.0, -1.0)}); });
+    EXPECT_NE(err.find("tiny.json"), std::string::npos) << err;
+    EXPECT_NE(err.find("region of interest"), std::string::npos) << err;
+}
+
+TEST(OusterRoiColumns, FramesHoldEveryRegionPointOfTheWholeRotation) {
+    const std::string pcap = kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+    const rp::SensorRoi roi = default_roi(1.97, 1.0);
+    rp::SourceOptions o;
+    o.roi_columns = {roi};
+    auto source = rp::open_frames({pcap}, o);
+    const auto& notes = source->info().notes;
+    ASSERT_FALSE(notes.empty());
+    EXPECT_NE(notes.back().find("columns 261–763 decoded, 503 of the 1024"), std::string::npos) << notes.back();
+    const auto whole = all_frames(pcap);
+    std::size_t k = 0;
+    while (auto f = source->next()) {
+        ASSERT_LT(k, whole.size());
+        SCOPED_TRACE("frame " + std::to_string(k));
+        EXPECT_EQ(f->frame_id, whole[k].frame_id);
+        EXPECT_TRUE(f->diagnostics.complete);
+        EXPECT_LT(f->points.rows(), whole[k].points.rows() / 2);
+        const auto got = points_in(*f, roi), want = points_in(whole[k], roi);
+        EXPECT_GT(want.size(), 20000u);
+        EXPECT_EQ(got, want);
+        ++k;
+    }
+    EXPECT_EQ(k, whole.size());
+}
+
+TEST(OusterRoiColumns, OnlyAnOustersColumnsCanBeLimited) {
+    rp::SourceOptions o;
+    o.roi_columns = {default_roi(1.8, 1.0)};
+    const std::string velodyne = std::string(ROADPREVIEW_TEST_DATA) + "/velodyne/";
+    std::string err = error_of([&] { all_frames(velodyne + "velodyne_vlp16.pcap", o); });
+    EXPECT_NE(err.find("velodyne_vlp16.pcap"), std::string::npos) << err;
+    EXPECT_NE(err.find("--cut-angle"), std::string::npos) << err;
+    const std::string bin = std::string(ROADPREVIEW_TEST_DATA) + "/semantickitti/000000.bin";
+    err = error_of([&] { rp::open_frames({bin}, o); });
+    EXPECT_NE(err.find("000000.bin"), std::string::npos) << err;
 }

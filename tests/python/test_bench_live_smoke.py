@@ -1,18 +1,27 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Smoke test of ``bench/live.py --quick``: the 1× row with every frame written and latency figures."""
+"""Smoke test of ``bench/live.py --quick``: the 1× rows, whole rotations and the region's columns, with every frame
+written and latency figures."""
 
 import re
 
 from paths import run_bench
 
 
-def test_live_bench_prints_the_row_at_recorded_speed():
+def test_live_bench_prints_the_rows_at_recorded_speed():
     out = run_bench("live.py", "--quick")
-    row = re.search(r"\| 1× \| (\d+) \((\d+)\) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| (\d+) \| (\d+) \| (\d+) "
-                    r"\| [\d.]+ / [\d.]+ \| (yes|no) \|", out)
-    assert row, out
-    frames, sent = int(row[1]), int(row[2])
-    p50, p99, worst = float(row[3]), float(row[4]), float(row[5])
-    assert frames == sent == 15  # 5 loops of the 3-frame capture: none lost at 1×
-    assert 0 < p50 <= p99 <= worst
-    assert int(row[8]) == 0  # nothing dropped by the receive queue
+    rows = {}
+    for row in re.finditer(r"\| 1× \| (whole rotation|region's columns) \| (\d+) \((\d+)\) \| ([\d.]+) \| ([\d.]+) "
+                           r"\| ([\d.]+) \| (-?[\d.]+) \| ([\d.]+) \| (\d+) \| (\d+) \| (\d+) \| [\d.]+ / [\d.]+ "
+                           r"\| (yes|no) \|", out):
+        rows[row[1]] = row
+    assert set(rows) == {"whole rotation", "region's columns"}, out
+    for row in rows.values():
+        frames, sent = int(row[2]), int(row[3])
+        p50, p99, worst = float(row[4]), float(row[5]), float(row[6])
+        assert frames == sent == 15  # 5 loops of the 3-frame capture: none lost at 1×
+        assert 0 < p50 <= p99 <= worst
+        assert int(row[10]) == 0  # nothing dropped by the receive queue
+    assert float(rows["whole rotation"][7]) == float(rows["whole rotation"][4])
+    # Columns 764–1023 come 25.4 ms after the region's last: the result is that much earlier against the rotation.
+    region = rows["region's columns"]
+    assert abs(float(region[7]) - (float(region[4]) - 25.39)) < 0.011

@@ -111,3 +111,46 @@ def test_pcap_results_are_finite_and_use_the_ground():
     assert out[0]["points"]["ground"] > 1000
     z = np.array([v for v in out[0]["profiles"]["left"]["z"] if v is not None])
     assert len(z) > 20 and np.all(np.abs(z) < 1.0)
+
+
+def test_roi_columns_give_the_whole_rotations_answers_from_the_columns_that_see_the_road():
+    """--roi-columns decodes the OS1-128's columns 261–763 only; with the yaw rate given (the IMU samples a frame
+    carries follow its end) every answer is the whole rotation's: the points of the region are the same."""
+    args = ("run", OS1_128_PCAP, "--speed", 2.5, "--yaw-rate", 0.05, *OS1)
+    whole, windowed = run(*args), run(*args, "--roi-columns")
+    assert "columns 261–763 decoded, 503 of the 1024" in windowed.stderr
+    got, want = lines(windowed.stdout), lines(whole.stdout)
+    assert len(got) == len(want) == 3
+    for g, w in zip(got, want):
+        assert g["points"]["roi"] == w["points"]["roi"] and g["points"]["input"] < w["points"]["input"] / 2
+        assert 0.02 < g["timestamp"] - w["timestamp"] < 0.03  # the frame begins at column 261, not 0
+        for key in ("profiles", "roughness", "obstacles", "ground"):
+            assert g[key] == w[key], key
+
+
+def test_roi_columns_need_the_mounting_and_an_ouster():
+    one_line_error(run("run", OS1_128_PCAP, "--speed", 2.5, "--roi-columns", "-q", check=False), "--sensor-height")
+    one_line_error(run("run", VELODYNE / "velodyne_vlp16.pcap", "--speed", 2.5, "--sensor-height", 1.8,
+                       "--roi-columns", "-q", check=False), "velodyne_vlp16.pcap", "--cut-angle")
+
+
+def test_open_with_roi_columns_keeps_the_region_of_every_frame():
+    cfg = rp.Config(sensor_height=OS1_128_HEIGHT)
+    source = rp.io.open(OS1_128_PCAP, roi_columns=cfg)
+    assert any("columns 261–763 decoded" in n for n in source.info["notes"])
+    windowed, whole = list(source), list(rp.io.open(OS1_128_PCAP))
+
+    def in_region(points):
+        x, y = points[:, 0], points[:, 1]  # sensor frame = base frame but for the height
+        return points[(x >= 1) & (x <= 40) & (np.abs(y) <= 10)]
+
+    for g, w in zip(windowed, whole):
+        np.testing.assert_array_equal(in_region(g.points), in_region(w.points))
+    behind = rp.io.open(OS1_128_PCAP, roi_columns=cfg, roi_direction="both")
+    assert any("every column decoded" in n for n in behind.info["notes"])
+    with pytest.raises(ValueError, match="roi_direction"):
+        rp.io.open(OS1_128_PCAP, roi_columns=cfg, roi_direction="sideways")
+    with pytest.raises(ValueError, match="mounting"):
+        rp.io.open(OS1_128_PCAP, roi_columns=rp.Config())
+    with pytest.raises(RuntimeError, match="velodyne_vlp16.pcap"):
+        list(rp.io.open(VELODYNE / "velodyne_vlp16.pcap", roi_columns=cfg))

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/roi_cloud.hpp"
 
@@ -25,6 +26,32 @@ GroundConfig roi_facing(const GroundConfig& g, double direction) {
     behind.roi_x_min_m = -g.roi_x_max_m;
     behind.roi_x_max_m = -g.roi_x_min_m;
     return behind;
+}
+
+SensorRoi sensor_roi(const Config& cfg, double direction) {
+    const GroundConfig g = roi_facing(cfg.ground, direction);
+    return {effective_extrinsics(cfg), g.roi_x_min_m, g.roi_x_max_m, g.roi_y_abs_max_m};
+}
+
+// The slab test on the ray's horizontal projection: the parameter interval inside each pair of bounds,
+// intersected, must hold some t ≥ 0.
+bool ray_reaches(const SensorRoi& roi, const RigidTransform& T, const double origin[3], const double direction[3]) {
+    double o[3];
+    transform_point(T, origin, o);
+    double lo = 0.0, hi = std::numeric_limits<double>::infinity();
+    const double bounds[2][2] = {{roi.x_min_m, roi.x_max_m}, {-roi.y_abs_max_m, roi.y_abs_max_m}};
+    for (int axis = 0; axis < 2; ++axis) {
+        const double d = T.R[axis][0] * direction[0] + T.R[axis][1] * direction[1] + T.R[axis][2] * direction[2];
+        const double a = bounds[axis][0], b = bounds[axis][1];
+        if (d == 0.0) {
+            if (o[axis] < a || o[axis] > b) return false;
+            continue;
+        }
+        const double t1 = (a - o[axis]) / d, t2 = (b - o[axis]) / d;
+        lo = std::max(lo, std::min(t1, t2));
+        hi = std::min(hi, std::max(t1, t2));
+    }
+    return lo <= hi;
 }
 
 namespace {

@@ -370,6 +370,10 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
         default: id = read_le<std::uint16_t>(data + 2); break;
     }
     check_measurement_ids(first_col, col_bytes);
+    bool any_in_window = false;
+    for (int c = 0; c < meta_.columns_per_packet && !any_in_window; ++c)
+        any_in_window = in_window(read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8));
+    if (!any_in_window) return std::nullopt;  // columns the window leaves out (keep_columns_reaching)
     // A packet of the frame just closed came late (reordered on the way): its columns are counted missing there.
     if (!open_ && id == closed_id_) {
         ++late_packets_;
@@ -384,6 +388,7 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     for (int c = 0; c < meta_.columns_per_packet; ++c) {
         const std::uint8_t* col = first_col + static_cast<std::size_t>(c) * col_bytes;
         const int mid = read_le<std::uint16_t>(col + 8);
+        if (!in_window(mid)) continue;
         const std::uint32_t status = l.column_footer ? read_le<std::uint32_t>(col + col_bytes - 4)
                                                      : read_le<std::uint16_t>(col + 10);
         const auto ts = read_le<std::uint64_t>(col);
@@ -408,6 +413,44 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     // The window's last column closes the frame at once (no wait for the next frame's first packet: live latency).
     if (last_of_window && !done) done = build_frame();
     return done;
+}
+
+bool OusterDecoder::in_window(int column) const {
+    const int a = meta_.column_window[0], b = meta_.column_window[1];
+    return a <= b ? column >= a && column <= b : column >= a || column <= b;
+}
+
+std::string OusterDecoder::keep_columns_reaching(const std::vector<SensorRoi>& regions) {
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame, first = meta_.column_window[0];
+    const auto reaches = [&](int v) {
+        for (const SensorRoi& roi : regions) {
+            const RigidTransform T = to_rigid_transform(roi.sensor);
+            for (int u = 0; u < H; ++u) {
+                const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
+                const double origin[3] = {lut_.offset[i], lut_.offset[i + 1], lut_.offset[i + 2]};
+                const double direction[3] = {lut_.direction[i], lut_.direction[i + 1], lut_.direction[i + 2]};
+                if (ray_reaches(roi, T, origin, direction)) return true;
+            }
+        }
+        return false;
+    };
+    int from = -1, to = -1;  // in window order: k-th column sent = (first + k) mod W
+    for (int k = 0; k < meta_.window_columns(); ++k) {
+        if (!reaches((first + k) % W)) continue;
+        if (from < 0) from = k;
+        to = k;
+    }
+    if (from < 0)
+        throw std::invalid_argument(meta_.source + ": no column of the sensor's window (" + std::to_string(first) +
+                                    "–" + std::to_string(meta_.column_window[1]) +
+                                    ") can see the region of interest: check the sensor's mounting");
+    const int sent = meta_.window_columns();
+    if (to - from + 1 == sent)
+        return "every column decoded: the region of interest (roi_columns) is seen at both ends of the sensor's frame";
+    meta_.column_window = {(first + from) % W, (first + to) % W};
+    return "columns " + std::to_string(meta_.column_window[0]) + "–" + std::to_string(meta_.column_window[1]) +
+           " decoded, " + std::to_string(to - from + 1) + " of the " + std::to_string(sent) +
+           " the sensor sends: those that can see the region of interest (roi_columns)";
 }
 
 Frame OusterDecoder::build_frame() {

@@ -23,6 +23,7 @@ public:
         info_.frame_rate_hz = m.frame_rate_hz;
         info_.beams = m.pixels_per_column;
         info_.serial = m.prod_sn;
+        if (!o.roi_columns.empty()) info_.notes.push_back(decoder_.keep_columns_reaching(o.roi_columns));
     }
 
 private:

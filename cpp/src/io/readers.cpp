@@ -331,7 +331,11 @@ private:
 
 std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
-    if (pcaps == 0) return std::make_unique<FileListSource>(list_inputs(inputs), options);
+    if (pcaps == 0) {
+        if (!options.roi_columns.empty())
+            fail_file(inputs[0], "only an Ouster recording's columns can be limited to the region of interest");
+        return std::make_unique<FileListSource>(list_inputs(inputs), options);
+    }
     if (pcaps != static_cast<std::ptrdiff_t>(inputs.size()))
         fail_file(inputs[0], "give .pcap/.pcapng recordings or frame files, not both in one run");
     if (options.columns > 0) fail_file(inputs[0], "--columns applies to raw float32 .bin files only");

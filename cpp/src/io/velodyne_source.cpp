@@ -30,6 +30,9 @@ public:
         if (!o.sensor_model.empty()) forced_ = velodyne_model_from_name(o.sensor_model);
         if (forced_ == VelodyneModel::Hdl64e && o.calibration.empty())
             fail("an HDL-64E needs its calibration file (--calibration)");
+        if (!o.roi_columns.empty())
+            fail("only an Ouster's columns can be limited to the region of interest (a Velodyne sweep ends at the cut "
+                 "angle: --cut-angle)");
     }
 
 private:

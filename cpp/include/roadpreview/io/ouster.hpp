@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "roadpreview/core/frames.hpp"
 #include "roadpreview/io/frame_source.hpp"
 
 namespace roadpreview {
@@ -76,6 +77,12 @@ public:
 
     const OusterMetadata& metadata() const { return meta_; }
 
+    /// Narrows the column window (metadata().column_window) to the columns, in the order the window sends them,
+    /// from the first to the last with a beam that can reach one of `regions` (SourceOptions::roi_columns):
+    /// columns outside it are not decoded and the frame ends at its last. Returns a note for the user saying
+    /// which columns are kept. Throws std::invalid_argument naming the metadata when no column can reach them.
+    std::string keep_columns_reaching(const std::vector<SensorRoi>& regions);
+
 private:
     struct Lut {
         std::vector<float> direction;  // 3 per pixel (row-major beam × column), m per mm of range
@@ -86,6 +93,7 @@ private:
     void check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const;
     void start_frame(std::int64_t id, double capture_time);
     Frame build_frame();
+    bool in_window(int column) const;
 
     OusterMetadata meta_;
     Lut lut_;

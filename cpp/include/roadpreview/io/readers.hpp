@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "roadpreview/core/frames.hpp"
 #include "roadpreview/io/frame_source.hpp"
 
 namespace roadpreview {
@@ -54,6 +55,11 @@ struct SourceOptions {
     /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
     std::string beam_calibration;
     int imu_port = 0;  ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
+    /// Ouster: decode only the columns with a beam that can reach one of these regions (sensor_roi), and end each
+    /// frame at the last of them — a narrower column window, as the sensor's own azimuth window would give: the
+    /// frame comes as soon as the road ahead has been scanned, not a rotation's rest later. Empty: every column.
+    /// Other inputs: an error.
+    std::vector<SensorRoi> roi_columns;
 };
 
 /// A reader for the inputs: .pcap/.pcapng recordings (Ouster when metadata is given or found, Velodyne when its
