@@ -58,7 +58,7 @@ struct RunOptions {
     std::string calib;
     std::string disparity;
     LiveRunOptions live;                    // udp:// input
-    bool roi_columns = false;               // Ouster: decode only the columns that can see the ROI
+    bool roi_columns = false;               // frames end once the region of interest has been scanned
 };
 
 // True when the subcommand has this option and it was given.
@@ -281,6 +281,8 @@ rp::SourceOptions source_options(const RunOptions& o, const CLI::App& app, const
     if (!o.roi_columns) return s;
     if (!cfg.sensor_height && !cfg.extrinsics)
         throw std::invalid_argument("--roi-columns needs the sensor's mounting: give --sensor-height or --extrinsics");
+    if (app.count("--cut-angle"))
+        throw std::invalid_argument("give --cut-angle or --roi-columns (which sets the cut angle), not both");
     if (app.count("--speed"))
         s.roi_columns = {rp::sensor_roi(cfg, o.speed)};
     else
@@ -311,7 +313,7 @@ std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const CLI::App
     for (const char* name : {"--duration", "--timeout"})
         if (app.count(name)) throw std::invalid_argument(std::string(name) + " applies to a udp:// input only");
     if (!is_stereo(o)) return rp::open_frames(o.inputs, source_options(o, app, cfg));
-    if (o.roi_columns) throw std::invalid_argument("--roi-columns applies to Ouster recordings and streams only");
+    if (o.roi_columns) throw std::invalid_argument("--roi-columns applies to Ouster and Velodyne recordings and streams");
     rp::StereoInputs in;
     if (!o.stereo.empty()) in.left = {o.stereo[0]}, in.right = {o.stereo[1]};
     if (!o.disparity.empty()) in.disparity = {o.disparity};
@@ -631,8 +633,8 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("--roi-columns", o.roi_columns,
-                      "Ouster: decode only the columns that can see the region of interest and end each frame at "
-                      "the last of them (the result comes that much sooner); needs the mounting");
+                      "End each frame as soon as the region of interest has been scanned (Ouster: decode only "
+                      "the columns that can see it; Velodyne: the cut angle after it); needs the mounting");
     run_cmd->add_flag("-q,--quiet", o.quiet, "No per-frame progress on stderr");
 
     std::vector<std::string> info_inputs;

@@ -59,9 +59,10 @@ def open(path: Union[PathLike, Sequence[PathLike]], meta: Optional[PathLike] = N
     ``.beams`` (int32 beam of each point; empty when the input does not number them).
 
     ``roi_columns``: a :class:`roadpreview.Config` with the sensor's mounting (``sensor_height`` or
-    ``extrinsics``): an Ouster recording decodes only the columns that can see its region of interest, facing
-    ``roi_direction`` ("ahead", "behind" when reversing, "both"), and each frame ends at the last of them
-    (``roadpreview run --roi-columns``; ``.info["notes"]`` says which). Other inputs raise RuntimeError.
+    ``extrinsics``): each frame ends as soon as its region of interest, facing ``roi_direction`` ("ahead",
+    "behind" when reversing, "both"), has been scanned (``roadpreview run --roi-columns``). An Ouster recording
+    decodes only the columns that can see it; a Velodyne sweep ends at the cut angle after it (``cut_angle_deg``
+    is not used). ``.info["notes"]`` says which; frame files raise RuntimeError.
     """
     paths = [path] if isinstance(path, (str, os.PathLike)) else list(path)
     return core().open_frames([os.fspath(p) for p in paths], os.fspath(meta) if meta else "", sensor_model or "",

@@ -2,6 +2,7 @@
 // geometry, the azimuth interpolation, the sweep cut, HDL-64E calibration files and dual-return packets.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -221,4 +222,52 @@ TEST(Velodyne, BadPacketsAreErrorsNotCrashes) {
     EXPECT_THROW(d.add_packet(p.data(), 1205, 0.0, done), std::invalid_argument);
     p[500] = 0x12;  // block 5's flag
     EXPECT_THROW(d.add_packet(p.data(), p.size(), 0.0, done), std::invalid_argument);
+}
+
+namespace {
+
+rp::SensorRoi roi_ahead(double x_m, double height_m) {
+    rp::Config cfg;
+    cfg.extrinsics = rp::Extrinsics{x_m, 0.0, height_m, 0.0, 0.0, 0.0};
+    return rp::sensor_roi(cfg, 1.0);
+}
+
+}  // namespace
+
+TEST(VelodyneRoiColumns, TheSweepEndsWhereTheRegionHasBeenScanned) {
+    // A VLP-16 (no azimuth offsets) at the base origin sees the region x ∈ [1, 40] m, |y| ≤ 10 m within
+    // atan2(10, 1) = 84.29° of ahead: the first firing azimuth past that arc, clockwise, is 84.3°.
+    const rp::VelodyneCalibration vlp16 = rp::default_velodyne_calibration(rp::VelodyneModel::Vlp16);
+    const auto cut = rp::velodyne_cut_after({roi_ahead(0.0, 1.8)}, vlp16);
+    ASSERT_TRUE(cut);
+    EXPECT_DOUBLE_EQ(*cut, 84.3);
+    // A sensor 5 m behind the base origin sees it within atan2(10, 6) = 59.04° of ahead.
+    EXPECT_DOUBLE_EQ(*rp::velodyne_cut_after({roi_ahead(-5.0, 1.8)}, vlp16), 59.1);
+    // Inside the region (its edge x = 1 m), every azimuth can see it: no cut is better than another.
+    EXPECT_FALSE(rp::velodyne_cut_after({roi_ahead(1.0, 1.8)}, vlp16));
+}
+
+TEST(VelodyneRoiColumns, EverySweepHoldsTheRegionWholeAndEndsAfterIt) {
+    rp::SourceOptions o;
+    o.roi_columns = {roi_ahead(0.0, 1.8)};
+    auto source = rp::open_frames({kVelodyne + "hdl32_example.pcap"}, o);
+    int complete = 0;
+    while (auto f = source->next()) {
+        if (!f->diagnostics.complete) continue;
+        ++complete;
+        // The region's points are the sweep's last: none before the sweep's middle, and the last of all among them.
+        float first_in = 1e9f, last_in = 0.0f, last = 0.0f;
+        for (Eigen::Index i = 0; i < f->points.rows(); ++i) {
+            const float t = f->point_times[static_cast<std::size_t>(i)];
+            last = std::max(last, t);
+            if (f->points(i, 0) >= 1.0f && f->points(i, 0) <= 40.0f && std::abs(f->points(i, 1)) <= 10.0f)
+                first_in = std::min(first_in, t), last_in = std::max(last_in, t);
+        }
+        EXPECT_GT(first_in, 0.4f * last);
+        EXPECT_GT(last_in, 0.99f * last);
+    }
+    EXPECT_GT(complete, 3);
+    const auto& notes = source->info().notes;
+    EXPECT_TRUE(std::any_of(notes.begin(), notes.end(),
+                            [](const std::string& n) { return n.find("sweeps end at 84.3°") != std::string::npos; }));
 }

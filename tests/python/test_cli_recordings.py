@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
-from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, VELODYNE
+from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, VELODYNE
 from test_cli import lines, one_line_error, run
 
 OS1 = ("--sensor-height", OS1_128_HEIGHT)
@@ -128,10 +128,13 @@ def test_roi_columns_give_the_whole_rotations_answers_from_the_columns_that_see_
             assert g[key] == w[key], key
 
 
-def test_roi_columns_need_the_mounting_and_an_ouster():
+def test_roi_columns_need_the_mounting_and_a_recording():
     one_line_error(run("run", OS1_128_PCAP, "--speed", 2.5, "--roi-columns", "-q", check=False), "--sensor-height")
-    one_line_error(run("run", VELODYNE / "velodyne_vlp16.pcap", "--speed", 2.5, "--sensor-height", 1.8,
-                       "--roi-columns", "-q", check=False), "velodyne_vlp16.pcap", "--cut-angle")
+    hdl32 = (VELODYNE / "hdl32_example.pcap", "--speed", 2.5, "--sensor-height", 1.8, "--roi-columns")
+    one_line_error(run("run", *hdl32, "--cut-angle", 90, "-q", check=False), "--cut-angle", "--roi-columns")
+    assert "sweeps end at 84.3°, where the region of interest has been scanned" in run("run", *hdl32).stderr
+    one_line_error(run("run", KITTI_FRAMES[0], "--speed", 2.5, "--sensor-height", 1.73,
+                       "--roi-columns", "-q", check=False), "000000.bin", "region of interest")
 
 
 def test_open_with_roi_columns_keeps_the_region_of_every_frame():
@@ -152,5 +155,8 @@ def test_open_with_roi_columns_keeps_the_region_of_every_frame():
         rp.io.open(OS1_128_PCAP, roi_columns=cfg, roi_direction="sideways")
     with pytest.raises(ValueError, match="mounting"):
         rp.io.open(OS1_128_PCAP, roi_columns=rp.Config())
-    with pytest.raises(RuntimeError, match="velodyne_vlp16.pcap"):
-        list(rp.io.open(VELODYNE / "velodyne_vlp16.pcap", roi_columns=cfg))
+    with pytest.raises(RuntimeError, match="000000.bin"):
+        rp.io.open(KITTI_FRAMES[0], roi_columns=cfg)
+    hdl32 = rp.io.open(VELODYNE / "hdl32_example.pcap", roi_columns=rp.Config(sensor_height=1.8))
+    next(iter(hdl32))  # the model, hence the lasers, come with the first packets
+    assert any("sweeps end at 84.3°" in n for n in hdl32.info["notes"])

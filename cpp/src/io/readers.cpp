@@ -333,7 +333,7 @@ std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs,
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
     if (pcaps == 0) {
         if (!options.roi_columns.empty())
-            fail_file(inputs[0], "only an Ouster recording's columns can be limited to the region of interest");
+            fail_file(inputs[0], "frames limited to the region of interest's columns need an Ouster or Velodyne recording");
         return std::make_unique<FileListSource>(list_inputs(inputs), options);
     }
     if (pcaps != static_cast<std::ptrdiff_t>(inputs.size()))

@@ -160,6 +160,37 @@ double velodyne_packet_period_us(VelodyneModel model, bool dual) {
     return f.block_us * (dual ? kBlocks / 2 : kBlocks);
 }
 
+std::optional<double> velodyne_cut_after(const std::vector<SensorRoi>& regions, const VelodyneCalibration& calibration) {
+    constexpr int kSteps = 3600;  // firing azimuths 0.1° apart
+    std::vector<bool> reaches(kSteps, false);
+    for (const SensorRoi& roi : regions) {
+        const RigidTransform T = to_rigid_transform(roi.sensor);
+        for (const VelodyneLaser& L : calibration.lasers) {
+            for (int k = 0; k < kSteps; ++k) {
+                if (reaches[static_cast<std::size_t>(k)]) continue;
+                // The beam's direction in the decoder's frame (x forward, y left); its offsets are centimetres.
+                const double azimuth = deg(k / 10.0) - L.rot_correction;
+                const double origin[3] = {0.0, 0.0, 0.0};
+                const double direction[3] = {std::cos(L.vert_correction) * std::cos(azimuth),
+                                             -std::cos(L.vert_correction) * std::sin(azimuth),
+                                             std::sin(L.vert_correction)};
+                reaches[static_cast<std::size_t>(k)] = ray_reaches(roi, T, origin, direction);
+            }
+        }
+    }
+    // The longest run of azimuths that cannot reach the regions, going round once: the cut is its first.
+    int best_start = -1, best_length = 0;
+    for (int k = 0; k < kSteps; ++k) {
+        if (reaches[static_cast<std::size_t>(k)] || !reaches[static_cast<std::size_t>((k + kSteps - 1) % kSteps)])
+            continue;  // not where such a run starts
+        int length = 0;
+        while (length < kSteps && !reaches[static_cast<std::size_t>((k + length) % kSteps)]) ++length;
+        if (length > best_length) best_start = k, best_length = length;
+    }
+    if (best_start < 0) return std::nullopt;
+    return best_start / 10.0;
+}
+
 std::uint32_t velodyne_packet_time_us(const std::uint8_t* packet) { return read_le<std::uint32_t>(packet + 1200); }
 
 VelodyneDecoder::VelodyneDecoder(VelodyneModel model, VelodyneCalibration calibration, double cut_angle_deg)

@@ -2,6 +2,7 @@
 // A Velodyne pcap. The model comes from --sensor-model, else from the factory byte checked against the firing
 // timing (the time between the first two packets): some early VLP-16 firmware reports an HDL-32E.
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -30,9 +31,7 @@ public:
         if (!o.sensor_model.empty()) forced_ = velodyne_model_from_name(o.sensor_model);
         if (forced_ == VelodyneModel::Hdl64e && o.calibration.empty())
             fail("an HDL-64E needs its calibration file (--calibration)");
-        if (!o.roi_columns.empty())
-            fail("only an Ouster's columns can be limited to the region of interest (a Velodyne sweep ends at the cut "
-                 "angle: --cut-angle)");
+
     }
 
 private:
@@ -87,7 +86,25 @@ private:
         if (!options_.beam_calibration.empty()) apply_beams_file(calibration, model);
         info_.frame_rate_hz = 0.0;
         info_.beams = static_cast<int>(calibration.lasers.size());
-        decoder_.emplace(model, std::move(calibration), options_.cut_angle_deg);
+        const double cut = cut_angle_deg(calibration);
+        decoder_.emplace(model, std::move(calibration), cut);
+    }
+
+    // The cut angle given, or with roi_columns the one after which the region of interest is scanned: each sweep
+    // then holds the region whole, and ends as soon as it has been scanned.
+    double cut_angle_deg(const VelodyneCalibration& calibration) {
+        if (options_.roi_columns.empty()) return options_.cut_angle_deg;
+        const std::optional<double> cut = velodyne_cut_after(options_.roi_columns, calibration);
+        if (!cut) {
+            info_.notes.push_back("every azimuth can see the region of interest (roi_columns): sweeps end at the cut "
+                                  "angle given");
+            return options_.cut_angle_deg;
+        }
+        char note[160];
+        std::snprintf(note, sizeof note, "sweeps end at %.1f°, where the region of interest has been scanned "
+                      "(roi_columns)", *cut);
+        info_.notes.push_back(note);
+        return *cut;
     }
 
     // The beams file's offsets folded into the lasers' corrections (the decoder adds dist_correction).

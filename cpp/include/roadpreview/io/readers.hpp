@@ -55,10 +55,10 @@ struct SourceOptions {
     /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
     std::string beam_calibration;
     int imu_port = 0;  ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
-    /// Ouster: decode only the columns with a beam that can reach one of these regions (sensor_roi), and end each
-    /// frame at the last of them — a narrower column window, as the sensor's own azimuth window would give: the
-    /// frame comes as soon as the road ahead has been scanned, not a rotation's rest later. Empty: every column.
-    /// Other inputs: an error.
+    /// Frames that end as soon as these regions (sensor_roi) have been scanned, not a rotation's rest later.
+    /// Ouster: only the columns with a beam that can reach one of them are decoded, and the frame ends at the last
+    /// (a narrower column window, as the sensor's own azimuth window would give). Velodyne: the sweep ends at the
+    /// cut angle after them (velodyne_cut_after; cut_angle_deg is not used). Frame files: an error. Empty: neither.
     std::vector<SensorRoi> roi_columns;
 };
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "roadpreview/core/frames.hpp"
 #include "roadpreview/io/frame_source.hpp"
 
 namespace roadpreview {
@@ -51,6 +52,12 @@ struct VelodyneFactory {
     int product_id = 0;
 };
 VelodyneFactory velodyne_factory(const std::uint8_t* packet);
+
+/// The cut angle (deg, clockwise from ahead, as SourceOptions::cut_angle_deg) after which no firing's beams can reach
+/// one of `regions` before the sweep ends: the first firing azimuth past the arc of those that can (0.1° steps),
+/// so that the arc is scanned last and whole in every sweep (SourceOptions::roi_columns). nullopt when every
+/// azimuth can.
+std::optional<double> velodyne_cut_after(const std::vector<SensorRoi>& regions, const VelodyneCalibration& calibration);
 
 /// µs between two data packets of `model` (12 blocks of firings; half the blocks in dual mode).
 double velodyne_packet_period_us(VelodyneModel model, bool dual);
