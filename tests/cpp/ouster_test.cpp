@@ -421,3 +421,15 @@ TEST(OusterRoiColumns, FrameFilesCannotBeLimited) {
     EXPECT_NE(err.find("000000.bin"), std::string::npos) << err;
     EXPECT_NE(err.find("region of interest"), std::string::npos) << err;
 }
+
+TEST(OusterRoiColumns, ARecordingWithoutTheRegionsColumnsIsAnErrorNotAnEmptyDrive) {
+    // The bundled partial frame holds columns 0–127 only: behind the sensor.
+    const std::string pcap = kOuster + "OS-1-128_767798045_1024x10_20230712_120049.pcap";
+    rp::SourceOptions o;
+    o.roi_columns = {default_roi(1.8, 1.0)};
+    const std::string err = error_of([&] { all_frames(pcap, o); });
+    EXPECT_NE(err.find(pcap), std::string::npos) << err;
+    EXPECT_NE(err.find("none of its 8 lidar packets holds a column that can see the region of interest"),
+              std::string::npos) << err;
+    EXPECT_EQ(all_frames(pcap).size(), 1u);  // without the limit, the partial frame
+}

@@ -373,7 +373,10 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     bool any_in_window = false;
     for (int c = 0; c < meta_.columns_per_packet && !any_in_window; ++c)
         any_in_window = in_window(read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8));
-    if (!any_in_window) return std::nullopt;  // columns the window leaves out (keep_columns_reaching)
+    if (!any_in_window) {  // columns the window leaves out (keep_columns_reaching)
+        ++outside_window_;
+        return std::nullopt;
+    }
     // A packet of the frame just closed came late (reordered on the way): its columns are counted missing there.
     if (!open_ && id == closed_id_) {
         ++late_packets_;

@@ -28,7 +28,7 @@ public:
 
 private:
     void on_lidar(const UdpDatagram& d, std::deque<Frame>& ready) override {
-        if (auto f = decoder_.add_packet(d.payload.data(), d.payload.size(), d.timestamp)) ready.push_back(std::move(*f));
+        if (auto f = decoder_.add_packet(d.payload.data(), d.payload.size(), d.timestamp)) emit(std::move(*f), ready);
     }
 
     void on_other(const UdpDatagram& d) override {
@@ -39,9 +39,20 @@ private:
     }
 
     void on_end(std::deque<Frame>& ready) override {
-        if (auto f = decoder_.finish()) ready.push_back(std::move(*f));
+        if (auto f = decoder_.finish()) emit(std::move(*f), ready);
+        const auto window = decoder_.metadata().column_window;
+        if (!frames_ && decoder_.packets_outside_window())
+            fail("none of its " + std::to_string(decoder_.packets_outside_window()) + " lidar packets holds a column "
+                 "that can see the region of interest (roi_columns: columns " + std::to_string(window[0]) + "–" +
+                 std::to_string(window[1]) + ")");
     }
 
+    void emit(Frame f, std::deque<Frame>& ready) {
+        ++frames_;
+        ready.push_back(std::move(f));
+    }
+
+    std::int64_t frames_ = 0;
     int imu_port_;
     OusterDecoder decoder_;
 };

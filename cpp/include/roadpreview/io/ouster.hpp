@@ -82,6 +82,8 @@ public:
     /// columns outside it are not decoded and the frame ends at its last. Returns a note for the user saying
     /// which columns are kept. Throws std::invalid_argument naming the metadata when no column can reach them.
     std::string keep_columns_reaching(const std::vector<SensorRoi>& regions);
+    /// Lidar packets whose every column lay outside the column window (left out, not counted as late).
+    std::int64_t packets_outside_window() const { return outside_window_; }
 
 private:
     struct Lut {
@@ -102,6 +104,7 @@ private:
     std::int64_t frame_id_ = -1;
     std::int64_t closed_id_ = -1;  // the frame last returned
     std::int64_t late_packets_ = 0, duplicate_packets_ = 0;  // since the last frame returned
+    std::int64_t outside_window_ = 0;
     double frame_time_ = 0.0;
     std::uint64_t first_column_ns_ = 0;
     std::vector<std::uint32_t> range_mm_;     // beam × column, staggered
