@@ -271,3 +271,10 @@ TEST(VelodyneRoiColumns, EverySweepHoldsTheRegionWholeAndEndsAfterIt) {
     EXPECT_TRUE(std::any_of(notes.begin(), notes.end(),
                             [](const std::string& n) { return n.find("sweeps end at 84.3°") != std::string::npos; }));
 }
+
+TEST(VelodyneRoiColumns, ARegionNoAzimuthCanSeeIsAnError) {
+    // A spinning sensor sees every direction; only lasers without a direction (a broken calibration) see none.
+    rp::VelodyneCalibration broken = rp::default_velodyne_calibration(rp::VelodyneModel::Vlp16);
+    for (auto& laser : broken.lasers) laser.vert_correction = std::nan("");
+    EXPECT_THROW(rp::velodyne_cut_after({roi_ahead(0.0, 1.8)}, broken), std::invalid_argument);
+}

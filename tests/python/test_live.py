@@ -21,10 +21,10 @@ sys.path.insert(0, str(REPO / "bench"))
 from live import free_port_pair  # noqa: E402  (the benchmark's loopback port pair, one definition)
 
 
-def live_frames(pcap, meta=None, **replay):
+def live_frames(pcap, meta=None, roi_columns=None, **replay):
     """Frames of the live source while the capture is replayed to it from a thread."""
     port = free_port_pair()
-    source = rp.io.open_live(f"udp://127.0.0.1:{port}", meta, timeout_s=0.5, duration_s=30.0)
+    source = rp.io.open_live(f"udp://127.0.0.1:{port}", meta, timeout_s=0.5, duration_s=30.0, roi_columns=roi_columns)
     sent, failed = {}, []
 
     def send():
@@ -60,6 +60,17 @@ def test_open_live_flags_the_frames_that_lost_packets():
     assert len(frames) >= 5  # 2 loops of 3 frames; a frame may lose its first packets, never its place
     flagged = [f for f in frames if f.diagnostics["lost_packets"] or f.diagnostics["late_packets"]]
     assert flagged and all(not f.diagnostics["complete"] for f in flagged if f.diagnostics["lost_packets"])
+
+
+def test_open_live_with_roi_columns_yields_the_offline_frames_of_the_regions_columns():
+    cfg = rp.Config(sensor_height=OS1_128_HEIGHT)
+    frames, info, _ = live_frames(OS1_128_PCAP, OS1_128_META, roi_columns=cfg, rate="max")
+    offline = list(rp.io.open(OS1_128_PCAP, OS1_128_META, roi_columns=cfg))
+    assert any("columns 261–763 decoded" in n for n in info["notes"])
+    assert [f.frame_id for f in frames] == [f.frame_id for f in offline] == [1795, 1796, 1797]
+    for got, want in zip(frames, offline):
+        np.testing.assert_array_equal(got.points, want.points)
+        assert got.diagnostics["complete"]
 
 
 def test_replay_refuses_a_bad_rate():

@@ -43,6 +43,7 @@ bool ray_reaches(const SensorRoi& roi, const RigidTransform& T, const double ori
     for (int axis = 0; axis < 2; ++axis) {
         const double d = T.R[axis][0] * direction[0] + T.R[axis][1] * direction[1] + T.R[axis][2] * direction[2];
         const double a = bounds[axis][0], b = bounds[axis][1];
+        if (!std::isfinite(d) || !std::isfinite(o[axis])) return false;  // no ray: a broken table or calibration
         if (d == 0.0) {
             if (o[axis] < a || o[axis] > b) return false;
             continue;

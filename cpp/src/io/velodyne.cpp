@@ -178,6 +178,8 @@ std::optional<double> velodyne_cut_after(const std::vector<SensorRoi>& regions, 
             }
         }
     }
+    if (std::none_of(reaches.begin(), reaches.end(), [](bool r) { return r; }))  // lasers without a direction
+        throw std::invalid_argument("no azimuth of the sensor can see the region of interest: check its mounting");
     // The longest run of azimuths that cannot reach the regions, going round once: the cut is its first.
     int best_start = -1, best_length = 0;
     for (int k = 0; k < kSteps; ++k) {

@@ -94,7 +94,12 @@ private:
     // then holds the region whole, and ends as soon as it has been scanned.
     double cut_angle_deg(const VelodyneCalibration& calibration) {
         if (options_.roi_columns.empty()) return options_.cut_angle_deg;
-        const std::optional<double> cut = velodyne_cut_after(options_.roi_columns, calibration);
+        std::optional<double> cut;
+        try {
+            cut = velodyne_cut_after(options_.roi_columns, calibration);
+        } catch (const std::invalid_argument& e) {
+            fail(e.what());  // the mounting's fault, not a packet's: never skipped
+        }
         if (!cut) {
             info_.notes.push_back("every azimuth can see the region of interest (roi_columns): sweeps end at the cut "
                                   "angle given");

@@ -56,7 +56,7 @@ VelodyneFactory velodyne_factory(const std::uint8_t* packet);
 /// The cut angle (deg, clockwise from ahead, as SourceOptions::cut_angle_deg) after which no firing's beams can reach
 /// one of `regions` before the sweep ends: the first firing azimuth past the arc of those that can (0.1° steps),
 /// so that the arc is scanned last and whole in every sweep (SourceOptions::roi_columns). nullopt when every
-/// azimuth can.
+/// azimuth can; std::invalid_argument when none can.
 std::optional<double> velodyne_cut_after(const std::vector<SensorRoi>& regions, const VelodyneCalibration& calibration);
 
 /// µs between two data packets of `model` (12 blocks of firings; half the blocks in dual mode).
