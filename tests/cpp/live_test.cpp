@@ -128,7 +128,9 @@ void expect_same_frames(const std::vector<rp::Frame>& got, const std::vector<rp:
         EXPECT_EQ(got[k].imu.size(), want[k].imu.size());
         EXPECT_EQ(got[k].diagnostics.missing_columns, want[k].diagnostics.missing_columns);
         // A frame the end of the stream completes (its last columns never came) has no arrival to count from.
-        if (k + 1 < want.size()) EXPECT_GT(got[k].arrival_s, 0.0);
+        if (k + 1 < want.size()) {
+            EXPECT_GT(got[k].arrival_s, 0.0);
+        }
     }
 }
 
@@ -205,7 +207,9 @@ TEST(Live, DroppedAndReorderedPacketsAreFlaggedNotFatal) {
             const auto same = std::find_if(whole.begin(), whole.end(), [&](const rp::Frame& w) {
                 return w.points.rows() == f.points.rows() && w.points == f.points;
             });
-            if (same == whole.end()) EXPECT_TRUE(is_flagged) << "frame " << f.frame_id << " differs but is not flagged";
+            if (same == whole.end()) {
+                EXPECT_TRUE(is_flagged) << "frame " << f.frame_id << " differs but is not flagged";
+            }
         }
         EXPECT_GT(flagged, 0);
         EXPECT_GE(lost, run.sent.dropped / 2);  // a dropped IMU or position packet is no lidar packet lost

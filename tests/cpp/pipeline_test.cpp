@@ -203,7 +203,9 @@ TEST(Pipeline, RowOrderDoesNotChangeTheResult) {
     EXPECT_EQ(r.left.count, q.left.count);
     EXPECT_EQ(r.right.count, q.right.count);
     for (std::size_t k = 0; k < r.left.z.size(); ++k)
-        if (!std::isnan(r.left.z[k])) EXPECT_NEAR(r.left.z[k], q.left.z[k], 1e-12) << "bin " << k;
+        if (!std::isnan(r.left.z[k])) {
+            EXPECT_NEAR(r.left.z[k], q.left.z[k], 1e-12) << "bin " << k;
+        }
 }
 
 // Clusters level in x are ranked by their lowest input row, not by their place in the ROI (ordered by cell,

@@ -178,7 +178,9 @@ TEST(RoadsideGrid, SeparateGroupsAreLabelledAsOneGridWouldLabelThem) {
             const std::size_t component = first[rank].second;
             EXPECT_EQ(g.cells[rank + 1], static_cast<int>(squares[component].size())) << "scene " << scene;
             for (std::size_t i = 0; i < pts.size(); ++i)
-                if (find(i) == component) ASSERT_EQ(g.point_label[i], static_cast<int>(rank + 1)) << "scene " << scene;
+                if (find(i) == component) {
+                    ASSERT_EQ(g.point_label[i], static_cast<int>(rank + 1)) << "scene " << scene;
+                }
         }
     }
 }
@@ -255,7 +257,9 @@ TEST(RoadsideProcessor, TracksACarFromTwoScannersAndReportsADropout) {
             EXPECT_NEAR(o.x_m, truth_x, 0.15) << "t " << c.t_s;  // predicted to the cycle time
             EXPECT_NEAR(o.y_m, 1.0, 0.15);
             // After the filter settles; within 5 %: passing between the scanners, the visible sides change.
-            if (o.age_s > 0.7) EXPECT_NEAR(o.speed_mps, speed, 0.05 * speed) << "t " << c.t_s;
+            if (o.age_s > 0.7) {
+                EXPECT_NEAR(o.speed_mps, speed, 0.05 * speed) << "t " << c.t_s;
+            }
             EXPECT_EQ(o.cls, "car");
         }
     }
