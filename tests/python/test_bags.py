@@ -158,8 +158,9 @@ def test_the_ouster_packet_bag_decodes_through_the_library_decoder():
 
 def test_the_ouster_bag_runs_with_its_imu_yaw_rate_and_declines_a_class_for_its_indoor_scene():
     """The bag is a bench capture (median range 0.6 m, 95 % within 2.6 m): no road to classify, and the output
-    says so rather than inventing a class."""
-    (res,) = list(drive.run(OUSTER_BAG, rp.Config(sensor_height=0.6), motion=(2.0, None)))
+    says so rather than inventing a class — and warns that its ground does not fit a vehicle's mounting."""
+    with pytest.warns(RuntimeWarning, match="fitted ground is .* check --sensor-height"):
+        (res,) = list(drive.run(OUSTER_BAG, rp.Config(sensor_height=0.6), motion=(2.0, None)))
     line = res.to_dict()
     assert line["path"]["yaw_rate_source"] == "imu"
     assert line["points"]["input"] == 28751 and line["points"]["ground"] > 300
