@@ -425,14 +425,15 @@ bool OusterDecoder::in_window(int column) const {
 
 std::string OusterDecoder::keep_columns_reaching(const std::vector<SensorRoi>& regions) {
     const int H = meta_.pixels_per_column, W = meta_.columns_per_frame, first = meta_.column_window[0];
+    std::vector<RigidTransform> sensor_to_base;
+    for (const SensorRoi& roi : regions) sensor_to_base.push_back(to_rigid_transform(roi.sensor));
     const auto reaches = [&](int v) {
-        for (const SensorRoi& roi : regions) {
-            const RigidTransform T = to_rigid_transform(roi.sensor);
+        for (std::size_t r = 0; r < regions.size(); ++r) {
             for (int u = 0; u < H; ++u) {
                 const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
                 const double origin[3] = {lut_.offset[i], lut_.offset[i + 1], lut_.offset[i + 2]};
                 const double direction[3] = {lut_.direction[i], lut_.direction[i + 1], lut_.direction[i + 2]};
-                if (ray_reaches(roi, T, origin, direction)) return true;
+                if (ray_reaches(regions[r], sensor_to_base[r], origin, direction)) return true;
             }
         }
         return false;

@@ -40,11 +40,12 @@ private:
 
     void on_end(std::deque<Frame>& ready) override {
         if (auto f = decoder_.finish()) emit(std::move(*f), ready);
-        const auto window = decoder_.metadata().column_window;
-        if (!frames_ && decoder_.packets_outside_window())
+        if (!frames_ && decoder_.packets_outside_window()) {
+            const auto window = decoder_.metadata().column_window;
             fail("none of its " + std::to_string(decoder_.packets_outside_window()) + " lidar packets holds a column "
                  "that can see the region of interest (roi_columns: columns " + std::to_string(window[0]) + "–" +
                  std::to_string(window[1]) + ")");
+        }
     }
 
     void emit(Frame f, std::deque<Frame>& ready) {
