@@ -55,14 +55,13 @@ void pca_ground(PointsView pts, const GroundConfig& cfg, GroundFit& fit) {
     for (int k = 0; k < cfg.pca_iterations; ++k) {
         fit.plane = plane_from(kept);
         if (!fit.plane) break;
-        kept = Moments{};
+        // The kept set only shrinks: its moments lose the points dropped (a few after the first fit).
         for (Eigen::Index i = 0; i < pts.rows(); ++i) {
             if (!fit.mask[i]) continue;
             const Eigen::Vector3d p = row(pts, i);
             if (height_above(*fit.plane, p.x(), p.y(), p.z()) > cfg.pca_threshold_m) {
                 fit.mask[i] = 0;
-            } else {
-                kept.add(p);
+                kept.remove(p);
             }
         }
     }

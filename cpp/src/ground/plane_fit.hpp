@@ -32,6 +32,23 @@ struct Moments {
         outer(2, 2) += z * z;
         ++count;
     }
+
+    // The inverse of add (the same shift): a fit whose kept points change a little updates its moments by the
+    // change. With none left, back to empty, so that the next point sets a fresh shift.
+    void remove(const Eigen::Vector3d& p) {
+        if (--count == 0) {
+            *this = Moments{};
+            return;
+        }
+        const double x = p.x() - shift.x(), y = p.y() - shift.y(), z = p.z() - shift.z();
+        sum -= Eigen::Vector3d(x, y, z);
+        outer(0, 0) -= x * x;
+        outer(1, 0) -= y * x;
+        outer(2, 0) -= z * x;
+        outer(1, 1) -= y * y;
+        outer(2, 1) -= z * y;
+        outer(2, 2) -= z * z;
+    }
 };
 
 struct PlaneFit {

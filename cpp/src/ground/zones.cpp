@@ -32,20 +32,28 @@ void group_by_patch(std::int32_t patches, ZoneScratch& z) {
 // `kept` enters as the set the first fit uses and leaves as the points the last fit keeps.
 std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std::vector<std::uint8_t>& kept,
                                     const GroundConfig& cfg) {
+    Moments m;  // of the points kept so far
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        if (kept[i]) m.add(pts[i]);
     std::optional<PlaneFit> fit;
     for (int k = 0; k < cfg.pca_iterations; ++k) {
-        Moments m;  // of the points kept so far
-        for (std::size_t i = 0; i < pts.size(); ++i)
-            if (kept[i]) m.add(pts[i]);
         fit = plane_fit(m);
         if (!fit) return std::nullopt;
-        // The selection alone, without moments: the last one (or one that repeats) needs none.
+        // The selection, and the next fit's moments updated by the points it drops and takes back (after the
+        // first fit few change): the last selection needs none.
+        const bool last = k + 1 == cfg.pca_iterations;
         bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const double h = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z());
-            const bool keep = h <= cfg.pca_threshold_m && h >= -cfg.max_depth_m;
-            changed |= keep != static_cast<bool>(kept[i]);
+            const bool keep = (h <= cfg.pca_threshold_m) & (h >= -cfg.max_depth_m);
+            if (keep == static_cast<bool>(kept[i])) continue;
+            changed = true;
             kept[i] = keep;
+            if (last) continue;
+            if (keep)
+                m.add(pts[i]);
+            else
+                m.remove(pts[i]);
         }
         if (!changed) break;  // the same points again: every later fit would be this one
     }
