@@ -303,6 +303,24 @@ TEST(Ouster, InvalidColumnsAndZeroRangesAreSkippedAndFramesSplitByFrameId) {
     EXPECT_THROW(add(tiny_packet(2, 600, 5000)), std::invalid_argument);  // beyond 512 columns
 }
 
+// Pixels are made as their column arrives: what a column held in one frame, or in a copy of it later found
+// invalid, must not reach the frame.
+TEST(Ouster, AColumnsPointsLastOnlyAsLongAsItsLatestValidCopyInItsFrame) {
+    rp::OusterDecoder d(tiny_metadata());
+    const auto add = [&](const std::vector<std::uint8_t>& p) { return d.add_packet(p.data(), p.size(), 0.0); };
+    add(tiny_packet(1, 0, 5000));
+    add(tiny_packet(1, 1, 5000));
+    add(tiny_packet(1, 1, 5000, 0));  // the same column again, its status bit clear
+    const auto first = add(tiny_packet(2, 2, 7000));
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->points.rows(), 4);  // column 0's four beams only
+    EXPECT_EQ(first->diagnostics.invalid_columns, 1);
+    const auto second = d.finish();  // column 2 only: nothing of columns 0 and 1 from frame 1
+    ASSERT_TRUE(second);
+    ASSERT_EQ(second->points.rows(), 4);
+    for (int beam = 0; beam < 4; ++beam) EXPECT_NEAR(second->points.row(beam).head<3>().norm(), 7.0, 0.05);
+}
+
 namespace {
 
 // The region the pipeline crops to with the defaults (x 1–40 m, |y| ≤ 10 m), the sensor `height_m` up.

@@ -3,6 +3,7 @@
 // XYZ follows its "Lidar Range to XYZ" section, which the vendor SDK's XYZLut implements.
 #include "roadpreview/io/ouster.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -281,7 +282,7 @@ OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
                                  std::sin(encoder + azimuth) * std::cos(altitude), std::sin(altitude)};
             const double o[3] = {std::cos(encoder) * beam_x - d[0] * beam_dist,
                                  std::sin(encoder) * beam_x - d[1] * beam_dist, -d[2] * beam_dist + beam_z};
-            const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
+            const std::size_t i = 3 * lut_pixel(u, v);
             const double range_offset_mm = meta_.beam_range_offset_m.empty()
                                                ? 0.0 : 1e3 * meta_.beam_range_offset_m[static_cast<std::size_t>(u)];
             for (int r = 0; r < 3; ++r) {
@@ -293,8 +294,8 @@ OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
             }
         }
     }
-    range_mm_.resize(pixels);
-    reflectivity_.resize(pixels);
+    xyzr_.resize(4 * pixels);
+    returned_.resize(pixels);
     column_state_.assign(static_cast<std::size_t>(W), 0);
     column_ns_.assign(static_cast<std::size_t>(W), 0);
 }
@@ -349,6 +350,7 @@ void OusterDecoder::start_frame(std::int64_t id, double capture_time) {
     frame_time_ = capture_time;
     first_column_ns_ = 0;
     std::fill(column_state_.begin(), column_state_.end(), 0);
+    std::fill(returned_.begin(), returned_.end(), 0);
 }
 
 std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::size_t size, double capture_time) {
@@ -386,7 +388,6 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     if (open_ && id != frame_id_) done = build_frame();  // a new frame id, or an older one: the sensor restarted
     if (!open_) start_frame(id, capture_time);
 
-    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
     bool news = false, last_of_window = false;
     for (int c = 0; c < meta_.columns_per_packet; ++c) {
         const std::uint8_t* col = first_col + static_cast<std::size_t>(c) * col_bytes;
@@ -401,21 +402,51 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
         last_of_window = last_of_window || mid == meta_.column_window[1];
         if (!(status & 1u)) {
             column_state_[static_cast<std::size_t>(mid)] = 2;
+            forget_column(mid);  // a valid copy of it may have come before
             continue;
         }
         column_state_[static_cast<std::size_t>(mid)] = 1;
-        const std::uint8_t* px = col + l.column_header;
-        for (int u = 0; u < H; ++u, px += l.pixel) {
-            const std::size_t i = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(mid);
-            range_mm_[i] = (read_le<std::uint32_t>(px) & l.range_mask) << l.range_shift;
-            reflectivity_[i] = l.reflectivity_16bit ? read_le<std::uint16_t>(px + l.reflectivity_offset)
-                                                    : px[l.reflectivity_offset];
-        }
+        decode_column(col + l.column_header, mid);
     }
     if (!news) ++duplicate_packets_;
     // The window's last column closes the frame at once (no wait for the next frame's first packet: live latency).
     if (last_of_window && !done) done = build_frame();
     return done;
+}
+
+void OusterDecoder::decode_column(const std::uint8_t* px, int column) {
+    const Layout l = layout_of(meta_.profile);
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    for (int u = 0; u < H; ++u, px += l.pixel) {
+        const std::size_t i = lut_pixel(u, column);
+        const std::size_t at = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(destaggered(u, column));
+        const std::uint32_t range_mm = (read_le<std::uint32_t>(px) & l.range_mask) << l.range_shift;
+        const float r = static_cast<float>(range_mm);
+        const float* direction = &lut_.direction[3 * i];
+        const float* offset = &lut_.offset[3 * i];
+        float* out = &xyzr_[4 * at];
+        for (int c = 0; c < 3; ++c) out[c] = direction[c] * r + offset[c];
+        out[3] = static_cast<float>(l.reflectivity_16bit ? read_le<std::uint16_t>(px + l.reflectivity_offset)
+                                                         : px[l.reflectivity_offset]);
+        returned_[at] = range_mm != 0;
+    }
+}
+
+void OusterDecoder::forget_column(int column) {
+    const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    for (int u = 0; u < H; ++u)
+        returned_[static_cast<std::size_t>(u) * W + static_cast<std::size_t>(destaggered(u, column))] = 0;
+}
+
+std::size_t OusterDecoder::lut_pixel(int u, int column) const {
+    return static_cast<std::size_t>(column) * static_cast<std::size_t>(meta_.pixels_per_column) +
+           static_cast<std::size_t>(u);
+}
+
+int OusterDecoder::destaggered(int u, int column) const {
+    const int W = meta_.columns_per_frame;
+    const int vd = (column + meta_.pixel_shift_by_row[static_cast<std::size_t>(u)]) % W;
+    return vd < 0 ? vd + W : vd;
 }
 
 bool OusterDecoder::in_window(int column) const {
@@ -430,7 +461,7 @@ std::string OusterDecoder::keep_columns_reaching(const std::vector<SensorRoi>& r
     const auto reaches = [&](int v) {
         for (std::size_t r = 0; r < regions.size(); ++r) {
             for (int u = 0; u < H; ++u) {
-                const std::size_t i = 3 * (static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v));
+                const std::size_t i = 3 * lut_pixel(u, v);
                 const double origin[3] = {lut_.offset[i], lut_.offset[i + 1], lut_.offset[i + 2]};
                 const double direction[3] = {lut_.direction[i], lut_.direction[i + 1], lut_.direction[i + 2]};
                 if (ray_reaches(regions[r], sensor_to_base[r], origin, direction)) return true;
@@ -474,36 +505,35 @@ Frame OusterDecoder::build_frame() {
     f.diagnostics.late_packets = std::exchange(late_packets_, 0);
     f.diagnostics.duplicate_packets = std::exchange(duplicate_packets_, 0);
 
-    // Destaggered order: pixel (u, v_d) of the image holds staggered column v = v_d − shift[u] (mod W).
-    const auto first_column = [&](int u) {
-        const int v = -meta_.pixel_shift_by_row[static_cast<std::size_t>(u)] % W;
-        return v < 0 ? v + W : v;
-    };
-    const auto returned = [&](int u, int v) {
-        return column_state_[static_cast<std::size_t>(v)] == 1 && range_mm_[static_cast<std::size_t>(u) * W + v] != 0;
-    };
     // Each column's time since the frame's first, once per column rather than once per pixel.
     column_s_.resize(static_cast<std::size_t>(W));
     for (std::size_t v = 0; v < column_s_.size(); ++v)
         column_s_[v] =
             static_cast<float>(1e-9 * static_cast<double>(static_cast<std::int64_t>(column_ns_[v] - first_column_ns_)));
-    Eigen::Index n = 0;
-    for (int u = 0; u < H; ++u)
-        for (int v = 0; v < W; ++v) n += returned(u, v);  // the order does not matter for the count
+    const auto n = static_cast<Eigen::Index>(std::count(returned_.begin(), returned_.end(), 1));
     f.points.resize(n, 4);
     f.point_times.resize(static_cast<std::size_t>(n));
     f.beams.resize(static_cast<std::size_t>(n));
+    // The pixels in destaggered order (staggered column v = v_d − shift[u] mod W), copied without a branch: every
+    // pixel is written, a returned one as the next point, the others into a sink (the pattern of returns is
+    // irregular, a branch on it mispredicted).
+    float* const points = f.points.data();  // row-major n × 4
+    std::int32_t* const beams = f.beams.data();
+    float* const times = f.point_times.data();
+    float sink_point[4], sink_time;
+    std::int32_t sink_beam;
+    const float* xyzr = xyzr_.data();
+    const std::uint8_t* returned = returned_.data();
+    const float* column_s = column_s_.data();
     Eigen::Index k = 0;
     for (int u = 0; u < H; ++u) {
-        for (int vd = 0, v = first_column(u); vd < W; ++vd, v = v + 1 == W ? 0 : v + 1) {
-            if (!returned(u, v)) continue;
-            const std::size_t i = static_cast<std::size_t>(u) * W + static_cast<std::size_t>(v);
-            const float r = static_cast<float>(range_mm_[i]);
-            for (int c = 0; c < 3; ++c) f.points(k, c) = lut_.direction[3 * i + c] * r + lut_.offset[3 * i + c];
-            f.points(k, 3) = static_cast<float>(reflectivity_[i]);
-            f.beams[static_cast<std::size_t>(k)] = u;
-            f.point_times[static_cast<std::size_t>(k)] = column_s_[static_cast<std::size_t>(v)];
-            ++k;
+        for (int vd = 0, v = W - destaggered(u, 0); vd < W; ++vd, ++v, xyzr += 4, ++returned) {
+            if (v == W) v = 0;
+            const bool keep = *returned;
+            std::copy_n(xyzr, 4, keep ? points + 4 * k : sink_point);
+            *(keep ? beams + k : &sink_beam) = u;
+            *(keep ? times + k : &sink_time) = column_s[v];
+            k += keep;
         }
     }
     open_ = false;

@@ -86,14 +86,22 @@ public:
     std::int64_t packets_outside_window() const { return outside_window_; }
 
 private:
-    struct Lut {
-        std::vector<float> direction;  // 3 per pixel (row-major beam × column), m per mm of range
+    struct Lut {  // by column, then beam (lut_pixel): a column's pixels decode from consecutive entries
+        std::vector<float> direction;  // 3 per pixel, m per mm of range
         std::vector<float> offset;     // 3 per pixel, m
     };
     void check_header(const std::uint8_t* data) const;
     void check_column_spacing(const std::uint8_t* data);
     void check_measurement_ids(const std::uint8_t* first_col, std::size_t col_bytes) const;
     void start_frame(std::int64_t id, double capture_time);
+    /// The pixels of one valid staggered column (its first pixel at `pixels`) into xyzr_ and returned_.
+    void decode_column(const std::uint8_t* pixels, int column);
+    /// A column found invalid: none of its pixels returned.
+    void forget_column(int column);
+    /// The lookup table's pixel of beam u in staggered column `column`.
+    std::size_t lut_pixel(int u, int column) const;
+    /// The destaggered column of row u's pixel of staggered column `column`: column + shift[u] (mod W).
+    int destaggered(int u, int column) const;
     Frame build_frame();
     bool in_window(int column) const;
 
@@ -107,8 +115,10 @@ private:
     std::int64_t outside_window_ = 0;
     double frame_time_ = 0.0;
     std::uint64_t first_column_ns_ = 0;
-    std::vector<std::uint32_t> range_mm_;     // beam × column, staggered
-    std::vector<std::uint16_t> reflectivity_;
+    // Beam × column, destaggered: each pixel's x, y, z and reflectivity, made as its column arrives (so that the
+    // frame's last packet leaves only a copy to do), and whether it returned (a valid column, a range > 0).
+    std::vector<float> xyzr_;
+    std::vector<std::uint8_t> returned_;
     std::vector<std::uint8_t> column_state_;  // 0 missing, 1 valid, 2 invalid
     std::vector<std::uint64_t> column_ns_;
     std::vector<float> column_s_;  // each column's time since the frame's first, made when a frame is built
