@@ -5,13 +5,16 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <algorithm>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include <roadpreview/io/readers.hpp>
 #include <roadpreview/io/ouster.hpp>
+#include <roadpreview/io/pcap.hpp>
 
 namespace rp = roadpreview;
 using nlohmann::json;
@@ -319,6 +322,47 @@ TEST(Ouster, AColumnsPointsLastOnlyAsLongAsItsLatestValidCopyInItsFrame) {
     ASSERT_TRUE(second);
     ASSERT_EQ(second->points.rows(), 4);
     for (int beam = 0; beam < 4; ++beam) EXPECT_NEAR(second->points.row(beam).head<3>().norm(), 7.0, 0.05);
+}
+
+// Each column's points are placed as it arrives: a frame's packets in any order (the one holding the window's
+// last column last, as it closes the frame) give the points of the recorded order, bit for bit. Their times count
+// from the first packet received, so they move together by the same amount.
+TEST(Ouster, APacketOrderWithinAFrameGivesTheSameFrame) {
+    const std::string pcap = kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+    const rp::OusterMetadata meta = rp::read_ouster_metadata(kOuster + "OS-1-128_v2.3.0_1024x10.json");
+    std::vector<rp::UdpDatagram> packets;  // frame 1796's (the frame id: bytes 2–3 of this profile's header)
+    rp::PcapReader reader(pcap);
+    for (rp::UdpDatagram d; reader.next(d);)
+        if (d.payload.size() == meta.lidar_packet_bytes() && d.payload[2] + 256 * d.payload[3] == 1796)
+            packets.push_back(d);
+    ASSERT_EQ(packets.size(), 64u);
+    const auto decode = [&](const std::vector<rp::UdpDatagram>& in) {
+        rp::OusterDecoder d(meta);
+        std::optional<rp::Frame> f;
+        for (const auto& p : in) {
+            EXPECT_FALSE(f) << "the frame closed before its last packet";
+            f = d.add_packet(p.payload.data(), p.payload.size(), p.timestamp);
+        }
+        return f;
+    };
+    const auto recorded = decode(packets);
+    ASSERT_TRUE(recorded);
+    EXPECT_EQ(recorded->points.rows(), 107357);
+    std::mt19937 rng(7);
+    for (int trial = 0; trial < 3; ++trial) {
+        std::shuffle(packets.begin(), packets.end() - 1, rng);
+        const auto shuffled = decode(packets);
+        ASSERT_TRUE(shuffled);
+        ASSERT_EQ(shuffled->points.rows(), recorded->points.rows());
+        EXPECT_EQ(std::memcmp(shuffled->points.data(), recorded->points.data(),
+                              sizeof(float) * static_cast<std::size_t>(recorded->points.size())), 0);
+        EXPECT_EQ(shuffled->beams, recorded->beams);
+        const float shift = shuffled->point_times[0] - recorded->point_times[0];
+        double worst = 0.0;
+        for (std::size_t i = 0; i < recorded->point_times.size(); ++i)
+            worst = std::max(worst, std::abs(double{shuffled->point_times[i] - recorded->point_times[i] - shift}));
+        EXPECT_LT(worst, 1e-6);
+    }
 }
 
 namespace {
