@@ -181,6 +181,14 @@ TEST(Ouster, BadMetadataNamesTheFileAndTheField) {
     j["data_format"]["udp_profile_lidar"] = "FIVE_WORD_PIXEL";
     EXPECT_NE(error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); }).find("not supported"), std::string::npos);
     EXPECT_NE(error_of([&] { rp::parse_ouster_metadata("{not json", "m.json"); }).find("m.json"), std::string::npos);
+    // A shift of a whole rotation or more is no sensor's (and column + shift could overflow an int).
+    for (const int shift : {1024, -1024, 2147483647}) {
+        j = json::parse(slurp(kOuster + "OS-1-128_v2.3.0_1024x10.json"));
+        j["data_format"]["pixel_shift_by_row"][5] = shift;
+        err = error_of([&] { rp::parse_ouster_metadata(j.dump(), "m.json"); });
+        EXPECT_NE(err.find("m.json: pixel_shift_by_row must lie within ±1023"), std::string::npos) << err;
+        EXPECT_NE(err.find("row 5"), std::string::npos) << err;
+    }
 }
 
 TEST(Ouster, IntegerFieldsOutOfTheirTypeAreErrorsNotUndefinedCasts) {

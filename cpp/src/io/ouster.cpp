@@ -166,6 +166,12 @@ void validate(const OusterMetadata& m) {
             std::to_string(m.beam_azimuth_deg.size()));
     if (static_cast<int>(m.pixel_shift_by_row.size()) != H)
         bad("pixel_shift_by_row must have " + std::to_string(H) + " entries");
+    for (int u = 0; u < H; ++u) {
+        const int shift = m.pixel_shift_by_row[static_cast<std::size_t>(u)];
+        if (shift <= -W || shift >= W)
+            bad("pixel_shift_by_row must lie within ±" + std::to_string(W - 1) + " (columns_per_frame − 1), got " +
+                std::to_string(shift) + " for row " + std::to_string(u));
+    }
     for (int c : m.column_window)
         if (c < 0 || c >= W) bad("column_window must lie in 0.." + std::to_string(W - 1));
     if (m.lidar_packet_bytes() > 65507) bad("the lidar packet would exceed a UDP datagram");
