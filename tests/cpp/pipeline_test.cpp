@@ -183,6 +183,37 @@ TEST(Pipeline, JsonLineWithoutTimingRepeatsAndRestatesTheFrame) {
     EXPECT_EQ(timed, j);
 }
 
+// The line is written as a stream: numbers must read back as the same doubles (NaN and ±Inf as null), and text
+// that is not UTF-8 (a file name in another encoding) is an error naming the field, not a broken line.
+TEST(Pipeline, JsonLineNumbersReadBackExactlyAndBadTextIsAnError) {
+    rp::Estimator est(kitti_like());
+    rp::Result r = est.process(road_scene(), 5.0, 0.3, "f.bin");
+    r.speed_mps = 0.1 + 0.2;  // 0.30000000000000004: needs all 17 digits
+    r.yaw_rate_rps = std::numeric_limits<double>::infinity();
+    r.left.s0 = 1e-300;
+    r.left.ds = -0.0;
+    const auto j = nlohmann::json::parse(rp::result_to_json(r));
+    EXPECT_EQ(j["motion"]["speed"].get<double>(), 0.1 + 0.2);
+    EXPECT_TRUE(j["motion"]["yaw_rate"].is_null());
+    EXPECT_EQ(j["profiles"]["left"]["s0"].get<double>(), 1e-300);
+    EXPECT_TRUE(std::signbit(j["profiles"]["left"]["ds"].get<double>()));
+    ASSERT_EQ(j["profiles"]["left"]["z"].size(), r.left.z.size());
+    for (std::size_t i = 0; i < r.left.z.size(); ++i) {
+        if (std::isfinite(r.left.z[i]))
+            EXPECT_EQ(j["profiles"]["left"]["z"][i].get<double>(), r.left.z[i]) << i;
+        else
+            EXPECT_TRUE(j["profiles"]["left"]["z"][i].is_null()) << i;
+    }
+    r.source = "road\xff.bin";
+    try {
+        rp::result_to_json(r);
+        ADD_FAILURE() << "no error for a source name that is not UTF-8";
+    } catch (const std::runtime_error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("source is not UTF-8 text: road\\xff.bin"), std::string::npos) << message;
+    }
+}
+
 // The ROI is ordered by cell inside the pipeline, whatever the order of the rows: a reversed cloud gives the
 // same ground, clusters and profiles, row for row.
 TEST(Pipeline, RowOrderDoesNotChangeTheResult) {

@@ -1,168 +1,322 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The JSON output line (schema in docs/output.md). NaN and ±Inf become null.
+// The JSON output line (schema in docs/output.md), written field by field in the documented order. NaN and ±Inf
+// become null.
 #include <cmath>
-
-#include <nlohmann/json.hpp>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
 
 #include "roadpreview/ground/mounting.hpp"
 #include "pipeline/output_json.hpp"
 #include "roadpreview/pipeline/pipeline.hpp"
 
 namespace roadpreview {
+namespace detail {
+
+void write_number(JsonWriter& w, double v) {
+    if (std::isfinite(v))
+        w.Double(v);
+    else
+        w.Null();
+}
+
+void write_optional_number(JsonWriter& w, const std::optional<double>& v) {
+    if (v)
+        write_number(w, *v);
+    else
+        w.Null();
+}
+
+void write_numbers(JsonWriter& w, const std::vector<double>& v) {
+    w.StartArray();
+    for (const double x : v) write_number(w, x);
+    w.EndArray();
+}
+
+void write_string(JsonWriter& w, const std::string& text, const char* what) {
+    if (w.String(text.data(), static_cast<rapidjson::SizeType>(text.size()))) return;
+    std::string shown;  // the text with its bytes beyond ASCII as \xNN, so that the message itself is valid text
+    for (const char c : text) {
+        const auto byte = static_cast<unsigned char>(c);
+        if (byte >= 0x20 && byte < 0x7f) {
+            shown += c;
+        } else {
+            char hex[5];
+            std::snprintf(hex, sizeof hex, "\\x%02x", byte);
+            shown += hex;
+        }
+    }
+    throw std::runtime_error(std::string("output line: the ") + what + " is not UTF-8 text: " + shown);
+}
+
+}  // namespace detail
+
 namespace {
 
-using json = nlohmann::ordered_json;  // keeps the documented field order
+using detail::JsonWriter;
+using detail::write_number;
+using detail::write_numbers;
+using detail::write_optional_number;
+using detail::write_string;
 
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-json numbers(const std::vector<double>& v) {
-    json out = json::array();
-    for (double x : v) out.push_back(number(x));
-    return out;
-}
+constexpr double kNull = std::numeric_limits<double>::quiet_NaN();  // written as null
 
 // Obstacle geometry to 1 mm and yaw to 1 mrad keeps the lists short; both are far below the sensors' noise.
-double rounded(double v) { return std::round(v * 1e3) / 1e3; }
+void write_rounded(JsonWriter& w, double v) { write_number(w, std::round(v * 1e3) / 1e3); }
 
-json rounded3(const Vec3& v) { return {rounded(v[0]), rounded(v[1]), rounded(v[2])}; }
-
-json flags(const std::vector<std::uint8_t>& v) {
-    json out = json::array();
-    for (auto f : v) out.push_back(f != 0);
-    return out;
+void write_rounded3(JsonWriter& w, const Vec3& v) {
+    w.StartArray();
+    for (const double x : v) write_rounded(w, x);
+    w.EndArray();
 }
 
-json path_obstacles_json(const std::optional<std::vector<PathObstacle>>& obstacles) {
-    if (!obstacles) return nullptr;
-    json out = json::array();
-    for (const PathObstacle& o : *obstacles)
-        out.push_back({{"id", o.id}, {"s_start", rounded(o.s_start)}, {"s_end", rounded(o.s_end)},
-                       {"height", rounded(o.height)}});
-    return out;
+// A reason's text, null for none (""): the texts are the library's own ASCII.
+void write_text_or_null(JsonWriter& w, const char* text) {
+    if (*text)
+        w.String(text);
+    else
+        w.Null();
 }
 
-json clusters_json(const std::optional<std::vector<Cluster>>& clusters) {
-    if (!clusters) return nullptr;
-    json out = json::array();
-    for (const Cluster& c : *clusters)
-        out.push_back({{"id", c.id},
-                       {"count", c.count},
-                       {"centroid", rounded3(c.centroid)},
-                       {"aabb_min", rounded3(c.aabb_min)},
-                       {"aabb_max", rounded3(c.aabb_max)},
-                       {"obb", {{"center", rounded3(c.obb.center)}, {"size", rounded3(c.obb.size)},
-                                {"yaw", rounded(c.obb.yaw)}}},
-                       {"height", rounded(c.height)},
-                       {"bottom", rounded(c.bottom)}});
-    return out;
+void write_path_obstacles(JsonWriter& w, const std::optional<std::vector<PathObstacle>>& obstacles) {
+    if (!obstacles) {
+        w.Null();
+        return;
+    }
+    w.StartArray();
+    for (const PathObstacle& o : *obstacles) {
+        w.StartObject();
+        w.Key("id"), w.Int(o.id);
+        w.Key("s_start"), write_rounded(w, o.s_start);
+        w.Key("s_end"), write_rounded(w, o.s_end);
+        w.Key("height"), write_rounded(w, o.height);
+        w.EndObject();
+    }
+    w.EndArray();
 }
 
-json profile_json(const Profile& p) {
-    return {{"s0", p.s0},          {"ds", p.ds},
-            {"s", numbers(p.s)},   {"z", numbers(p.z)},
-            {"count", p.count},    {"spread", numbers(p.spread)},
-            {"blocked", flags(p.blocked)}, {"obstacles", path_obstacles_json(p.obstacles)}};
+void write_clusters(JsonWriter& w, const std::optional<std::vector<Cluster>>& clusters) {
+    if (!clusters) {
+        w.Null();
+        return;
+    }
+    w.StartArray();
+    for (const Cluster& c : *clusters) {
+        w.StartObject();
+        w.Key("id"), w.Int(c.id);
+        w.Key("count"), w.Int(c.count);
+        w.Key("centroid"), write_rounded3(w, c.centroid);
+        w.Key("aabb_min"), write_rounded3(w, c.aabb_min);
+        w.Key("aabb_max"), write_rounded3(w, c.aabb_max);
+        w.Key("obb"), w.StartObject();
+        w.Key("center"), write_rounded3(w, c.obb.center);
+        w.Key("size"), write_rounded3(w, c.obb.size);
+        w.Key("yaw"), write_rounded(w, c.obb.yaw);
+        w.EndObject();
+        w.Key("height"), write_rounded(w, c.height);
+        w.Key("bottom"), write_rounded(w, c.bottom);
+        w.EndObject();
+    }
+    w.EndArray();
 }
 
-json optional_number(const std::optional<double>& v) { return v ? number(*v) : json(nullptr); }
-
-// A reason's text, null for none ("").
-json text_or_null(const char* text) { return *text ? json(text) : json(nullptr); }
-
-json iri_json(const Iri& i) {
-    return {{"value", optional_number(i.value)}, {"length", i.length_m},
-            {"reason", text_or_null(to_string(i.reason))},
-            {"backed_fraction", optional_number(i.backed_fraction)}};
+void write_iri(JsonWriter& w, const Iri& i) {
+    w.StartObject();
+    w.Key("value"), write_optional_number(w, i.value);
+    w.Key("length"), write_number(w, i.length_m);
+    w.Key("reason"), write_text_or_null(w, to_string(i.reason));
+    w.Key("backed_fraction"), write_optional_number(w, i.backed_fraction);
+    w.EndObject();
 }
 
-json roughness_json(const Roughness& r) {
-    json octaves = json::array();
-    for (std::size_t i = 0; i < r.octave_centers.size(); ++i)
-        octaves.push_back({{"center", r.octave_centers[i]}, {"gd", number(r.octave_gd[i])}});
-    const bool fitted = r.iso_class.has_value();
-    return {{"class", fitted ? json(std::string(1, *r.iso_class)) : json(nullptr)},
-            {"gd_n0", fitted ? number(r.gd_n0) : json(nullptr)},
-            {"gd_n0_free", fitted ? number(r.gd_n0_free) : json(nullptr)},
-            {"waviness", fitted ? number(r.waviness) : json(nullptr)},
-            {"band", fitted ? json::array({r.band_lo, r.band_hi}) : json(nullptr)},
-            {"n", numbers(r.spectrum.n)},
-            {"psd", numbers(r.spectrum.psd)},
-            {"octave_bands", octaves},
-            {"reason", text_or_null(to_string(r.reason))},
-            {"confidence", fitted ? number(r.confidence) : json(nullptr)},
-            {"band_limit", text_or_null(to_string(r.band_limit))},
-            {"backed_fraction", optional_number(r.backed_fraction)},
-            {"noise_floor", optional_number(r.noise_floor)},
-            {"noise_psd", numbers(r.noise_psd)},
-            {"iri", iri_json(r.iri)}};
-}
-
-json path_json(const WheelPaths& p, const std::string& yaw_rate_source) {
+void write_path(JsonWriter& w, const WheelPaths& p, const std::string& yaw_rate_source) {
     const bool arc = p.status == PathStatus::Arc;
-    if (!arc && yaw_rate_source.empty()) return nullptr;
-    json out = {{"icr_y", arc ? json(p.icr_y) : json(nullptr)},
-                {"left_radius", arc ? json(p.left_radius) : json(nullptr)},
-                {"right_radius", arc ? json(p.right_radius) : json(nullptr)}};
-    if (!yaw_rate_source.empty()) out["yaw_rate_source"] = yaw_rate_source;
-    return out;
+    if (!arc && yaw_rate_source.empty()) {
+        w.Null();
+        return;
+    }
+    w.StartObject();
+    w.Key("icr_y"), write_number(w, arc ? p.icr_y : kNull);
+    w.Key("left_radius"), write_number(w, arc ? p.left_radius : kNull);
+    w.Key("right_radius"), write_number(w, arc ? p.right_radius : kNull);
+    if (!yaw_rate_source.empty()) w.Key("yaw_rate_source"), write_string(w, yaw_rate_source, "yaw rate source");
+    w.EndObject();
 }
 
 // The extrinsics in force, where they came from, and how the fitted ground sits in the base frame.
-json mounting_json(const Result& r) {
+void write_mounting(JsonWriter& w, const Result& r) {
     const Extrinsics& e = r.extrinsics;
-    json out = {{"extrinsics", {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad}},
-                {"source", r.mounting_source.empty() ? json(nullptr) : json(r.mounting_source)},
-                {"ground_offset", nullptr}, {"ground_tilt_deg", nullptr}, {"disagrees", nullptr}};
+    w.StartObject();
+    w.Key("extrinsics"), w.StartArray();
+    for (const double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad}) write_number(w, v);
+    w.EndArray();
+    w.Key("source");
+    if (r.mounting_source.empty())
+        w.Null();
+    else
+        write_string(w, r.mounting_source, "mounting source");
     if (r.plane) {
         const MountingCheck c = check_mounting(*r.plane);
-        out["ground_offset"] = c.offset_m, out["ground_tilt_deg"] = c.tilt_deg, out["disagrees"] = c.disagrees;
+        w.Key("ground_offset"), write_number(w, c.offset_m);
+        w.Key("ground_tilt_deg"), write_number(w, c.tilt_deg);
+        w.Key("disagrees"), w.Bool(c.disagrees);
+    } else {
+        w.Key("ground_offset"), w.Null();
+        w.Key("ground_tilt_deg"), w.Null();
+        w.Key("disagrees"), w.Null();
     }
-    return out;
+    w.EndObject();
 }
 
-json fusion_json(const std::optional<FusionStatus>& f, double time_ms, bool timing) {
-    if (!f) return nullptr;
-    json out = {{"method", to_string(f->method)}, {"frames", f->frames}, {"coverage", f->coverage},
-                {"frame_coverage", f->frame_coverage}, {"reset", f->reset.empty() ? json(nullptr) : json(f->reset)},
-                {"pose", {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}}};
-    if (timing) out["time_ms"] = time_ms;
-    return out;
+void write_fusion(JsonWriter& w, const std::optional<FusionStatus>& f, double time_ms, bool timing) {
+    if (!f) {
+        w.Null();
+        return;
+    }
+    w.StartObject();
+    w.Key("method"), w.String(to_string(f->method));
+    w.Key("frames"), w.Int64(f->frames);
+    w.Key("coverage"), write_number(w, f->coverage);
+    w.Key("frame_coverage"), write_number(w, f->frame_coverage);
+    w.Key("reset");
+    if (f->reset.empty())
+        w.Null();
+    else
+        write_string(w, f->reset, "fusion reset");
+    w.Key("pose"), w.StartArray();
+    for (const double v : {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}) write_number(w, v);
+    w.EndArray();
+    if (timing) w.Key("time_ms"), write_number(w, time_ms);
+    w.EndObject();
+}
+
+void write_timing(JsonWriter& w, const TimingMs& t) {
+    w.StartObject();
+    w.Key("ground"), write_number(w, t.ground);
+    w.Key("path"), write_number(w, t.path);
+    w.Key("profile"), write_number(w, t.profile);
+    w.Key("roughness"), write_number(w, t.roughness);
+    w.Key("obstacles"), write_number(w, t.obstacles);
+    w.Key("total"), write_number(w, t.total);
+    w.EndObject();
 }
 
 }  // namespace
 
 namespace detail {
-nlohmann::ordered_json profile_to_json(const Profile& p) { return profile_json(p); }
-nlohmann::ordered_json roughness_to_json(const Roughness& r) { return roughness_json(r); }
+
+void write_profile(JsonWriter& w, const Profile& p) {
+    w.StartObject();
+    w.Key("s0"), write_number(w, p.s0);
+    w.Key("ds"), write_number(w, p.ds);
+    w.Key("s"), write_numbers(w, p.s);
+    w.Key("z"), write_numbers(w, p.z);
+    w.Key("count"), w.StartArray();
+    for (const std::int32_t c : p.count) w.Int(c);
+    w.EndArray();
+    w.Key("spread"), write_numbers(w, p.spread);
+    w.Key("blocked"), w.StartArray();
+    for (const std::uint8_t b : p.blocked) w.Bool(b != 0);
+    w.EndArray();
+    w.Key("obstacles"), write_path_obstacles(w, p.obstacles);
+    w.EndObject();
+}
+
+void write_roughness(JsonWriter& w, const Roughness& r) {
+    const bool fitted = r.iso_class.has_value();
+    const auto fitted_number = [&](double v) { write_number(w, fitted ? v : kNull); };
+    w.StartObject();
+    w.Key("class");
+    if (fitted)
+        w.String(&*r.iso_class, 1);
+    else
+        w.Null();
+    w.Key("gd_n0"), fitted_number(r.gd_n0);
+    w.Key("gd_n0_free"), fitted_number(r.gd_n0_free);
+    w.Key("waviness"), fitted_number(r.waviness);
+    w.Key("band");
+    if (fitted) {
+        w.StartArray();
+        write_number(w, r.band_lo);
+        write_number(w, r.band_hi);
+        w.EndArray();
+    } else {
+        w.Null();
+    }
+    w.Key("n"), write_numbers(w, r.spectrum.n);
+    w.Key("psd"), write_numbers(w, r.spectrum.psd);
+    w.Key("octave_bands"), w.StartArray();
+    for (std::size_t i = 0; i < r.octave_centers.size(); ++i) {
+        w.StartObject();
+        w.Key("center"), write_number(w, r.octave_centers[i]);
+        w.Key("gd"), write_number(w, r.octave_gd[i]);
+        w.EndObject();
+    }
+    w.EndArray();
+    w.Key("reason"), write_text_or_null(w, to_string(r.reason));
+    w.Key("confidence"), fitted_number(r.confidence);
+    w.Key("band_limit"), write_text_or_null(w, to_string(r.band_limit));
+    w.Key("backed_fraction"), write_optional_number(w, r.backed_fraction);
+    w.Key("noise_floor"), write_optional_number(w, r.noise_floor);
+    w.Key("noise_psd"), write_numbers(w, r.noise_psd);
+    w.Key("iri"), write_iri(w, r.iri);
+    w.EndObject();
+}
+
 }  // namespace detail
 
 std::string result_to_json(const Result& r) { return result_to_json(r, LineOptions{}); }
 
 std::string result_to_json(const Result& r, const LineOptions& options) {
-    json line = {
-        {"frame", options.frame ? *options.frame : static_cast<std::int64_t>(r.frame)},
-        {"source", r.source},
-        {"timestamp", r.timestamp ? number(*r.timestamp) : json(nullptr)},
-        {"motion", {{"speed", r.speed_mps}, {"yaw_rate", r.yaw_rate_rps}, {"status", to_string(r.path.status)}}},
-        {"points", {{"input", r.points.input}, {"finite", r.points.finite}, {"roi", r.points.roi},
-                    {"ground", r.points.ground}}},
-        {"ground", {{"method", to_string(r.ground_method)},
-                    {"plane", r.plane ? json(*r.plane) : json(nullptr)}}},
-        {"mounting", mounting_json(r)},
-        {"path", path_json(r.path, r.yaw_rate_source)},
-        {"obstacles", clusters_json(r.obstacles)},
-        {"profiles", {{"left", profile_json(r.left)}, {"right", profile_json(r.right)}}},
-        {"roughness", {{"left", roughness_json(r.left.roughness)},
-                       {"right", roughness_json(r.right.roughness)},
-                       {"vehicle", roughness_json(r.vehicle)}}},
-        {"reason", r.status == FrameStatus::Ok ? json(nullptr) : json(to_string(r.status))},
-        {"fusion", fusion_json(r.fusion, r.timing_ms.fusion, options.timing)},
-    };
-    if (options.timing)
-        line["timing_ms"] = {{"ground", r.timing_ms.ground}, {"path", r.timing_ms.path}, {"profile", r.timing_ms.profile},
-                             {"roughness", r.timing_ms.roughness}, {"obstacles", r.timing_ms.obstacles},
-                             {"total", r.timing_ms.total}};
-    return line.dump();
+    rapidjson::StringBuffer text;
+    JsonWriter w(text);
+    w.StartObject();
+    w.Key("frame"), w.Int64(options.frame ? *options.frame : static_cast<std::int64_t>(r.frame));
+    w.Key("source"), write_string(w, r.source, "source");
+    w.Key("timestamp"), write_optional_number(w, r.timestamp);
+    w.Key("motion"), w.StartObject();
+    w.Key("speed"), write_number(w, r.speed_mps);
+    w.Key("yaw_rate"), write_number(w, r.yaw_rate_rps);
+    w.Key("status"), w.String(to_string(r.path.status));
+    w.EndObject();
+    w.Key("points"), w.StartObject();
+    w.Key("input"), w.Int64(r.points.input);
+    w.Key("finite"), w.Int64(r.points.finite);
+    w.Key("roi"), w.Int64(r.points.roi);
+    w.Key("ground"), w.Int64(r.points.ground);
+    w.EndObject();
+    w.Key("ground"), w.StartObject();
+    w.Key("method"), w.String(to_string(r.ground_method));
+    w.Key("plane");
+    if (r.plane) {
+        w.StartArray();
+        for (const double v : *r.plane) write_number(w, v);
+        w.EndArray();
+    } else {
+        w.Null();
+    }
+    w.EndObject();
+    w.Key("mounting"), write_mounting(w, r);
+    w.Key("path"), write_path(w, r.path, r.yaw_rate_source);
+    w.Key("obstacles"), write_clusters(w, r.obstacles);
+    w.Key("profiles"), w.StartObject();
+    w.Key("left"), detail::write_profile(w, r.left);
+    w.Key("right"), detail::write_profile(w, r.right);
+    w.EndObject();
+    w.Key("roughness"), w.StartObject();
+    w.Key("left"), detail::write_roughness(w, r.left.roughness);
+    w.Key("right"), detail::write_roughness(w, r.right.roughness);
+    w.Key("vehicle"), detail::write_roughness(w, r.vehicle);
+    w.EndObject();
+    w.Key("reason");
+    if (r.status == FrameStatus::Ok)
+        w.Null();
+    else
+        w.String(to_string(r.status));
+    w.Key("fusion"), write_fusion(w, r.fusion, r.timing_ms.fusion, options.timing);
+    if (options.timing) w.Key("timing_ms"), write_timing(w, r.timing_ms);
+    w.EndObject();
+    return std::string(text.GetString(), text.GetSize());
 }
 
 }  // namespace roadpreview

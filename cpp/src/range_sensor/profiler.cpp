@@ -2,12 +2,9 @@
 // Range-sensor samples binned into windows along the track, then the roughness and IRI stages
 // (docs/method.md §11.5); the window's output line (docs/output.md).
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <limits>
 #include <numeric>
-
-#include <nlohmann/json.hpp>
 
 #include "pipeline/output_json.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
@@ -149,76 +146,68 @@ RangeWindow RangeProfiler::close_window() {
 
 namespace {
 
-// The samples' arrays, written directly (shortest round-trip numbers): a window holds thousands of samples and
-// building them as JSON values first would cost more than reading them.
-void append_number(std::string& out, double v) {
-    if (!std::isfinite(v)) {
-        out += "null";
-        return;
-    }
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    out.append(buf, r.ptr);
+using detail::JsonWriter;
+
+// One of the samples' arrays: a window holds thousands of samples, streamed as they are.
+template <typename Write>
+void write_samples(JsonWriter& w, const char* name, const std::vector<RangeSample>& samples, Write write) {
+    w.Key(name);
+    w.StartArray();
+    for (const RangeSample& x : samples) write(x);
+    w.EndArray();
 }
 
-template <typename Get>
-void append_array(std::string& out, const char* name, const std::vector<RangeSample>& samples, Get get) {
-    out += '"';
-    out += name;
-    out += "\":[";
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-        if (i) out += ',';
-        get(samples[i]);
-    }
-    out += ']';
-}
-
-void append_samples_json(std::string& out, const std::vector<RangeSample>& samples,
-                         const std::vector<RangeSensor>& layout) {
-    std::vector<std::string> quoted_ids;
-    for (const RangeSensor& s : layout) quoted_ids.push_back(nlohmann::json(s.id).dump());
-    out.reserve(out.size() + samples.size() * 96);
-    out += '{';
-    append_array(out, "t", samples, [&](const RangeSample& x) { append_number(out, x.t_s); });
-    out += ',';
-    append_array(out, "sensor", samples,
-        [&](const RangeSample& x) { out += quoted_ids[static_cast<std::size_t>(x.sensor)]; });
-    out += ',';
-    append_array(out, "s", samples, [&](const RangeSample& x) { append_number(out, x.s_m); });
-    out += ',';
-    append_array(out, "z", samples, [&](const RangeSample& x) { append_number(out, x.z_m); });
-    out += ',';
-    append_array(out, "ahead", samples, [&](const RangeSample& x) { append_number(out, x.ahead_m); });
-    out += ',';
-    append_array(out, "time_to_wheel", samples, [&](const RangeSample& x) { append_number(out, x.time_to_wheel_s); });
-    out += '}';
+void write_samples(JsonWriter& w, const std::vector<RangeSample>& samples, const std::vector<RangeSensor>& layout) {
+    using detail::write_number;
+    w.StartObject();
+    write_samples(w, "t", samples, [&](const RangeSample& x) { write_number(w, x.t_s); });
+    write_samples(w, "sensor", samples, [&](const RangeSample& x) {
+        detail::write_string(w, layout[static_cast<std::size_t>(x.sensor)].id, "sensor id");
+    });
+    write_samples(w, "s", samples, [&](const RangeSample& x) { write_number(w, x.s_m); });
+    write_samples(w, "z", samples, [&](const RangeSample& x) { write_number(w, x.z_m); });
+    write_samples(w, "ahead", samples, [&](const RangeSample& x) { write_number(w, x.ahead_m); });
+    write_samples(w, "time_to_wheel", samples, [&](const RangeSample& x) { write_number(w, x.time_to_wheel_s); });
+    w.EndObject();
 }
 
 }  // namespace
 
 std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSensor>& layout,
     const std::string& source) {
-    using json = nlohmann::ordered_json;
-    const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-    const json line = {
-        {"frame", w.index},
-        {"source", "range"},
-        {"input", source},
-        {"timestamp", w.samples.empty() ? json(nullptr) : json(w.t_first_s)},
-        {"window", {{"s_start", w.s_start_m}, {"s_end", w.s_end_m}, {"t_first", number(w.t_first_s)},
-                    {"t_last", number(w.t_last_s)}, {"mean_speed", w.mean_speed_mps}}},
-        {"profiles", {{"left", detail::profile_to_json(w.left)}, {"right", detail::profile_to_json(w.right)}}},
-        {"roughness", {{"left", detail::roughness_to_json(w.left.roughness)},
-                       {"right", detail::roughness_to_json(w.right.roughness)},
-                       {"vehicle", detail::roughness_to_json(w.vehicle)}}},
-        {"reason", w.reason.empty() ? json(nullptr) : json(w.reason)},
-    };
-    std::string text = line.dump();
-    text.pop_back();  // the closing brace: the samples follow
-    text += ",\"samples\":";
-    append_samples_json(text, w.samples, layout);
-    text += '}';
-    return text;
+    using detail::write_number;
+    rapidjson::StringBuffer text;
+    JsonWriter out(text);
+    out.StartObject();
+    out.Key("frame"), out.Int64(w.index);
+    out.Key("source"), out.String("range");
+    out.Key("input"), detail::write_string(out, source, "input name");
+    const double no_time = std::numeric_limits<double>::quiet_NaN();  // written as null
+    out.Key("timestamp"), write_number(out, w.samples.empty() ? no_time : w.t_first_s);
+    out.Key("window"), out.StartObject();
+    out.Key("s_start"), write_number(out, w.s_start_m);
+    out.Key("s_end"), write_number(out, w.s_end_m);
+    out.Key("t_first"), write_number(out, w.t_first_s);
+    out.Key("t_last"), write_number(out, w.t_last_s);
+    out.Key("mean_speed"), write_number(out, w.mean_speed_mps);
+    out.EndObject();
+    out.Key("profiles"), out.StartObject();
+    out.Key("left"), detail::write_profile(out, w.left);
+    out.Key("right"), detail::write_profile(out, w.right);
+    out.EndObject();
+    out.Key("roughness"), out.StartObject();
+    out.Key("left"), detail::write_roughness(out, w.left.roughness);
+    out.Key("right"), detail::write_roughness(out, w.right.roughness);
+    out.Key("vehicle"), detail::write_roughness(out, w.vehicle);
+    out.EndObject();
+    out.Key("reason");
+    if (w.reason.empty())
+        out.Null();
+    else
+        detail::write_string(out, w.reason, "reason");
+    out.Key("samples"), write_samples(out, w.samples, layout);
+    out.EndObject();
+    return std::string(text.GetString(), text.GetSize());
 }
 
 }  // namespace roadpreview
