@@ -201,10 +201,6 @@ void write_timing(JsonWriter& w, const TimingMs& t) {
     w.EndObject();
 }
 
-}  // namespace
-
-namespace detail {
-
 void write_profile(JsonWriter& w, const Profile& p) {
     w.StartObject();
     w.Key("s0"), write_number(w, p.s0);
@@ -263,6 +259,22 @@ void write_roughness(JsonWriter& w, const Roughness& r) {
     w.EndObject();
 }
 
+}  // namespace
+
+namespace detail {
+
+void write_profiles_and_roughness(JsonWriter& w, const Profile& left, const Profile& right, const Roughness& vehicle) {
+    w.Key("profiles"), w.StartObject();
+    w.Key("left"), write_profile(w, left);
+    w.Key("right"), write_profile(w, right);
+    w.EndObject();
+    w.Key("roughness"), w.StartObject();
+    w.Key("left"), write_roughness(w, left.roughness);
+    w.Key("right"), write_roughness(w, right.roughness);
+    w.Key("vehicle"), write_roughness(w, vehicle);
+    w.EndObject();
+}
+
 }  // namespace detail
 
 std::string result_to_json(const Result& r) { return result_to_json(r, LineOptions{}); }
@@ -299,15 +311,7 @@ std::string result_to_json(const Result& r, const LineOptions& options) {
     w.Key("mounting"), write_mounting(w, r);
     w.Key("path"), write_path(w, r.path, r.yaw_rate_source);
     w.Key("obstacles"), write_clusters(w, r.obstacles);
-    w.Key("profiles"), w.StartObject();
-    w.Key("left"), detail::write_profile(w, r.left);
-    w.Key("right"), detail::write_profile(w, r.right);
-    w.EndObject();
-    w.Key("roughness"), w.StartObject();
-    w.Key("left"), detail::write_roughness(w, r.left.roughness);
-    w.Key("right"), detail::write_roughness(w, r.right.roughness);
-    w.Key("vehicle"), detail::write_roughness(w, r.vehicle);
-    w.EndObject();
+    detail::write_profiles_and_roughness(w, r.left, r.right, r.vehicle);
     w.Key("reason");
     if (r.status == FrameStatus::Ok)
         w.Null();

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The output line's JSON writer (RapidJSON's, streaming: a line holds thousands of numbers, which built as JSON
-// values first cost several times their writing), and the profile and roughness objects (docs/output.md) for other
-// outputs that share the schema.
+// values first cost several times their writing), and the profiles and roughness fields (docs/output.md) for
+// other outputs that share the schema.
 #pragma once
 
 #include <optional>
@@ -24,7 +24,7 @@ void write_optional_number(JsonWriter& w, const std::optional<double>& v);
 void write_numbers(JsonWriter& w, const std::vector<double>& v);
 /// Throws std::runtime_error naming `what` when the text is not UTF-8.
 void write_string(JsonWriter& w, const std::string& text, const char* what);
-void write_profile(JsonWriter& w, const Profile& p);
-void write_roughness(JsonWriter& w, const Roughness& r);
+/// The "profiles" and "roughness" fields: both wheels' profiles, then their and the vehicle's roughness.
+void write_profiles_and_roughness(JsonWriter& w, const Profile& left, const Profile& right, const Roughness& vehicle);
 
 }  // namespace roadpreview::detail

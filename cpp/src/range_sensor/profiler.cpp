@@ -191,15 +191,7 @@ std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSe
     out.Key("t_last"), write_number(out, w.t_last_s);
     out.Key("mean_speed"), write_number(out, w.mean_speed_mps);
     out.EndObject();
-    out.Key("profiles"), out.StartObject();
-    out.Key("left"), detail::write_profile(out, w.left);
-    out.Key("right"), detail::write_profile(out, w.right);
-    out.EndObject();
-    out.Key("roughness"), out.StartObject();
-    out.Key("left"), detail::write_roughness(out, w.left.roughness);
-    out.Key("right"), detail::write_roughness(out, w.right.roughness);
-    out.Key("vehicle"), detail::write_roughness(out, w.vehicle);
-    out.EndObject();
+    detail::write_profiles_and_roughness(out, w.left, w.right, w.vehicle);
     out.Key("reason");
     if (w.reason.empty())
         out.Null();
