@@ -25,7 +25,8 @@ cmake -S . -B build/sanitize -G Ninja -DROADPREVIEW_BUILD_TESTS=ON -DROADPREVIEW
 tests=$(cmake --build build/sanitize --target help | sed -n 's/^\.\.\. \([a-z_]*_test\)$/\1/p; s/^\([a-z_]*_test\): .*/\1/p')
 cmake --build build/sanitize -j "$(nproc)" --target $tests
 built=$SECONDS
+# Only *_test targets are built here: the consumer, the benchmarks and the no-exceptions build are left out.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build/sanitize -j "$(nproc)" --output-on-failure \
-    -E "find_package_consumer|cluster_search_bench|frame_tail_bench|realtime_noexceptions"  # only *_test targets are built here
+    -E "find_package_consumer|cluster_search_bench|frame_tail_bench|realtime_noexceptions"
 log "sanitizer build: $((built - started)) s, tests: $((SECONDS - built)) s"
