@@ -78,46 +78,42 @@ void write_text_or_null(JsonWriter& w, const char* text) {
         w.Null();
 }
 
-void write_path_obstacles(JsonWriter& w, const std::optional<std::vector<PathObstacle>>& obstacles) {
-    if (!obstacles) {
+// A list that may be absent (null: the stage is off), each item written by `write_item`.
+template <typename T, typename WriteItem>
+void write_list_or_null(JsonWriter& w, const std::optional<std::vector<T>>& items, WriteItem write_item) {
+    if (!items) {
         w.Null();
         return;
     }
     w.StartArray();
-    for (const PathObstacle& o : *obstacles) {
-        w.StartObject();
-        w.Key("id"), w.Int(o.id);
-        w.Key("s_start"), write_rounded(w, o.s_start);
-        w.Key("s_end"), write_rounded(w, o.s_end);
-        w.Key("height"), write_rounded(w, o.height);
-        w.EndObject();
-    }
+    for (const T& item : *items) write_item(item);
     w.EndArray();
 }
 
-void write_clusters(JsonWriter& w, const std::optional<std::vector<Cluster>>& clusters) {
-    if (!clusters) {
-        w.Null();
-        return;
-    }
-    w.StartArray();
-    for (const Cluster& c : *clusters) {
-        w.StartObject();
-        w.Key("id"), w.Int(c.id);
-        w.Key("count"), w.Int(c.count);
-        w.Key("centroid"), write_rounded3(w, c.centroid);
-        w.Key("aabb_min"), write_rounded3(w, c.aabb_min);
-        w.Key("aabb_max"), write_rounded3(w, c.aabb_max);
-        w.Key("obb"), w.StartObject();
-        w.Key("center"), write_rounded3(w, c.obb.center);
-        w.Key("size"), write_rounded3(w, c.obb.size);
-        w.Key("yaw"), write_rounded(w, c.obb.yaw);
-        w.EndObject();
-        w.Key("height"), write_rounded(w, c.height);
-        w.Key("bottom"), write_rounded(w, c.bottom);
-        w.EndObject();
-    }
-    w.EndArray();
+void write_path_obstacle(JsonWriter& w, const PathObstacle& o) {
+    w.StartObject();
+    w.Key("id"), w.Int(o.id);
+    w.Key("s_start"), write_rounded(w, o.s_start);
+    w.Key("s_end"), write_rounded(w, o.s_end);
+    w.Key("height"), write_rounded(w, o.height);
+    w.EndObject();
+}
+
+void write_cluster(JsonWriter& w, const Cluster& c) {
+    w.StartObject();
+    w.Key("id"), w.Int(c.id);
+    w.Key("count"), w.Int(c.count);
+    w.Key("centroid"), write_rounded3(w, c.centroid);
+    w.Key("aabb_min"), write_rounded3(w, c.aabb_min);
+    w.Key("aabb_max"), write_rounded3(w, c.aabb_max);
+    w.Key("obb"), w.StartObject();
+    w.Key("center"), write_rounded3(w, c.obb.center);
+    w.Key("size"), write_rounded3(w, c.obb.size);
+    w.Key("yaw"), write_rounded(w, c.obb.yaw);
+    w.EndObject();
+    w.Key("height"), write_rounded(w, c.height);
+    w.Key("bottom"), write_rounded(w, c.bottom);
+    w.EndObject();
 }
 
 void write_iri(JsonWriter& w, const Iri& i) {
@@ -214,7 +210,7 @@ void write_profile(JsonWriter& w, const Profile& p) {
     w.Key("blocked"), w.StartArray();
     for (const std::uint8_t b : p.blocked) w.Bool(b != 0);
     w.EndArray();
-    w.Key("obstacles"), write_path_obstacles(w, p.obstacles);
+    w.Key("obstacles"), write_list_or_null(w, p.obstacles, [&](const PathObstacle& o) { write_path_obstacle(w, o); });
     w.EndObject();
 }
 
@@ -310,7 +306,7 @@ std::string result_to_json(const Result& r, const LineOptions& options) {
     w.EndObject();
     w.Key("mounting"), write_mounting(w, r);
     w.Key("path"), write_path(w, r.path, r.yaw_rate_source);
-    w.Key("obstacles"), write_clusters(w, r.obstacles);
+    w.Key("obstacles"), write_list_or_null(w, r.obstacles, [&](const Cluster& c) { write_cluster(w, c); });
     detail::write_profiles_and_roughness(w, r.left, r.right, r.vehicle);
     w.Key("reason");
     if (r.status == FrameStatus::Ok)

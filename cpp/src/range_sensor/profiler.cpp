@@ -182,8 +182,8 @@ std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSe
     out.Key("frame"), out.Int64(w.index);
     out.Key("source"), out.String("range");
     out.Key("input"), detail::write_string(out, source, "input name");
-    const double no_time = std::numeric_limits<double>::quiet_NaN();  // written as null
-    out.Key("timestamp"), write_number(out, w.samples.empty() ? no_time : w.t_first_s);
+    out.Key("timestamp"), detail::write_optional_number(out, w.samples.empty() ? std::nullopt
+                                                                                : std::optional<double>(w.t_first_s));
     out.Key("window"), out.StartObject();
     out.Key("s_start"), write_number(out, w.s_start_m);
     out.Key("s_end"), write_number(out, w.s_end_m);
