@@ -111,7 +111,7 @@ TEST(ElevationMap, DefaultsCoverThePreviewAndDocumentTheirMemory) {
     rp::ElevationMap map(cfg.fusion.cell_m, cfg.fusion.map_length_m);
     EXPECT_EQ(map.side(), 1000);
     EXPECT_EQ(map.bytes(), 1000u * 1000u * sizeof(rp::MapCell));
-    EXPECT_EQ(sizeof(rp::MapCell), 32u);  // docs/method.md §7 quotes 32 MB
+    EXPECT_EQ(sizeof(rp::MapCell), 28u);  // docs/method.md §7 quotes 28 MB
 }
 
 TEST(Motion, IntegratesArcsAndLines) {

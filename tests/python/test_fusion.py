@@ -236,37 +236,3 @@ def test_the_fused_os1_128_recording_keeps_its_class_once_frames_disagree():
         assert cpp.vehicle.iso_class == ref.vehicle.iso_class
         classes.append(cpp.vehicle.iso_class)
     assert classes[0] == classes[2] == "C", classes
-
-
-def smeared_bump_frame(height_m=0.05, sigma_m=0.1, sensor_height=1.65):
-    """Base-frame points (sensor sensor_height above the road) on a 1 m raised-cosine bump at x = 10 m under the
-    left wheel, their heights the bump blurred along x with σ = sigma_m — what points smeared along their rays
-    give a median — and the range variances whose along-ground part is σ² (method.md §7, unblurring)."""
-    x, y = np.meshgrid(np.arange(2.0, 30.0, 0.02), np.arange(-2.0, 2.0, 0.05), indexing="ij")
-    x, y = x.ravel(), y.ravel()
-    u = np.arange(-1.0, 1.0, 0.001)
-    kernel = np.exp(-0.5 * (np.arange(-0.5, 0.5, 0.001) / sigma_m) ** 2)
-    bump = np.where(np.abs(u) <= 0.5, height_m * 0.5 * (1 + np.cos(2 * np.pi * u)), 0.0)
-    blurred = np.convolve(bump, kernel / kernel.sum(), mode="same")
-    z = np.where(np.abs(y - 0.8) < 0.5, np.interp(x - 10.0, u, blurred, left=0.0, right=0.0), 0.0)
-    uz2 = sensor_height ** 2 / (x ** 2 + y ** 2 + sensor_height ** 2)
-    points = np.column_stack([x, y, z - sensor_height, np.ones_like(x)]).astype(np.float32)
-    return points, (sigma_m ** 2 / (1 - uz2)).astype(np.float32), float(blurred.max())
-
-
-def test_the_fused_profile_undoes_the_smear_along_the_rays():
-    points, range_variances, blurred_crest = smeared_bump_frame()
-    cfg = rp.Config(sensor_height=1.65, obstacles={"enabled": False}, fusion={"method": "kalman"})
-    crests = {}
-    for name, variances in (("with", range_variances), ("without", None)):
-        cpp = rp.Estimator(cfg).process(points, 10.0, 0.0, range_variances=variances)
-        ref = rp.reference.process_fused(rp.reference.FusedMap(cfg), points, 10.0, 0.0, range_variances=variances)
-        assert_profiles_agree(cpp, ref)
-        s, z = np.asarray(cpp.left.s), np.asarray(cpp.left.z)
-        crests[name] = np.nanmax(z[np.abs(s - 10.0) < 0.3]) - np.nanmedian(z[(s > 4) & (s < 8)])
-        flat = (s > 4) & (s < 8)
-        np.testing.assert_allclose(z[flat], np.nanmedian(z[flat]), atol=1e-4)  # no curvature, nothing changes
-    assert crests["without"] == pytest.approx(blurred_crest, abs=0.002)  # 5 cm blurred by σ = 0.1 m: 4.55 cm
-    # First order, with the curvature of a parabola over ±0.4 m — which flattens a bump only 1 m long — gives back
-    # more than a third of the loss (method.md §7), and never more than the bump.
-    assert blurred_crest + 0.33 * (0.05 - blurred_crest) < crests["with"] < 0.05 + 0.001

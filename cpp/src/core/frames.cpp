@@ -134,19 +134,15 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
 
 void roi_height_variances(const float* range_variances_m2, const RigidTransform& T, RoiCloud& roi) {
     roi.height_variance.clear();
-    roi.along_variance.clear();
     if (!range_variances_m2) return;
     roi.height_variance.resize(roi.input_index.size());
-    roi.along_variance.resize(roi.input_index.size());
     for (std::size_t i = 0; i < roi.input_index.size(); ++i) {
         const auto& p = roi.cloud->points[i];
         const double dx = p.x - T.t[0], dy = p.y - T.t[1], dz = p.z - T.t[2];
         const double squared_range = dx * dx + dy * dy + dz * dz;
         const double uz2 = squared_range > 0.0 ? dz * dz / squared_range : 1.0;
         const double v = range_variances_m2[roi.input_index[i]];
-        const double known = std::isfinite(v) && v > 0.0 ? v : 0.0;
-        roi.height_variance[i] = static_cast<float>(uz2 * known);
-        roi.along_variance[i] = static_cast<float>((1.0 - uz2) * known);
+        roi.height_variance[i] = static_cast<float>(std::isfinite(v) && v > 0.0 ? uz2 * v : 0.0);
     }
 }
 

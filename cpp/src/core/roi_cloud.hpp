@@ -23,7 +23,6 @@ struct RoiCloud {
     std::vector<std::int32_t> input_order;  ///< the ROI points' positions in the order of their input rows
     std::int64_t finite = 0;                ///< input rows with finite x, y, z
     std::vector<float> height_variance;     ///< m² per ROI point (from its range variance); empty when unknown
-    std::vector<float> along_variance;      ///< m², the same range error's horizontal part; empty when unknown
 
     Eigen::Index size() const { return static_cast<Eigen::Index>(input_index.size()); }
     PointsView view() const {  // pcl::PointXYZ is x, y, z + one padding float
@@ -46,8 +45,7 @@ struct RoiCloud {
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out);
 
 /// Each ROI point's height variance from its input row's range variance (nullptr: clears them): an error along
-/// the line of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction —
-/// and horizontally by √(1 − u_z²) per metre, its along-ground variance.
+/// the line of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction.
 void roi_height_variances(const float* range_variances_m2, const RigidTransform& T, RoiCloud& roi);
 
 }  // namespace roadpreview

@@ -37,16 +37,15 @@ constexpr double kOutlierSigmas = 3.0;        // cells farther than this from th
 constexpr double kPoolBandM = 5.0;
 constexpr double kPoolMaxSpread = 4.0;
 constexpr std::size_t kMinPoolCells = 10;
-constexpr double kUnblurHalfWidthM = 0.4;  // the parabola that gives a profile's curvature: ±0.4 m, 9 bins of 0.1 m
 
 std::int64_t floor_index(double v, double cell) { return static_cast<std::int64_t>(std::floor(v / cell)); }
 
 std::int64_t wrap(std::int64_t i, std::int64_t n) { return ((i % n) + n) % n; }
 
 // One observation of a cell: height z with variance r, from points whose mean offset from the cell's centre is
-// (dx, dy) and mean along-ground variance `smear`; both take the height's weight.
-void fuse_cell(MapCell& c, double z, double r, double dx, double dy, double smear, std::int32_t points,
-               std::int32_t frame, const FusionConfig& cfg) {
+// (dx, dy); the offset takes the height's weight.
+void fuse_cell(MapCell& c, double z, double r, double dx, double dy, std::int32_t points, std::int32_t frame,
+               const FusionConfig& cfg) {
     double weight = 1.0;  // of the new observation
     if (c.observations == 0) {
         c.height = static_cast<float>(z);
@@ -64,7 +63,6 @@ void fuse_cell(MapCell& c, double z, double r, double dx, double dy, double smea
     }
     c.dx = static_cast<float>(c.dx + weight * (dx - c.dx));
     c.dy = static_cast<float>(c.dy + weight * (dy - c.dy));
-    c.smear = static_cast<float>(c.smear + weight * (smear - c.smear));
     ++c.observations;
     c.points += points;
     c.last_update = frame;
@@ -75,29 +73,6 @@ void fuse_cell(MapCell& c, double z, double r, double dx, double dy, double smea
 double spread_for_variance(double v, std::int32_t count) {
     if (count >= 3) return std::sqrt(v * count / kMedianVarianceFactor);
     return std::sqrt(count == 2 ? 2.0 * v : v);
-}
-
-// Undoes, to first order, the blur of profile heights smeared along the road with variance smear[k] (m²): a
-// Gaussian blur of variance σ² turns z into z + ½σ²z'' + O(σ⁴), so z − ½σ²z'' restores it (method.md §7). z'' is
-// that of the least-squares parabola through the bins within ±kUnblurHalfWidthM (a Savitzky–Golay filter: the
-// bins' noise would swamp a plain second difference); a bin without that many finite neighbours keeps its height.
-void unblur(std::vector<double>& z, const std::vector<double>& smear, double ds, std::vector<double>& out) {
-    const auto m = static_cast<std::ptrdiff_t>(std::max(1L, std::lround(kUnblurHalfWidthM / ds)));
-    const double centre = static_cast<double>(m * (m + 1)) / 3.0;  // the mean of i² over the window
-    double norm = 0.0;
-    for (std::ptrdiff_t i = -m; i <= m; ++i) norm += std::pow(static_cast<double>(i * i) - centre, 2);
-    out.assign(z.begin(), z.end());
-    const auto n = static_cast<std::ptrdiff_t>(z.size());
-    for (std::ptrdiff_t k = m; k + m < n; ++k) {
-        const double variance = smear[static_cast<std::size_t>(k)];
-        if (!(variance > 0.0)) continue;
-        double c = 0.0;
-        for (std::ptrdiff_t i = -m; i <= m; ++i)
-            c += (static_cast<double>(i * i) - centre) * z[static_cast<std::size_t>(k + i)];
-        const double curvature = 2.0 * c / norm / (ds * ds);  // NaN when a bin in the window is
-        if (std::isfinite(curvature)) out[static_cast<std::size_t>(k)] -= 0.5 * variance * curvature;
-    }
-    std::copy(out.begin(), out.end(), z.begin());
 }
 
 }  // namespace
@@ -224,7 +199,7 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
 // A frame touches at most one cell per point: buffers that large grow only with a larger frame than any before.
 void TemporalFusion::reserve_cells(std::size_t cells) {
     touched_.reserve(cells);
-    for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &smears_, &deviations_}) v->reserve(cells);
+    for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
     offsets_.reserve(cells);
     counts_.reserve(cells);
     bands_.reserve(cells);
@@ -242,7 +217,7 @@ void TemporalFusion::link(std::int64_t slot, std::size_t i) {
 }
 
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-                          const std::vector<float>* height_variances, const std::vector<float>* along_variances) {
+                          const std::vector<float>* height_variances) {
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
     std::vector<std::int64_t>& touched = touched_;
@@ -251,7 +226,6 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     z_.resize(static_cast<std::size_t>(points.rows()));
     xy_.resize(static_cast<std::size_t>(points.rows()));
     variance_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
-    along_.assign(static_cast<std::size_t>(points.rows()), 0.0f);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {  // per-slot linked lists: linear, no sort
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [x, y, z] = L.apply(points(i, 0), points(i, 1), points(i, 2));
@@ -262,9 +236,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         xy_[static_cast<std::size_t>(i)] = xy;
         z_[static_cast<std::size_t>(i)] = z;
         if (height_variances) variance_[static_cast<std::size_t>(i)] = (*height_variances)[static_cast<std::size_t>(i)];
-        if (along_variances) along_[static_cast<std::size_t>(i)] = (*along_variances)[static_cast<std::size_t>(i)];
     }
-    // Per cell: the median of its points, their count, spread and mean along-ground variance, and its range band.
+    // Per cell: the median of its points, their count and spread, and its range band.
     const std::size_t cells = touched.size();
     std::vector<double>&medians = medians_, &spreads = spreads_, &cell_z = cell_z_;
     medians.resize(cells);
@@ -272,21 +245,18 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     offsets_.resize(cells);
     counts_.resize(cells);
     bands_.resize(cells);
-    smears_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
-        double variance_sum = 0.0, along_sum = 0.0, x_sum = 0.0, y_sum = 0.0;
+        double variance_sum = 0.0, x_sum = 0.0, y_sum = 0.0;
         auto& head = head_[static_cast<std::size_t>(touched[c])];
         for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) {
             cell_z.push_back(z_[static_cast<std::size_t>(i)]);
             variance_sum += variance_[static_cast<std::size_t>(i)];
-            along_sum += along_[static_cast<std::size_t>(i)];
             x_sum += xy_[static_cast<std::size_t>(i)][0];
             y_sum += xy_[static_cast<std::size_t>(i)][1];
         }
         head = -1;
         counts_[c] = static_cast<std::int32_t>(cell_z.size());
-        smears_[c] = along_sum / counts_[c];
         spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts_[c])
                                         : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
@@ -311,8 +281,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     }
     if (cfg_.fusion.align) align(touched, variances_, medians);
     for (std::size_t c = 0; c < cells; ++c)
-        fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], offsets_[c][0], offsets_[c][1], smears_[c],
-                  counts_[c], frame_, cfg_.fusion);
+        fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], offsets_[c][0], offsets_[c][1], counts_[c], frame_,
+                  cfg_.fusion);
     ++fused_;
 }
 
@@ -340,8 +310,7 @@ std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) 
         }
         head = -1;
         const auto [cx, cy] = map_.centre(k);
-        fuse_cell(map_.cell(k), z / weight, 1.0 / weight, x / weight - cx, y / weight - cy, 0.0, count, frame_,
-                  cfg_.fusion);
+        fuse_cell(map_.cell(k), z / weight, 1.0 / weight, x / weight - cx, y / weight - cy, count, frame_, cfg_.fusion);
     }
     return touched.size();
 }
@@ -437,14 +406,13 @@ void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<
     p.count.assign(bins, 0);
     p.spread.assign(bins, kNaN);
     p.blocked.assign(bins, 0);
-    bin_smear_.assign(bins, 0.0);
     if (blocked) std::copy(blocked->begin(), blocked->end(), p.blocked.begin() + static_cast<std::ptrdiff_t>(behind));
     for (std::size_t k = 0; k < bins; ++k) {
         // (k + ½ − B)·ds, as method.md writes it (and the reference computes it): a pose half a cell off the
         // grid then puts both on the same side of every cell boundary.
         const double s = (static_cast<double>(k) + 0.5 - static_cast<double>(behind)) * pc.ds_m;
         p.s[k] = s;
-        double sum = 0.0, variance = 0.0, smear = 0.0;
+        double sum = 0.0, variance = 0.0;
         int valid = 0;
         bool now = false;
         for (int lane = 0; lane < lanes; ++lane) {  // lanes across the tire, one cell apart
@@ -459,7 +427,7 @@ void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<
             }
             const MapCell* cell = map_.at(pose_.x_m + c * x - sn * y, pose_.y_m + sn * x + c * y);
             if (!cell || cell->observations == 0) continue;
-            sum += cell->height, variance += cell->variance, smear += cell->smear, ++valid;
+            sum += cell->height, variance += cell->variance, ++valid;
             p.count[k] += cell->points;
             now = now || cell->last_update == frame_;
         }
@@ -467,11 +435,9 @@ void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<
         if (k >= behind) ahead += 1, ahead_now += now ? 1 : 0;
         if (p.blocked[k]) continue;  // an obstacle's points are not road
         p.z[k] = sum / valid;
-        bin_smear_[k] = smear / valid;
         p.spread[k] = spread_for_variance(variance / (valid * valid), p.count[k]);
     }
     fill_gaps(p.z, pc.ds_m, pc.max_gap_m, &p.blocked);
-    unblur(p.z, bin_smear_, pc.ds_m, unblurred_);
 }
 
 void TemporalFusion::profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status,

@@ -254,8 +254,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
     // Stopped: the same view again and again is not new evidence, so the map holds.
     if (fusion && r.plane && r.path.status != PathStatus::Stopped)
-        fusion->fuse(roi.view(), ground.mask, L, height_variances,
-                     roi.along_variance.empty() ? nullptr : &roi.along_variance);
+        fusion->fuse(roi.view(), ground.mask, L, height_variances);
     r.timing_ms.fusion += ms_since(mark);
     r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
     if (r.status != FrameStatus::Ok) {

@@ -20,7 +20,7 @@ from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
-from .stereo import along_variances, height_variances
+from .stereo import height_variances
 from .support import pooled_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
@@ -53,35 +53,18 @@ class Cell:
     observations: int
     points: int
     last_update: int
-    smear: float = 0.0  #: m², along-ground variance of its points, averaged like the height
 
 
-def fuse_cell(cell: Optional[Cell], z: float, r: float, points: int, frame: int, cfg: Config,
-              smear: float = 0.0) -> Cell:
+def fuse_cell(cell: Optional[Cell], z: float, r: float, points: int, frame: int, cfg: Config) -> Cell:
     if cell is None:
-        return Cell(z, r, 1, points, frame, smear)
+        return Cell(z, r, 1, points, frame)
     if cfg.fusion.method == "ema":
-        a = weight = cfg.fusion.alpha
+        a = cfg.fusion.alpha
         height, variance = a * z + (1 - a) * cell.height, a * a * r + (1 - a) ** 2 * cell.variance
     else:  # kalman
-        weight = cell.variance / (cell.variance + r)
-        height, variance = cell.height + weight * (z - cell.height), cell.variance * r / (cell.variance + r)
-    return Cell(height, variance, cell.observations + 1, cell.points + points, frame,
-                cell.smear + weight * (smear - cell.smear))
-
-
-def unblur(z: np.ndarray, smear: np.ndarray, ds: float) -> np.ndarray:
-    """z − ½·smear·z'' (method.md §7): the first-order inverse of a blur along the profile of variance smear, with
-    z'' the second derivative of the parabola fitted to the bins within ±0.4 m; bins without smear or without a
-    full window of finite heights are kept."""
-    half = max(1, round(0.4 / ds))
-    offsets = np.arange(-half, half + 1) * ds
-    out = z.copy()
-    for k in range(half, len(z) - half):
-        window = z[k - half:k + half + 1]
-        if smear[k] > 0 and np.isfinite(window).all():
-            out[k] = z[k] - 0.5 * smear[k] * 2.0 * np.polyfit(offsets, window, 2)[0]
-    return out
+        gain = cell.variance / (cell.variance + r)
+        height, variance = cell.height + gain * (z - cell.height), cell.variance * r / (cell.variance + r)
+    return Cell(height, variance, cell.observations + 1, cell.points + points, frame)
 
 
 def spread_for_variance(v: float, count: int) -> float:
@@ -149,10 +132,9 @@ class FusedMap:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x0 + c * xy[:, 0] - s * xy[:, 1], y0 + s * xy[:, 0] + c * xy[:, 1]])
 
-    def fuse(self, levelled_ground: np.ndarray, variances=None, along=None):
+    def fuse(self, levelled_ground: np.ndarray, variances=None):
         """Median per cell of the frame's levelled ground points, fused into the map. The points' height
-        ``variances`` (m²), when given, raise each cell's spread to the root of their mean (method.md §12); their
-        ``along``-ground variances (m²) give each cell its smear, their mean."""
+        ``variances`` (m²), when given, raise each cell's spread to the root of their mean (method.md §12)."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
@@ -163,8 +145,6 @@ class FusedMap:
             mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
         medians = np.array([np.median(z) for z in groups])
-        smears = np.zeros(len(counts)) if along is None else \
-            np.bincount(inverse.ravel(), weights=along, minlength=len(counts)) / counts
         # As the roughness stage rates a bin's median, with the pooled variance of a point in the cell's 5 m band of
         # range for single points, and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
         distance = np.hypot(*((keys + 0.5) * cell - np.array(self.pose[:2])).T)
@@ -176,9 +156,8 @@ class FusedMap:
         variances = np.maximum(variances, _MIN_VARIANCE)
         if self.cfg.fusion.align:
             medians, variances = self.align(keys, medians, variances)
-        for key, z, m, r, smear in zip(map(tuple, keys), groups, medians, variances, smears):
-            self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg,
-                                        float(smear))
+        for key, z, m, r in zip(map(tuple, keys), groups, medians, variances):
+            self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg)
         self.fused += 1
 
     def align(self, keys: np.ndarray, medians: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -230,7 +209,7 @@ class FusedMap:
         lanes = max(1, round(tire / cell))
         offsets = [(lane + 0.5) * tire / lanes - tire / 2 for lane in range(lanes)]
         s = (np.arange(bins) + 0.5 - behind) * ds
-        z, spread, smear = np.full(bins, np.nan), np.full(bins, np.nan), np.zeros(bins)
+        z, spread = np.full(bins, np.nan), np.full(bins, np.nan)
         count = np.zeros(bins, dtype=np.int64)
         flags = np.zeros(bins, dtype=bool)
         if blocked is not None:
@@ -248,9 +227,8 @@ class FusedMap:
             if flags[k]:
                 continue
             z[k] = sum(c.height for c in found) / len(found)
-            smear[k] = sum(c.smear for c in found) / len(found)
             spread[k] = spread_for_variance(sum(c.variance for c in found) / len(found) ** 2, count[k])
-        z = unblur(fill_gaps(z, ds, cfg.profile.max_gap_m, flags), smear, ds)
+        z = fill_gaps(z, ds, cfg.profile.max_gap_m, flags)
         roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
         roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg)
         return Profile(s=s, z=z, count=count, spread=spread, roughness=roughness, blocked=flags), ahead, ahead_now
@@ -284,17 +262,14 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, finite = to_base_frame(points, cfg)
-    variances = along = None
-    if range_variances is not None:
-        variances = height_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
-        along = along_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
+    variances = None if range_variances is None else \
+        height_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
-        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz,
-                   None if variances is None else variances[ground], None if along is None else along[ground])
+        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz, None if variances is None else variances[ground])
     status["frames"] = state.fused
     # A map that holds data stands in for a frame without ground: the profiles are read from it.
     reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \

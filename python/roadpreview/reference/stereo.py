@@ -70,23 +70,10 @@ def disparity_to_points(disparity, first_row: int, calib: dict, stereo: StereoCo
 def height_variances(base_xyz, range_variances, cfg: Config) -> np.ndarray:
     """Variance of each base-frame point's height from its range variance: a range error moves the point along its
     line of sight from the sensor, u_z metres up per metre."""
-    uz2, v = _vertical_share(base_xyz, range_variances, cfg)
-    return uz2 * v
-
-
-def along_variances(base_xyz, range_variances, cfg: Config) -> np.ndarray:
-    """Variance of each base-frame point's horizontal position from its range variance (the rest of the move along
-    its line of sight): how far along the road the point is smeared."""
-    uz2, v = _vertical_share(base_xyz, range_variances, cfg)
-    return (1.0 - uz2) * v
-
-
-def _vertical_share(base_xyz, range_variances, cfg: Config) -> tuple[np.ndarray, np.ndarray]:
-    """(u_z² of each point's line of sight from the sensor, its range variance, 0 where unknown)."""
     origin = np.array([0.0, 0.0, cfg.sensor_height or 0.0]) if cfg.extrinsics is None else \
         np.array([cfg.extrinsics.x_m, cfg.extrinsics.y_m, cfg.extrinsics.z_m])
     ray = np.asarray(base_xyz, float)[:, :3] - origin
     squared = np.einsum("ij,ij->i", ray, ray)
     uz2 = np.divide(ray[:, 2] ** 2, squared, out=np.ones(len(ray)), where=squared > 0)
     v = np.asarray(range_variances, float)
-    return uz2, np.where(np.isfinite(v) & (v > 0), v, 0.0)
+    return np.where(np.isfinite(v) & (v > 0), uz2 * v, 0.0)

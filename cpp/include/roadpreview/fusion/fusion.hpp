@@ -54,10 +54,6 @@ struct MapCell {
     /// fused with the same weights. A cell's points are rarely spread evenly (a LiDAR ring crosses it at one
     /// place), and on a slope its height belongs there, not at the centre (docs/method.md §7).
     float dx = 0.0f, dy = 0.0f;
-    /// m², the along-ground variance of the points it was fused from (their range error's horizontal part), fused
-    /// with the same weights: how far along the rays the height is blurred; the profiles undo that blur to first
-    /// order (docs/method.md §7). 0 for points without range variances (LiDAR) and for samples.
-    float smear = 0.0f;
     std::int32_t observations = 0; ///< frames fused into the cell; 0 = empty
     std::int32_t points = 0;       ///< points fused into the cell
     std::int32_t last_update = 0;  ///< frame number of the last update (age = current frame − this)
@@ -116,11 +112,9 @@ public:
     /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
     /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
-    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread);
-    /// `along_variances` (m² per point, the same range errors' horizontal part) give the cells their smear.
+    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread).
     void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-              const std::vector<float>* height_variances = nullptr,
-              const std::vector<float>* along_variances = nullptr);
+              const std::vector<float>* height_variances = nullptr);
     /// Fuses height samples into the map: per cell the inverse-variance mean of its samples and that mean's
     /// variance, fused like a frame's cell (not aligned: the samples carry their own datum). Samples outside the
     /// window are skipped; returns the cells updated.
@@ -163,18 +157,17 @@ private:
     bool map_has_excess_ = false;  // the map's variances carry an excess disagreement (an alignment has run)
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
-    std::vector<float> variance_, along_;  // this frame's point height and along-ground variances (reused)
+    std::vector<float> variance_;  // this frame's point height variances, by point (reused)
     std::vector<std::array<double, 2>> xy_;  // this frame's points in the odometry frame, by point (reused)
     // Per cell of the frame (reused): its slot, median, spread, count, variance, and the heights of one cell.
     std::vector<std::int64_t> touched_;
-    std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_, smears_;
+    std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_;
     std::vector<std::array<double, 2>> offsets_;  // each touched cell's points' mean offset from its centre
     std::vector<std::int32_t> counts_, bands_;
     PoolBuffers pool_buffers_;
     std::vector<Eigen::Vector3d> align_v_;  // align's scratch
     std::vector<SharedCell> shared_;
     std::vector<double> deviations_;
-    mutable std::vector<double> bin_smear_, unblurred_;  // sample()'s, per bin of a profile (reused)
 };
 
 }  // namespace roadpreview
