@@ -49,6 +49,13 @@ void write_string(JsonWriter& w, const std::string& text, const char* what) {
     throw std::runtime_error(std::string("output line: the ") + what + " is not UTF-8 text: " + shown);
 }
 
+void write_string_or_null(JsonWriter& w, const std::string& text, const char* what) {
+    if (text.empty())
+        w.Null();
+    else
+        write_string(w, text, what);
+}
+
 }  // namespace detail
 
 namespace {
@@ -146,11 +153,7 @@ void write_mounting(JsonWriter& w, const Result& r) {
     w.Key("extrinsics"), w.StartArray();
     for (const double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad}) write_number(w, v);
     w.EndArray();
-    w.Key("source");
-    if (r.mounting_source.empty())
-        w.Null();
-    else
-        write_string(w, r.mounting_source, "mounting source");
+    w.Key("source"), detail::write_string_or_null(w, r.mounting_source, "mounting source");
     if (r.plane) {
         const MountingCheck c = check_mounting(*r.plane);
         w.Key("ground_offset"), write_number(w, c.offset_m);
@@ -174,11 +177,7 @@ void write_fusion(JsonWriter& w, const std::optional<FusionStatus>& f, double ti
     w.Key("frames"), w.Int64(f->frames);
     w.Key("coverage"), write_number(w, f->coverage);
     w.Key("frame_coverage"), write_number(w, f->frame_coverage);
-    w.Key("reset");
-    if (f->reset.empty())
-        w.Null();
-    else
-        write_string(w, f->reset, "fusion reset");
+    w.Key("reset"), detail::write_string_or_null(w, f->reset, "fusion reset");
     w.Key("pose"), w.StartArray();
     for (const double v : {f->pose.x_m, f->pose.y_m, f->pose.yaw_rad}) write_number(w, v);
     w.EndArray();

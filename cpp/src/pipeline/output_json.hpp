@@ -24,6 +24,8 @@ void write_optional_number(JsonWriter& w, const std::optional<double>& v);
 void write_numbers(JsonWriter& w, const std::vector<double>& v);
 /// Throws std::runtime_error naming `what` when the text is not UTF-8.
 void write_string(JsonWriter& w, const std::string& text, const char* what);
+/// null for empty text, else write_string.
+void write_string_or_null(JsonWriter& w, const std::string& text, const char* what);
 /// The "profiles" and "roughness" fields: both wheels' profiles, then their and the vehicle's roughness.
 void write_profiles_and_roughness(JsonWriter& w, const Profile& left, const Profile& right, const Roughness& vehicle);
 

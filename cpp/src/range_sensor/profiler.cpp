@@ -192,11 +192,7 @@ std::string range_window_to_json(const RangeWindow& w, const std::vector<RangeSe
     out.Key("mean_speed"), write_number(out, w.mean_speed_mps);
     out.EndObject();
     detail::write_profiles_and_roughness(out, w.left, w.right, w.vehicle);
-    out.Key("reason");
-    if (w.reason.empty())
-        out.Null();
-    else
-        detail::write_string(out, w.reason, "reason");
+    out.Key("reason"), detail::write_string_or_null(out, w.reason, "reason");
     out.Key("samples"), write_samples(out, w.samples, layout);
     out.EndObject();
     return std::string(text.GetString(), text.GetSize());
