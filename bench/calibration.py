@@ -12,8 +12,13 @@ Real: the six KITTI seq 00 frames (three in tests/data/semantickitti, three in t
 ground-truth poses, and the bundled OS1-128 recording with its poses: per-beam offsets, and the vehicle class of
 every frame before and after (single frame and fused).
 
-Usage: ``python bench/calibration.py [--quick] [--frames N] [--cell M]`` (default 20 frames, a 19 m drive, and the
-calibration's default 0.2 m cells); prints Markdown, progress on stderr.
+Consistency and transfer on KITTI (both methods): the offsets calibrated from frames 0–2 and from frames 3–5
+compared beam by beam, and the vehicle class, G_d(n0) and IRI of every frame and of the SPVNAS frame (another
+street) before and after a calibration that did not see it (surface method: from the other half of seq 00; the
+SPVNAS frame: from all six).
+
+Usage: ``python bench/calibration.py [--quick] [--frames N] [--cell M] [--method motion|surface]`` (default 20
+frames, a 19 m drive, the calibration's default 0.2 m cells, method motion); prints Markdown, progress on stderr.
 """
 
 from __future__ import annotations
@@ -70,7 +75,7 @@ def gauge_free_error(c, truth_deg: np.ndarray, reach: np.ndarray) -> np.ndarray:
     return np.asarray(c.elevation_offset_deg)[d] - (t - basis @ np.linalg.lstsq(basis, t, rcond=None)[0])
 
 
-def simulated(name: str, errors: dict, frames: int, quick: bool, cell_m: float) -> list:
+def simulated(name: str, errors: dict, frames: int, quick: bool, cell_m: float, method: str) -> list:
     lidar = sim.hdl_64e(height_m=SENSOR_HEIGHT_M, calibration_seed=80, columns=1024 if quick else 2083, **errors)
     scene = sim.Scene(sim.Road.iso8608("B", seed=80), ())
     start = time.perf_counter()
@@ -81,7 +86,7 @@ def simulated(name: str, errors: dict, frames: int, quick: bool, cell_m: float) 
     cfg = rp.Config(extrinsics=lidar.extrinsics())
     start = time.perf_counter()
     c = rp.calibrate_beams([(f.points, beams) for f in drive], poses=poses, config=cfg, beam_count=lidar.beams,
-                           cell_m=cell_m)
+                           cell_m=cell_m, method=method)
     seconds = time.perf_counter() - start
     # reach per beam (the gauge) as the estimator saw it: level sensor, flat road
     elevations = np.radians(np.asarray(lidar.elevations_deg))
@@ -129,17 +134,18 @@ def os1_frames():
     return frames, [(m[0, 3], m[1, 3], float(np.arctan2(m[1, 0], m[0, 0]))) for m in rows]
 
 
-def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, cell_m: float,
+def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, cell_m: float, method: str,
          **open_kwargs) -> tuple[list, list]:
     cfg = rp.Config(sensor_height=height)
     source = rp.io.open(open_kwargs.pop("path")) if "path" in open_kwargs else None
     if source is not None:
         numbered = [(f.points.copy(), np.asarray(f.beams).copy()) for f in source]
-        c = rp.calibrate_beams(numbered, poses=poses, config=cfg, beam_count=source.info["beams"], cell_m=cell_m)
+        c = rp.calibrate_beams(numbered, poses=poses, config=cfg, beam_count=source.info["beams"], cell_m=cell_m,
+                               method=method)
         c.sensor_model, c.serial = source.info["sensor_model"], source.info["serial"]
         corrected = [c.apply(p, b) for p, b in numbered]
     else:
-        c = rp.calibrate_beams(frames, poses=poses, config=cfg, cell_m=cell_m)
+        c = rp.calibrate_beams(frames, poses=poses, config=cfg, cell_m=cell_m, method=method)
         path = tmp / f"{name}.yaml"
         c.save(str(path))
         corrected = [f.points.copy() for f in rp.io.open([str(p) for p in open_kwargs["files"]],
@@ -158,11 +164,68 @@ def real(name: str, frames, poses, height: float, speed_mps: float, tmp: Path, c
     return summary, classes
 
 
+MOTIONS = ((5.0, 0.0), (8.0, 0.2))  # (m/s, rad/s): straight, and a 40 m curve to the left
+
+
+def roughness_summary(points, cfg: rp.Config) -> str:
+    """Per motion: left, right and vehicle class ('·' declined), the wheels' G_d(n0) (10⁻⁶ m³) and vehicle IRI."""
+    out = []
+    for speed, yaw_rate in MOTIONS:
+        r = rp.Estimator(cfg).process(points, speed, yaw_rate)
+        wheels = (r.left.roughness, r.right.roughness)
+        gd = "/".join(f"{w.gd_n0 * 1e6:.0f}" if w.gd_n0 else "·" for w in wheels)
+        classes = "".join(c or "·" for c in (*(w.iso_class for w in wheels), r.vehicle.iso_class))
+        iri = r.vehicle.iri.value if r.vehicle.iri else None
+        out.append(f"{classes} ({gd}, IRI {f'{iri:.1f}' if iri else '·'})")
+    return "; ".join(out)
+
+
+def consistency(frames, poses, files) -> None:
+    """KITTI: both methods' offsets from frames 0–2 against those from 3–5; classes before and after calibrations
+    that did not see the frame (surface method)."""
+    cfg = rp.Config(sensor_height=KITTI_HEIGHT_M)
+    halves = ((0, 1, 2), (3, 4, 5))
+    rows = []
+    for method in ("motion", "surface"):
+        start = time.perf_counter()
+        cals = [rp.calibrate_beams([frames[i] for i in h], poses=[poses[i] for i in h], config=cfg, method=method)
+                for h in halves]
+        seconds = (time.perf_counter() - start) / 2
+        both = np.asarray(cals[0].determined) & np.asarray(cals[1].determined)
+        a, b = (np.asarray(c.elevation_offset_deg)[both] for c in cals)
+        rms = [f"{np.sqrt(np.mean(v ** 2)):.4f}" for v in (a, b)]
+        rows.append([method, f"{int(both.sum())}", f"{np.corrcoef(a, b)[0, 1]:.2f}",
+                     f"{np.sqrt(np.mean((a - b) ** 2)):.4f}", " / ".join(rms),
+                     f"{np.nanmedian(np.asarray(cals[0].elevation_sigma_deg)):.4f}", f"{seconds:.1f}"])
+    print("## KITTI: the offsets of frames 0–2 against those of frames 3–5\n")
+    print(md_table(["method", "beams in both", "correlation", "RMS difference °", "RMS of offsets °",
+                    "median σ °", "calibration s"], rows) + "\n")
+    import tempfile
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = {}
+        for name, idx in (("0–2", halves[0]), ("3–5", halves[1]), ("0–5", range(6))):
+            paths[name] = Path(tmp) / f"{name}.yaml"
+            rp.calibrate_beams([frames[i] for i in idx], method="surface", config=cfg).save(str(paths[name]))
+        spvnas = REPO / "tests" / "data" / "semantickitti" / "spvnas_000000.bin"
+        targets = [(f"seq 00 frame {k}", files[k], "3–5" if k < 3 else "0–2") for k in range(6)]
+        targets.append(("SPVNAS frame (another street)", spvnas, "0–5"))
+        for label, path, source in targets:
+            before = roughness_summary(rp.io.read(path), cfg)
+            after = roughness_summary(next(iter(rp.io.open(path, beam_calibration=paths[source]))).points, cfg)
+            rows.append([label, source, before, after])
+    print("## KITTI: classes (left, right, vehicle), G_d(n0) ×10⁻⁶ m³ and vehicle IRI m/km before and after a "
+          "surface calibration that did not see the frame; 5 m/s straight; 8 m/s, 0.2 rad/s\n")
+    print(md_table(["frame", "calibrated from seq 00 frames", "before", "after"], rows) + "\n")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a short, coarse drive (smoke test)")
     parser.add_argument("--frames", type=int, default=20, help="frames of each simulated drive")
     parser.add_argument("--cell", type=float, default=0.2, help="road cell of the calibration, m (rp.calibrate_beams)")
+    parser.add_argument("--method", choices=("motion", "surface"), default="motion",
+                        help="calibration method (rp.calibrate_beams) of the simulated and real tables")
     parser.add_argument("--shared", type=Path, default=SHARED, help="the shared data folder (KITTI frames 3-5, poses)")
     args = parser.parse_args(argv)
     start = time.perf_counter()
@@ -171,11 +234,12 @@ def main(argv=None) -> int:
     for name, errors in (("beams off by 0.03° (1σ)", {"elevation_error_deg": 0.03}),
                          ("uniform offsets up to 0.1°", {"beam_errors_deg": tuple(
                              np.random.default_rng(5).uniform(-0.1, 0.1, 64))})):
-        rows += simulated(name, errors, frames, args.quick, args.cell)
+        rows += simulated(name, errors, frames, args.quick, args.cell, args.method)
     print("# roadpreview beam calibration benchmark\n")
     print(f"- load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; Python {platform.python_version()}, "
           f"roadpreview {rp.__version__}\n")
-    print(f"## Simulated HDL-64E, class B road, {frames} frames at {SPEED_MPS:g} m/s, cells of {args.cell:g} m\n")
+    print(f"## Simulated HDL-64E, class B road, {frames} frames at {SPEED_MPS:g} m/s, method {args.method}, "
+          f"cells of {args.cell:g} m\n")
     print(md_table(["beams", "calibration", "determined", "max |error| °", "RMS error °", "within 0.005°",
                     "median σ °",
                     "vehicle class per frame", "fused class per frame", "calibration s"], rows) + "\n")
@@ -187,11 +251,12 @@ def main(argv=None) -> int:
             if kitti is not None:
                 files = kitti_files(args.shared)
                 s, c = real("KITTI seq 00, frames 0–5", kitti, kitti_poses, KITTI_HEIGHT_M, 8.6, Path(tmp), args.cell,
-                            files=files)
+                            args.method, files=files)
                 summaries.append(s)
                 classes += c
             os1, os1_poses = os1_frames()
-            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, 2.5, Path(tmp), args.cell, path=OS1_PCAP)
+            s, c = real("OS1-128, 3 frames", os1, os1_poses, OS1_HEIGHT_M, 2.5, Path(tmp), args.cell, args.method,
+                        path=OS1_PCAP)
             summaries.append(s)
             classes += c
         print("## Real recordings: per-beam offsets\n")
@@ -199,6 +264,9 @@ def main(argv=None) -> int:
                         "max |offset| °", "median σ °"], summaries) + "\n")
         print("## Real recordings: vehicle class per frame, before and after calibration\n")
         print(md_table(["recording", "calibration", "single frame", "fused (kalman)"], classes) + "\n")
+        kitti, kitti_poses = kitti_frames(args.shared)
+        if kitti is not None:
+            consistency(kitti, kitti_poses, kitti_files(args.shared))
     log(f"done in {time.perf_counter() - start:.0f} s")
     return 0
 

@@ -50,7 +50,8 @@ struct RunOptions {
     std::string poses_file;
     int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
     double cell = 0.2;    // calibrate: road cell, m
-    double max_sigma = 0.01;  // calibrate: deg
+    double max_sigma = 0.0;   // calibrate: deg (0: the method's default)
+    std::string calibration_method = "motion";  // calibrate: motion | surface
     std::vector<double> segment_lengths_m;  // --segments
     std::string segments_file;              // --segments-csv
     std::string profile_dir;                // --export-profile
@@ -407,18 +408,47 @@ int run(const RunOptions& o, const CLI::App& app) {
     return 0;
 }
 
-// Frames of the drive into the calibrator: numbered points at once, files (no beam numbers) at the end, by the
-// beam centres their elevations show. Poses: the poses file's, else the motion integrated over the time since
-// the previous frame (timestamps, else 1/frame rate).
+// One of the two estimators of method.md §8: `motion` compares the road cells that different beams see as the
+// vehicle moves (needs the poses); `surface` compares every frame's beams with its smooth road (needs no motion).
+class Calibration {
+public:
+    Calibration(const RunOptions& o, const rp::Config& cfg, int beam_count) {
+        if (o.calibration_method == "surface") {
+            rp::SurfaceCalibrationOptions options;
+            if (o.max_sigma > 0) options.max_sigma_deg = o.max_sigma;
+            surface_.emplace(cfg, beam_count, options);
+        } else {
+            rp::CalibrationOptions options;
+            options.cell_m = o.cell;
+            if (o.max_sigma > 0) options.max_sigma_deg = o.max_sigma;
+            motion_.emplace(cfg, beam_count, options);
+        }
+    }
+    void add_frame(rp::PointsView points, const std::vector<std::int32_t>& beams, const rp::Pose2& pose) {
+        if (surface_) surface_->add_frame(points, beams);
+        else motion_->add_frame(points, beams, pose);
+    }
+    rp::BeamCalibration solve() const { return surface_ ? surface_->solve() : motion_->solve(); }
+
+private:
+    std::optional<rp::BeamCalibrator> motion_;
+    std::optional<rp::SurfaceCalibrator> surface_;
+};
+
+// Frames of the drive into the calibrator: numbered points at once, files (no beam numbers) at the end, by their
+// scan order or the beam centres their elevations show. Poses (method motion): the poses file's, else the motion
+// integrated over the time since the previous frame (timestamps, else 1/frame rate).
 int calibrate(const RunOptions& o, const CLI::App& app) {
-    if (!app.count("--speed") && o.motion_file.empty() && o.poses_file.empty())
-        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE");
+    const bool by_motion = o.calibration_method != "surface";
+    if (by_motion && !app.count("--speed") && o.motion_file.empty() && o.poses_file.empty())
+        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE "
+                                    "(or --method surface, which needs none)");
     if (o.output.empty()) throw std::invalid_argument("give the beams file to write: -o beams.yaml");
-    rp::DriveFrames frames(rp::open_frames(o.inputs, o.source), build_config(o, app), drive_options(o, app));
-    rp::CalibrationOptions options;
-    options.cell_m = o.cell;
-    options.max_sigma_deg = o.max_sigma;
-    std::optional<rp::BeamCalibrator> calibrator;
+    rp::DriveOptions drive = drive_options(o, app);
+    if (!by_motion && !drive.speed_mps && drive.motion_file.empty() && drive.poses_file.empty())
+        drive.speed_mps = 0.0;  // the surface method reads no motion
+    rp::DriveFrames frames(rp::open_frames(o.inputs, o.source), build_config(o, app), drive);
+    std::optional<Calibration> calibrator;
     std::vector<rp::Frame> unnumbered;
     std::vector<rp::Pose2> unnumbered_poses;
     std::optional<rp::Pose2> pose;
@@ -431,17 +461,22 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
         const rp::Motion& m = in->motion;
         pose = in->at.pose ? *in->at.pose : pose ? rp::integrate_motion(*pose, m.speed_mps, m.yaw_rate_rps, dt)
                                                  : rp::Pose2{};
-        if (!o.quiet)
-            std::fprintf(stderr, "[%lld] %s: pose x %.2f m, y %.2f m, yaw %.4f rad\n",
-                         static_cast<long long>(in->index + 1), rp::frame_label(in->frame).c_str(), pose->x_m,
-                         pose->y_m, pose->yaw_rad);
+        if (!o.quiet) {
+            if (by_motion)
+                std::fprintf(stderr, "[%lld] %s: pose x %.2f m, y %.2f m, yaw %.4f rad\n",
+                             static_cast<long long>(in->index + 1), rp::frame_label(in->frame).c_str(), pose->x_m,
+                             pose->y_m, pose->yaw_rad);
+            else
+                std::fprintf(stderr, "[%lld] %s\n", static_cast<long long>(in->index + 1),
+                             rp::frame_label(in->frame).c_str());
+        }
         if (in->frame.beams.empty()) {
             unnumbered.push_back(std::move(in->frame));
             unnumbered_poses.push_back(*pose);
             continue;
         }
         // Made again when a later frame gives the mounting: the frames before were compared in the wrong frame.
-        if (!calibrator || in->mounting_estimated) calibrator.emplace(frames.config(), frames.info().beams, options);
+        if (!calibrator || in->mounting_estimated) calibrator.emplace(o, frames.config(), frames.info().beams);
         calibrator->add_frame(rp::points_view(in->frame.points.data(), in->frame.points.rows(), 4), in->frame.beams,
                               *pose);
     }
@@ -450,9 +485,10 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
         std::vector<rp::PointsView> views;
         for (const rp::Frame& f : unnumbered) views.push_back(rp::points_view(f.points.data(), f.points.rows(), 4));
         rp::find_beam_centres(views, o.beams, indexing);
-        calibrator.emplace(frames.config(), o.beams, options);
+        calibrator.emplace(o, frames.config(), o.beams);
         for (std::size_t k = 0; k < views.size(); ++k)
-            calibrator->add_frame(views[k], rp::beams_by_elevation(views[k], indexing), unnumbered_poses[k]);
+            calibrator->add_frame(views[k], rp::beams_of_points(views[k], indexing, rp::frame_label(unnumbered[k])),
+                                  unnumbered_poses[k]);
     }
     if (!calibrator) throw rp::CalibrationError(o.inputs[0] + ": no frames to calibrate from");
     rp::BeamCalibration c;
@@ -465,7 +501,7 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     c.sensor_model = info.format == "files" ? o.source.sensor_model : info.sensor_model;
     c.serial = info.serial;
     if (!unnumbered.empty()) {
-        c.index = rp::BeamIndexMethod::Elevation;
+        c.index = indexing.index;
         c.tilt_deg[0] = indexing.tilt_deg[0];
         c.tilt_deg[1] = indexing.tilt_deg[1];
         c.index_tolerance_deg = indexing.index_tolerance_deg;
@@ -476,9 +512,11 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     double largest = 0.0;
     for (const rp::BeamOffsets& b : c.beams)
         if (b.determined) ++determined, largest = std::max(largest, std::abs(b.elevation_offset_deg));
-    std::fprintf(stderr, "roadpreview: %d of %d beams determined from %lld frames over %.2f m (point noise %.1f mm); "
-                 "largest offset %.4f deg; wrote %s\n", determined, c.beam_count, static_cast<long long>(c.frames),
-                 c.travel_m, 1e3 * c.residual_m, largest, o.output.c_str());
+    char travel[64] = "";  // the surface method reads no motion
+    if (by_motion) std::snprintf(travel, sizeof travel, " over %.2f m", c.travel_m);
+    std::fprintf(stderr, "roadpreview: %d of %d beams determined (%s) from %lld frames%s (point noise %.1f mm); "
+                 "largest offset %.4f deg; wrote %s\n", determined, c.beam_count, o.calibration_method.c_str(),
+                 static_cast<long long>(c.frames), travel, 1e3 * c.residual_m, largest, o.output.c_str());
     return 0;
 }
 
@@ -560,7 +598,8 @@ void add_source_options(CLI::App* cmd, rp::SourceOptions& s) {
         ->check(CLI::Range(1, 65535));
     cmd->add_flag("--skip-bad-packets", s.skip_bad_packets, "Skip and count lidar packets that do not decode instead of stopping");
     cmd->add_option("--beam-calibration", s.beam_calibration,
-                    "Beams file (roadpreview calibrate) applied while decoding; .bin/.pcd points find their beam by elevation");
+                    "Beams file (roadpreview calibrate) applied while decoding; .bin/.pcd points find their beam by scan "
+                    "order or elevation");
 }
 
 }  // namespace
@@ -660,9 +699,15 @@ int main(int argc, char** argv) {
     cal_cmd->add_option("--config", c.config_file, "JSON or YAML config file with the fields of rp.Config");
     cal_cmd->add_option("--beams", c.beams, "Beams of a sensor whose files do not number them (default 64, HDL-64E)")
         ->check(CLI::PositiveNumber);
-    cal_cmd->add_option("--cell", c.cell, "Road cell in which beams are compared, m (default 0.2)")->check(CLI::PositiveNumber);
-    cal_cmd->add_option("--max-sigma", c.max_sigma, "A beam less certain than this (deg) is not determined (default 0.01)")
+    cal_cmd->add_option("--cell", c.cell, "Method motion: road cell in which beams are compared, m (default 0.2)")
         ->check(CLI::PositiveNumber);
+    cal_cmd->add_option("--max-sigma", c.max_sigma,
+                        "A beam less certain than this (deg) is not determined (default 0.01 motion, 0.05 surface)")
+        ->check(CLI::PositiveNumber);
+    cal_cmd->add_option("--method", c.calibration_method,
+                        "motion: the same road seen by different beams as the vehicle moves (default); surface: each "
+                        "frame's beams against its smooth road, no motion needed (docs/method.md §8)")
+        ->check(CLI::IsMember({"motion", "surface"}));
     cal_cmd->add_option("-o,--output", c.output, "Beams file to write (YAML)")->required();
     cal_cmd->add_flag("-q,--quiet", c.quiet, "No per-frame progress on stderr");
     add_source_options(cal_cmd, c.source);

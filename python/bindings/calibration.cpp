@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Beam self-calibration from Python: rp.calibrate_beams(...) runs the C++ estimator on frames given as numpy
 // arrays; the result is the beams file's content (BeamCalibration), which saves itself as beams.yaml.
+#include <algorithm>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -21,39 +23,73 @@ rp::PointsView view_of(const Points& p) {
     return rp::points_view(p.data(), p.shape(0), p.shape(1));
 }
 
-// Runs the calibrator over frames whose beams are known, or found by elevation when every `beams` is None.
+// Each frame's beams: as given, or — when every `beams` is None — found by scan order or elevation, `indexing`
+// saying how (method.md §8).
+std::vector<std::vector<std::int32_t>> frame_beams(const std::vector<rp::PointsView>& views,
+                                                   const std::vector<py::object>& beams, int beam_count,
+                                                   rp::BeamCalibration& indexing) {
+    std::vector<std::vector<std::int32_t>> out(views.size());
+    const bool unnumbered = std::all_of(beams.begin(), beams.end(), [](const py::object& b) { return b.is_none(); });
+    if (!unnumbered) {
+        for (std::size_t k = 0; k < views.size(); ++k) {
+            const Beams b = py::cast<Beams>(beams[k]);
+            out[k].assign(b.data(), b.data() + b.size());
+        }
+        return out;
+    }
+    py::gil_scoped_release release;
+    rp::find_beam_centres(views, beam_count, indexing);
+    for (std::size_t k = 0; k < views.size(); ++k)
+        out[k] = rp::beams_of_points(views[k], indexing, "frame " + std::to_string(k));
+    return out;
+}
+
+// The result indexes unnumbered points as the frames were indexed.
+void adopt_indexing(rp::BeamCalibration& out, const rp::BeamCalibration& indexing) {
+    if (indexing.beams.empty()) return;
+    out.index = indexing.index;
+    out.tilt_deg[0] = indexing.tilt_deg[0];
+    out.tilt_deg[1] = indexing.tilt_deg[1];
+    out.index_tolerance_deg = indexing.index_tolerance_deg;
+    for (std::size_t b = 0; b < out.beams.size(); ++b) out.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
+}
+
+std::vector<rp::PointsView> views_of(const std::vector<Points>& points, const std::vector<py::object>& beams) {
+    if (points.size() != beams.size()) throw std::invalid_argument("calibrate_beams: one beams entry per frame");
+    std::vector<rp::PointsView> views;
+    for (const Points& p : points) views.push_back(view_of(p));
+    return views;
+}
+
+// Runs the motion calibrator over the frames and their poses.
 rp::BeamCalibration calibrate(const std::vector<Points>& points, const std::vector<py::object>& beams,
                               const std::vector<std::array<double, 3>>& poses, int beam_count,
                               const std::string& config_json, const rp::CalibrationOptions& options) {
-    if (points.size() != beams.size() || points.size() != poses.size())
-        throw std::invalid_argument("calibrate_beams: one beams entry and one pose per frame");
-    std::vector<rp::PointsView> views;
-    for (const Points& p : points) views.push_back(view_of(p));
+    const std::vector<rp::PointsView> views = views_of(points, beams);
+    if (points.size() != poses.size()) throw std::invalid_argument("calibrate_beams: one pose per frame");
     rp::BeamCalibration indexing;
-    const bool by_elevation = std::all_of(beams.begin(), beams.end(), [](const py::object& b) { return b.is_none(); });
+    const auto index = frame_beams(views, beams, beam_count, indexing);
     py::gil_scoped_release release;
-    if (by_elevation) rp::find_beam_centres(views, beam_count, indexing);
     rp::BeamCalibrator calibrator(rp::config_from_json(config_json, "config"), beam_count, options);
-    for (std::size_t k = 0; k < views.size(); ++k) {
-        std::vector<std::int32_t> index;
-        if (by_elevation) {
-            index = rp::beams_by_elevation(views[k], indexing);
-        } else {
-            py::gil_scoped_acquire hold;
-            const Beams b = py::cast<Beams>(beams[k]);
-            index.assign(b.data(), b.data() + b.size());
-        }
-        const rp::Pose2 pose{poses[k][0], poses[k][1], poses[k][2]};
-        calibrator.add_frame(views[k], index, pose);
-    }
+    for (std::size_t k = 0; k < views.size(); ++k)
+        calibrator.add_frame(views[k], index[k], rp::Pose2{poses[k][0], poses[k][1], poses[k][2]});
     rp::BeamCalibration out = calibrator.solve();
-    if (by_elevation) {
-        out.index = rp::BeamIndexMethod::Elevation;
-        out.tilt_deg[0] = indexing.tilt_deg[0];
-        out.tilt_deg[1] = indexing.tilt_deg[1];
-        out.index_tolerance_deg = indexing.index_tolerance_deg;
-        for (std::size_t b = 0; b < out.beams.size(); ++b) out.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
-    }
+    adopt_indexing(out, indexing);
+    return out;
+}
+
+// Runs the surface calibrator over the frames (no motion).
+rp::BeamCalibration calibrate_on_surface(const std::vector<Points>& points, const std::vector<py::object>& beams,
+                                         int beam_count, const std::string& config_json,
+                                         const rp::SurfaceCalibrationOptions& options) {
+    const std::vector<rp::PointsView> views = views_of(points, beams);
+    rp::BeamCalibration indexing;
+    const auto index = frame_beams(views, beams, beam_count, indexing);
+    py::gil_scoped_release release;
+    rp::SurfaceCalibrator calibrator(rp::config_from_json(config_json, "config"), beam_count, options);
+    for (std::size_t k = 0; k < views.size(); ++k) calibrator.add_frame(views[k], index[k]);
+    rp::BeamCalibration out = calibrator.solve();
+    adopt_indexing(out, indexing);
     return out;
 }
 
@@ -122,5 +158,13 @@ void bind_calibration(py::module_& m) {
         o.max_sigma_deg = max_sigma_deg;
         o.min_observations = min_observations;
         return calibrate(points, beams, poses, beam_count, config_json, o);
+    });
+    m.def("calibrate_beams_on_surface", [](const std::vector<Points>& points, const std::vector<py::object>& beams,
+                                           int beam_count, const std::string& config_json, double max_sigma_deg,
+                                           int min_frames) {
+        rp::SurfaceCalibrationOptions o;
+        o.max_sigma_deg = max_sigma_deg;
+        o.min_frames = min_frames;
+        return calibrate_on_surface(points, beams, beam_count, config_json, o);
     });
 }

@@ -50,33 +50,45 @@ def _integrated_poses(times: list, speed: float, yaw_rate: float, frame_rate_hz:
 def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate: float = 0.0,
                     poses: Optional[Sequence] = None, config: Optional[Config] = None,
                     beam_count: Optional[int] = None, frame_rate_hz: float = 10.0, cell_m: float = 0.2,
-                    max_sigma_deg: float = 0.01, min_observations: int = 100):
+                    max_sigma_deg: Optional[float] = None, min_observations: int = 100, method: str = "motion",
+                    min_frames: int = 3):
     """Per-beam offsets from a drive, estimated in C++ (as ``roadpreview calibrate``).
 
     frames: rp.io frames (their ``.beams`` number the points), (points, beams) pairs, or bare (N, C) arrays whose
-    beams are then found by elevation. poses: (x, y, yaw) of the base frame per frame (m, rad; e.g. from a KITTI
-    poses file); else speed (m/s) and yaw_rate (rad/s) are integrated between the frames' timestamps (or
-    1/frame_rate_hz). config: extrinsics and ground settings (rp.Config). beam_count: default the recording's
-    (rp.io ``.info["beams"]``), else 64 for frames found by elevation, else the largest beam + 1.
+    beams are then found by their scan order or elevation. method: ``"motion"`` compares the road cells that
+    different beams see as the vehicle moves and needs the motion — poses: (x, y, yaw) of the base frame per frame
+    (m, rad; e.g. from a KITTI poses file), else speed (m/s) and yaw_rate (rad/s) integrated between the frames'
+    timestamps (or 1/frame_rate_hz); ``"surface"`` compares each frame's beams with its smooth road, needs no
+    motion and at least ``min_frames`` frames, best from different places (docs/method.md §8). config: extrinsics
+    and ground settings (rp.Config). beam_count: default the recording's (rp.io ``.info["beams"]``), else 64 for
+    unnumbered frames, else the largest beam + 1. max_sigma_deg: a beam less certain is not determined (default
+    0.01 for motion, 0.05 for surface).
     Returns a BeamCalibration (``.save(path)`` writes beams.yaml); raises CalibrationError (a ValueError) when
     the drive cannot determine the offsets (too short, no motion, too few beams on the ground).
     """
+    if method not in ("motion", "surface"):
+        raise ValueError(f"calibrate_beams: method must be 'motion' or 'surface', got {method!r}")
     info = getattr(frames, "info", None)
     arrays = [_frame_arrays(f) for f in frames]
-    if poses is None:
-        if speed is None:
-            raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses")
-        poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
-    if len(poses) < len(arrays):
-        raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
     if beam_count is None:
         numbered = [a[1] for a in arrays if a[1] is not None and len(a[1])]
         beam_count = (info or {}).get("beams") or (
             int(max(b.max() for b in numbered)) + 1 if numbered else DEFAULT_UNNUMBERED_BEAMS)
-    out = core().calibrate_beams([a[0] for a in arrays], [a[1] for a in arrays],
-                                 [tuple(map(float, p[:3])) for p in poses[:len(arrays)]], int(beam_count),
-                                 (config or Config()).to_json(), float(cell_m), float(max_sigma_deg),
-                                 int(min_observations))
+    config_json = (config or Config()).to_json()
+    if method == "surface":
+        out = core().calibrate_beams_on_surface([a[0] for a in arrays], [a[1] for a in arrays], int(beam_count),
+                                                config_json, float(max_sigma_deg or 0.05), int(min_frames))
+    else:
+        if poses is None:
+            if speed is None:
+                raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses "
+                                 "(or method='surface', which needs none)")
+            poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
+        if len(poses) < len(arrays):
+            raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
+        out = core().calibrate_beams([a[0] for a in arrays], [a[1] for a in arrays],
+                                     [tuple(map(float, p[:3])) for p in poses[:len(arrays)]], int(beam_count),
+                                     config_json, float(cell_m), float(max_sigma_deg or 0.01), int(min_observations))
     if info:
         out.sensor_model, out.serial = info.get("sensor_model", ""), info.get("serial", "")
     return out

@@ -2,6 +2,7 @@
 """Beam self-calibration (docs/method.md §8): the numpy reference on small simulated drives, the CLI's
 `calibrate` and `--beam-calibration` on real recordings and on bad input."""
 
+import json
 import subprocess
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 import roadpreview as rp
 from roadpreview import sim
 from roadpreview.reference import calibration as cal
+from roadpreview.reference import surface_calibration as surface
 
 from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER, cli
 
@@ -122,7 +124,6 @@ def test_cli_calibrate_writes_a_beams_file(os1_beams):
 
 
 def test_cli_applies_the_beams_file(os1_beams, tmp_path):
-    import json
     outs = []
     for extra in ((), ("--beam-calibration", os1_beams)):
         out = tmp_path / f"run{len(outs)}.jsonl"
@@ -196,21 +197,105 @@ KITTI_POSES = [(0.0, 0.0, 0.0), (0.8587, 0.0469, 0.00207), (1.7163, 0.0937, 0.00
 
 
 @pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
-def test_kitti_beams_found_by_elevation(tmp_path):
+def test_kitti_beams_found_by_scan_order(tmp_path):
+    """KITTI's .bin files list their points ring by ring from the top beam (method.md §8): the ring is the beam."""
     frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
     c = rp.calibrate_beams(frames, poses=KITTI_POSES, config=rp.Config(sensor_height=1.73))
+    assert "beam_index: scan_order" in c.to_yaml()
+    centres = np.asarray(c.elevation_deg)
+    assert np.all(np.diff(centres) < 0) and -25.5 < centres[-1] < -23.0  # from the top; the lowest near −24.8°
+    path = tmp_path / "kitti_beams.yaml"
+    c.save(str(path))
+    frame = next(iter(rp.io.open(KITTI_FRAMES[0], beam_calibration=path)))
+    np.testing.assert_array_equal(frame.beams, surface.rings_in_scan_order(frames[0]))
+    assert [surface.in_scan_order(f, 64) for f in frames] == [True] * 3
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_kitti_beams_found_by_elevation_when_out_of_scan_order(tmp_path):
+    rng = np.random.default_rng(0)
+    frames = [p[rng.permutation(len(p))] for p in (rp.io.read(f) for f in KITTI_FRAMES[:3])]
+    assert not any(surface.in_scan_order(f, 64) for f in frames)
+    c = rp.calibrate_beams(frames, poses=KITTI_POSES, config=rp.Config(sensor_height=1.73))
+    assert "beam_index: elevation" in c.to_yaml()
     centres = np.asarray(c.elevation_deg)
     assert c.beam_count == 64 and np.all(np.diff(centres) <= -0.25)  # numbered from the top, distinct rings
     assert -25.5 < centres[-1] < -23.0  # the HDL-64E's lowest beam is near −24.8°
     path = tmp_path / "kitti_beams.yaml"
     c.save(str(path))
-    frame = next(iter(rp.io.open(KITTI_FRAMES[0], beam_calibration=path)))
+    shuffled = tmp_path / "shuffled.bin"
+    frames[0].astype(np.float32).tofile(shuffled)
+    frame = next(iter(rp.io.open(shuffled, beam_calibration=path)))
     beams = np.asarray(frame.beams)
     raw = frames[0]
     ahead = (raw[:, 0] > 4) & (np.abs(raw[:, 1]) < 10) & (raw[:, 2] < -1.0)  # the road ahead
     assert np.mean(beams[ahead] >= 0) > 0.9
     moved = np.linalg.norm(frame.points[:, :3] - raw[:, :3], axis=1)
     assert np.all(moved[beams < 0] == 0) and np.any(moved[beams >= 0] > 0)
+
+
+def test_reference_surface_calibration_recovers_simulated_offsets():
+    """No poses: each frame's beams against its smooth road; six frames of a class B road, offsets 0.03° (1σ)."""
+    errors = np.random.default_rng(7).normal(0.0, 0.03, 64)
+    lidar, frames = small_drive(errors)
+    res = surface.calibrate_beams_on_surface([(f.points, lidar.beam_index()) for f in frames], lidar.beams,
+                                             rp.Config(extrinsics=lidar.extrinsics()))
+    d = res.determined
+    assert d.sum() >= 40
+    truth = gauge_free(errors, res.extra["reach"], d)
+    error = res.elevation_offset_deg[d] - truth
+    assert np.sqrt(np.mean(error**2)) < 0.01  # 0.0064° measured: the road's own relief, six frames
+    assert np.corrcoef(res.elevation_offset_deg[d], truth)[0, 1] > 0.95
+    assert np.all(res.observations[d] >= 3)
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_surface_calibration_cpp_agrees_with_the_reference_on_kitti():
+    frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
+    cfg = rp.Config(sensor_height=1.73)
+    cpp = rp.calibrate_beams(frames, method="surface", config=cfg)
+    ref = surface.calibrate_beams_on_surface([(p, surface.rings_in_scan_order(p)) for p in frames], 64, cfg)
+    np.testing.assert_array_equal(cpp.determined, ref.determined)
+    assert ref.determined.sum() >= 40
+    np.testing.assert_allclose(cpp.elevation_offset_deg, ref.elevation_offset_deg, atol=1e-9)
+    np.testing.assert_allclose(cpp.elevation_sigma_deg, ref.elevation_sigma_deg, rtol=1e-6)
+    np.testing.assert_allclose(cpp.residual_m, ref.residual_m, rtol=1e-9)
+    with pytest.raises(rp.CalibrationError, match="too short"):
+        rp.calibrate_beams(frames[:2], method="surface", config=cfg)
+
+
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_a_surface_calibration_from_one_street_smooths_another(tmp_path):
+    """Real data: offsets from three frames of KITTI seq 00, no motion given, applied to the SPVNAS frame (another
+    street): its wheel-path profiles lose the beams' steps — the vehicle IRI falls by more than a quarter (13.5 →
+    8–8.5 m/km measured) and the roughness G_d(n0) of both wheels falls."""
+    beams = tmp_path / "beams.yaml"
+    r = run_cli("calibrate", *KITTI_FRAMES[:3], "--sensor-height", 1.73, "--method", "surface", "-o", beams, "-q")
+    assert r.returncode == 0, r.stderr
+    assert "beam_index: scan_order" in beams.read_text()
+    outs = []
+    for extra in ((), ("--beam-calibration", beams)):
+        out = tmp_path / f"run{len(outs)}.jsonl"
+        r = run_cli("run", KITTI_FRAMES[3], "--sensor-height", 1.73, "--speed", 5, "-o", out, "-q", *extra)
+        assert r.returncode == 0, r.stderr
+        outs.append(json.loads(out.read_text().splitlines()[0])["roughness"])
+    before, after = outs
+    assert after["vehicle"]["iri"]["value"] < 0.75 * before["vehicle"]["iri"]["value"]
+    for wheel in ("left", "right"):
+        assert after[wheel]["gd_n0"] < before[wheel]["gd_n0"]
+
+
+def test_cli_surface_calibration_needs_three_frames_and_scan_order(tmp_path):
+    r = run_cli("calibrate", *KITTI_FRAMES[:2], "--sensor-height", 1.73, "--method", "surface", "-o", tmp_path / "b.yaml")
+    assert r.returncode != 0 and "too short" in r.stderr and KITTI_FRAMES[0].name in r.stderr
+    beams = tmp_path / "beams.yaml"
+    assert run_cli("calibrate", *KITTI_FRAMES[:3], "--sensor-height", 1.73, "--method", "surface", "-o", beams,
+                   "-q").returncode == 0
+    shuffled = tmp_path / "shuffled.bin"
+    points = np.fromfile(KITTI_FRAMES[0], np.float32).reshape(-1, 4)
+    points[np.random.default_rng(1).permutation(len(points))].tofile(shuffled)
+    r = run_cli("run", shuffled, "--sensor-height", 1.73, "--speed", 5, "--beam-calibration", beams)
+    assert r.returncode != 0 and "shuffled.bin" in r.stderr and "scan order" in r.stderr
 
 
 @pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The beams file (beams.yaml, docs/output.md "Beams file"), its sensor check, the beam index of points that do
-// not carry one (KITTI .bin: by elevation angle) and the correction of such points.
+// not carry one (KITTI .bin: by their place in the file's scan order, else by elevation angle) and the correction
+// of such points.
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -88,6 +89,61 @@ double sharpness(const std::vector<double>& h) {
     return s;
 }
 
+// Each point's ring in a file that lists the points ring by ring, each ring one turn starting just past azimuth 0
+// (KITTI's .bin files): the ring number goes up where the azimuth steps from below 0 to 0 or above; a large step
+// (across ±180°) is no ring start. Points without a finite x, y stay in the ring they are in.
+std::vector<std::int32_t> rings_in_order(PointsView points) {
+    std::vector<std::int32_t> ring(static_cast<std::size_t>(points.rows()), 0);
+    std::int32_t current = 0;
+    double last = std::numeric_limits<double>::quiet_NaN();
+    for (Eigen::Index k = 0; k < points.rows(); ++k) {
+        const double x = points(k, 0), y = points(k, 1);
+        if (std::isfinite(x) && std::isfinite(y) && (x != 0.0 || y != 0.0)) {
+            const double az = std::atan2(y, x);
+            if (last < 0.0 && az >= 0.0 && az - last < 1.0) ++current;
+            last = az;
+        }
+        ring[static_cast<std::size_t>(k)] = current;
+    }
+    return ring;
+}
+
+// The mean of the two middle values for an even count; NaN for none.
+double median_of(std::vector<double> v) {
+    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return v.size() % 2 ? *mid : 0.5 * (*mid + *std::max_element(v.begin(), mid));
+}
+
+// The median elevation (deg) of each ring beyond 4 m; NaN for a ring without such points.
+std::vector<double> ring_elevations(PointsView points, const std::vector<std::int32_t>& ring, int rings) {
+    std::vector<std::vector<double>> el(static_cast<std::size_t>(rings));
+    for (Eigen::Index k = 0; k < points.rows(); ++k) {
+        const double x = points(k, 0), y = points(k, 1), z = points(k, 2), r = std::sqrt(x * x + y * y + z * z);
+        const auto b = ring[static_cast<std::size_t>(k)];
+        if (std::isfinite(r) && r >= 4.0 && b < rings) el[static_cast<std::size_t>(b)].push_back(deg(std::asin(z / r)));
+    }
+    std::vector<double> out;
+    for (auto& e : el) out.push_back(median_of(std::move(e)));
+    return out;
+}
+
+// Whether a frame lists exactly `beams` rings in scan order, from the top beam down (their median elevations
+// fall from ring to ring); fills `ring` (per point) and `elevations` (per ring).
+bool in_scan_order(PointsView points, int beams, std::vector<std::int32_t>& ring, std::vector<double>& elevations) {
+    ring = rings_in_order(points);
+    if (ring.empty() || ring.back() + 1 != beams) return false;
+    elevations = ring_elevations(points, ring, beams);
+    double above = INFINITY;
+    for (double e : elevations) {
+        if (std::isnan(e)) continue;
+        if (!(e < above)) return false;
+        above = e;
+    }
+    return true;
+}
+
 }  // namespace
 
 BeamCalibration read_beam_calibration(const std::string& path) {
@@ -101,9 +157,11 @@ BeamCalibration read_beam_calibration(const std::string& path) {
         c.serial = root["serial"] ? root["serial"].as<std::string>() : "";
         c.beam_count = root["beam_count"].as<int>();
         const std::string index = root["beam_index"].as<std::string>();
-        if (index != "decoder" && index != "elevation")
-            throw std::runtime_error("beam_index must be `decoder` or `elevation`, got `" + index + "`");
-        c.index = index == "elevation" ? BeamIndexMethod::Elevation : BeamIndexMethod::Decoder;
+        if (index != "decoder" && index != "elevation" && index != "scan_order")
+            throw std::runtime_error("beam_index must be `decoder`, `elevation` or `scan_order`, got `" + index + "`");
+        c.index = index == "elevation"    ? BeamIndexMethod::Elevation
+                  : index == "scan_order" ? BeamIndexMethod::ScanOrder
+                                          : BeamIndexMethod::Decoder;
         if (c.index == BeamIndexMethod::Elevation) {
             c.tilt_deg[0] = root["elevation_tilt_deg"][0].as<double>();
             c.tilt_deg[1] = root["elevation_tilt_deg"][1].as<double>();
@@ -143,7 +201,10 @@ std::string beam_calibration_to_yaml(const BeamCalibration& c) {
     e << YAML::Key << "beam_count" << YAML::Value << c.beam_count;
     e << YAML::Key << "units" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "angles"
       << YAML::Value << "deg" << YAML::Key << "ranges" << YAML::Value << "m" << YAML::EndMap;
-    e << YAML::Key << "beam_index" << YAML::Value << (c.index == BeamIndexMethod::Elevation ? "elevation" : "decoder");
+    e << YAML::Key << "beam_index" << YAML::Value
+      << (c.index == BeamIndexMethod::Elevation   ? "elevation"
+          : c.index == BeamIndexMethod::ScanOrder ? "scan_order"
+                                                  : "decoder");
     if (c.index == BeamIndexMethod::Elevation) {
         e << YAML::Key << "elevation_tilt_deg" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.tilt_deg[0]
           << c.tilt_deg[1] << YAML::EndSeq;
@@ -164,7 +225,7 @@ std::string beam_calibration_to_yaml(const BeamCalibration& c) {
         e << YAML::Key << "range_sigma_m" << YAML::Value;
         emit_number(e, o.range_sigma_m);
         e << YAML::Key << "observations" << YAML::Value << o.observations;
-        if (c.index == BeamIndexMethod::Elevation) e << YAML::Key << "elevation_deg" << YAML::Value << o.elevation_deg;
+        if (c.index != BeamIndexMethod::Decoder) e << YAML::Key << "elevation_deg" << YAML::Value << o.elevation_deg;
         e << YAML::EndMap;
     }
     e << YAML::EndSeq << YAML::EndMap;
@@ -191,6 +252,27 @@ void check_beam_calibration(const BeamCalibration& c, int beam_count, const std:
 }
 
 void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, BeamCalibration& c) {
+    // Scan order where every frame keeps it: exact, where elevations are not — a KITTI ring's elevation wanders
+    // by up to 0.9° around the turn, more than the 0.33–0.5° between its beams (method.md §8).
+    std::vector<std::vector<double>> elevations(frames.size());
+    std::vector<std::int32_t> ring;
+    bool ordered = !frames.empty();
+    for (std::size_t f = 0; f < frames.size() && ordered; ++f)
+        ordered = in_scan_order(frames[f], beam_count, ring, elevations[f]);
+    if (ordered) {
+        c.index = BeamIndexMethod::ScanOrder;
+        c.tilt_deg[0] = c.tilt_deg[1] = 0.0;
+        c.index_tolerance_deg = 0.0;
+        c.beam_count = beam_count;
+        c.beams.assign(static_cast<std::size_t>(beam_count), BeamOffsets{});
+        for (std::size_t b = 0; b < c.beams.size(); ++b) {  // for information: the median over the frames
+            std::vector<double> e;
+            for (const auto& frame : elevations)
+                if (!std::isnan(frame[b])) e.push_back(frame[b]);
+            c.beams[b].elevation_deg = median_of(std::move(e));
+        }
+        return;
+    }
     const auto samples = centre_samples(frames);
     if (samples.empty()) throw CalibrationError("no points ahead beyond 4 m to find the beams' elevations from");
     double lo = INFINITY, hi = -INFINITY;
@@ -241,6 +323,16 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     }
     std::sort(gaps.begin(), gaps.end());
     c.index_tolerance_deg = gaps.empty() ? kMinBeamGapDeg : 0.5 * gaps[gaps.size() / 2];
+}
+
+std::vector<std::int32_t> beams_of_points(PointsView points, const BeamCalibration& c, const std::string& name) {
+    if (c.index != BeamIndexMethod::ScanOrder) return beams_by_elevation(points, c);
+    std::vector<std::int32_t> ring;
+    std::vector<double> elevations;
+    if (!in_scan_order(points, c.beam_count, ring, elevations))
+        throw std::runtime_error(name + ": its points are not " + std::to_string(c.beam_count) +
+                                 " rings in scan order, as the beams file " + c.source + " (beam_index: scan_order) needs");
+    return ring;
 }
 
 std::vector<std::int32_t> beams_by_elevation(PointsView points, const BeamCalibration& c) {

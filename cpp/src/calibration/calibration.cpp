@@ -16,6 +16,8 @@
 #include "roadpreview/core/frames.hpp"
 #include "roadpreview/ground/ground.hpp"
 
+#include "beam_geometry.hpp"
+
 namespace roadpreview {
 namespace {
 
@@ -306,19 +308,15 @@ void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t
     for (std::size_t k = 0; k < n; ++k) {
         const std::int32_t beam = beams[k];
         if (!ground_mask[k] || beam < 0) continue;
-        if (beam >= beam_count_)
-            throw std::invalid_argument("beam calibration: beam index " + std::to_string(beam) + " of a " +
-                                        std::to_string(beam_count_) + "-beam sensor");
+        detail::check_beam_index(beam, beam_count_);
         const double p[3] = {points(static_cast<Eigen::Index>(k), 0), points(static_cast<Eigen::Index>(k), 1),
                              points(static_cast<Eigen::Index>(k), 2)};
         const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
         if (!(r > 0) || !std::isfinite(r)) continue;
         // reported at r along u(θ, φ); the true point lies at p − ρ·u + r·δ·∂u/∂θ (method.md §8)
-        const double el = std::asin(std::clamp(p[2] / r, -1.0, 1.0)), az = std::atan2(p[1], p[0]);
-        const double du[3] = {-std::sin(el) * std::cos(az), -std::sin(el) * std::sin(az), std::cos(el)};
         double base[3];
         transform_point(T, p, base);
-        const double j_el = -r * (T.R[2][0] * du[0] + T.R[2][1] * du[1] + T.R[2][2] * du[2]);
+        const double j_el = detail::elevation_jacobian(p, r, T);
         const double j_r = (T.R[2][0] * p[0] + T.R[2][1] * p[1] + T.R[2][2] * p[2]) / r;
         const double ox = pose.x_m + c * base[0] - s * base[1], oy = pose.y_m + s * base[0] + c * base[1];
         const auto i = static_cast<std::int64_t>(std::floor(ox / options_.cell_m));
@@ -336,8 +334,8 @@ void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t
     poses_.push_back(pose);
 }
 
-void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t>& beams, const Pose2& pose) {
-    const RigidTransform T = to_rigid_transform(effective_extrinsics(cfg_));
+std::vector<std::uint8_t> one_plane_ground(PointsView points, const Config& cfg) {
+    const RigidTransform T = to_rigid_transform(effective_extrinsics(cfg));
     Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> base(points.rows(), 3);
     for (Eigen::Index k = 0; k < points.rows(); ++k) {
         const double p[3] = {points(k, 0), points(k, 1), points(k, 2)};
@@ -345,12 +343,15 @@ void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t
         transform_point(T, p, b);
         for (int c = 0; c < 3; ++c) base(k, c) = static_cast<float>(b[c]);
     }
-    // The paper's one plane whatever ground.method says: the smooth road every beam crosses, not the verges and
-    // pavements a zone ground follows (method.md §8: KITTI's residual 17.7 mm with zones, 10.7 mm with it).
-    GroundConfig one_plane = cfg_.ground;
+    // Not the zone ground: it also follows the verges and pavements (method.md §8: KITTI's residual 17.7 mm with
+    // zones, 10.7 mm with the one plane).
+    GroundConfig one_plane = cfg.ground;
     one_plane.method = GroundMethod::Pca;
-    const GroundFit ground = fit_ground(points_view(base.data(), base.rows(), 3), one_plane);
-    add_frame(points, beams, ground.mask, pose);
+    return fit_ground(points_view(base.data(), base.rows(), 3), one_plane).mask;
+}
+
+void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t>& beams, const Pose2& pose) {
+    add_frame(points, beams, one_plane_ground(points, cfg_), pose);
 }
 
 BeamCalibration BeamCalibrator::solve() const {

@@ -195,16 +195,16 @@ std::string sequence_break(const std::string& previous, const std::string& next,
 namespace {
 
 // .bin, .pcd and .ply files, one frame each; frame_id is the position in the list.
-// With a beams file, each point's beam is found by its elevation angle and its offsets applied.
+// With a beams file, each point's beam is found by its place in the scan or its elevation and its offsets applied.
 class FileListSource : public FrameSource {
 public:
     FileListSource(InputFiles inputs, const SourceOptions& o) : inputs_(std::move(inputs)), columns_(o.columns) {
         if (o.beam_calibration.empty()) return;
         beams_file_ = read_beam_calibration(o.beam_calibration);
-        if (beams_file_->index != BeamIndexMethod::Elevation)
+        if (beams_file_->index == BeamIndexMethod::Decoder)
             fail_file(o.beam_calibration, "indexes beams by the decoder's beam number; .bin/.pcd points need a "
-                                          "beams file that indexes them by elevation (made by `roadpreview "
-                                          "calibrate` from such files)");
+                                          "beams file that indexes them by scan order or elevation (made by "
+                                          "`roadpreview calibrate` from such files)");
         check_beam_calibration(*beams_file_, beams_file_->beam_count, o.sensor_model, "");
     }
 
@@ -215,7 +215,8 @@ public:
         if (next_ > 0) f.sequence_break = sequence_break(files[next_ - 1], files[next_], step_);
         f.frame_id = static_cast<std::int64_t>(next_++);
         if (beams_file_) {
-            f.beams = beams_by_elevation(points_view(f.points.data(), f.points.rows(), 4), *beams_file_);
+            f.beams = beams_of_points(points_view(f.points.data(), f.points.rows(), 4), *beams_file_,
+                                      files[next_ - 1]);
             apply_beam_calibration(f.points.data(), f.points.rows(), 4, f.beams, *beams_file_);
         }
         return f;

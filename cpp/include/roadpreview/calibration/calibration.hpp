@@ -47,8 +47,9 @@ struct BeamOffsets {
     double elevation_deg = std::numeric_limits<double>::quiet_NaN();  ///< index by elevation: the beam's centre
 };
 
-/// How points find their beam: the decoder's beam (laser) number, or their elevation angle (KITTI .bin).
-enum class BeamIndexMethod { Decoder, Elevation };
+/// How points find their beam: the decoder's beam (laser) number, their place in a file that lists them ring by
+/// ring (KITTI .bin), or their elevation angle (files in no such order).
+enum class BeamIndexMethod { Decoder, Elevation, ScanOrder };
 
 struct BeamCalibration {
     std::string sensor_model;  ///< e.g. "OS-1-128", "VLP-16", "HDL-64E"; empty when unknown
@@ -76,10 +77,15 @@ std::string beam_calibration_to_yaml(const BeamCalibration& c);
 void check_beam_calibration(const BeamCalibration& c, int beam_count, const std::string& sensor_model,
                             const std::string& serial);
 
-/// Beam centres for index-by-elevation from frames of a sensor that does not number its points (KITTI .bin):
-/// the peaks of the histogram of the points' elevations (front half, beyond 4 m) after removing the common
-/// tilt that makes them sharpest. Fills index, tilt_deg, index_tolerance_deg and beams[].elevation_deg.
+/// How to find the beams of frames from a sensor that does not number its points. Scan order when every frame
+/// lists exactly beam_count rings, one turn each from azimuth 0, from the top beam down (KITTI .bin); else the
+/// beam centres for index-by-elevation: the peaks of the histogram of the points' elevations (front half, beyond
+/// 4 m) after removing the common tilt that makes them sharpest. Fills index, tilt_deg, index_tolerance_deg and
+/// beams[].elevation_deg (for scan order the rings' median elevations, for information).
 void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, BeamCalibration& c);
+/// Beam of each point of an unnumbered frame by c's index (ScanOrder or Elevation); throws naming `name` when a
+/// frame is not in the scan order c needs.
+std::vector<std::int32_t> beams_of_points(PointsView points, const BeamCalibration& c, const std::string& name);
 /// Beam of each point by its elevation (c.index must be Elevation); −1 where none is near.
 std::vector<std::int32_t> beams_by_elevation(PointsView points, const BeamCalibration& c);
 /// Corrects the points of a file reader in place (x, y, z of each row) by their beams' offsets.
@@ -115,5 +121,44 @@ private:
     std::vector<Pose2> poses_;
     std::vector<Observation> observations_;
 };
+
+/// Options of the surface calibration (method.md §8, "From the road's shape").
+struct SurfaceCalibrationOptions {
+    double min_x_m = 3.0, max_x_m = 30.0;  ///< the stretch ahead whose road is compared (base frame)
+    double half_width_m = 3.5;             ///< |y| of the corridor: the lane ahead, not the verges
+    int min_points = 30;                   ///< a beam's points in one frame's corridor for a value of that frame
+    int min_frames = 3;                    ///< frames that must give a beam a value for it to be determined
+    double max_sigma_deg = 0.05;           ///< a beam whose offset is less certain than this is not determined
+    double outlier_sigmas = 3.0;           ///< points further off the surface than this many robust σ are dropped
+    int rounds = 3;                        ///< surface fits, each after dropping the previous fit's outliers
+    int min_beams = 3;                     ///< fewer determined beams is an error
+};
+
+/// Per-beam elevation offsets from the road's shape, frame by frame: each frame's road in the corridor ahead is
+/// fitted by a smooth surface (quadratic in x and y), and a beam's offset is the median of its points'
+/// heights off that surface over their elevation Jacobian; the offsets are the median over the frames, their σ
+/// from the frames' spread. Needs no motion, and frames from different places agree the better (method.md §8).
+class SurfaceCalibrator {
+public:
+    SurfaceCalibrator(const Config& cfg, int beam_count, SurfaceCalibrationOptions options = {});
+    /// One frame: sensor-frame points and each one's beam (−1: unknown, skipped); the ground is the paper's one
+    /// plane, as for BeamCalibrator. A frame without enough road in the corridor adds nothing.
+    void add_frame(PointsView points, const std::vector<std::int32_t>& beams);
+    /// Throws CalibrationError when too few frames or beams determine the offsets.
+    BeamCalibration solve() const;
+    std::int64_t frames() const { return frames_; }
+
+private:
+    Config cfg_;
+    int beam_count_;
+    SurfaceCalibrationOptions options_;
+    std::int64_t frames_ = 0;
+    std::vector<std::vector<double>> values_;  // per beam: its offset (rad) in each frame that gave one
+    std::vector<double> reach_sum_, reach_weight_, noise_;  // per beam: Σ −J_δ and points; per frame: σ of the road
+};
+
+/// The ground of the paper's one plane (fit, drop points more than 0.2 m above, ×3) of sensor-frame points,
+/// whatever cfg.ground.method says: the smooth road every beam crosses, which calibration compares.
+std::vector<std::uint8_t> one_plane_ground(PointsView points, const Config& cfg);
 
 }  // namespace roadpreview

@@ -52,7 +52,8 @@ struct SourceOptions {
     bool skip_bad_packets = false;  ///< skip and count lidar packets that do not decode, instead of an error
     int columns = 0;  ///< raw float32 .bin files: values per point; 0: 5 for *.pcd.bin (nuScenes), else 4 (KITTI)
     /// Beams file (beams.yaml, `roadpreview calibrate`) applied while decoding: Ouster and Velodyne by beam,
-    /// .bin/.pcd files by each point's elevation angle. A file for another sensor is an error naming it.
+    /// .bin/.pcd files by their scan order or each point's elevation angle (as the beams file says). A file for
+    /// another sensor is an error naming it.
     std::string beam_calibration;
     int imu_port = 0;  ///< Ouster: UDP port of the IMU packets; 0: the metadata's, else told by packet size
     /// Frames that end as soon as these regions (sensor_roi) have been scanned, not a rotation's rest later.
