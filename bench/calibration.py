@@ -220,7 +220,8 @@ def consistency(frames, poses, files) -> None:
     print("## KITTI: repeatability of single frames (the later frame's 5–15 m ahead against the earlier frame's view "
           "of that stretch; correlation of the IRI-filtered profiles, RMS difference cm), before → after the surface "
           "calibration from the other half\n")
-    print(md_table(["frames", "travelled m", "left", "right"], repeatability_rows(files, poses, cfg)) + "\n")
+    print(md_table(["frames", "travelled m", "left", "right", "left, bins both measured after: count: RMS / noise",
+                    "right"], repeatability_rows(files, poses, cfg)) + "\n")
 
 
 def repeatability_rows(files, poses, cfg: rp.Config) -> list:
@@ -242,7 +243,7 @@ def repeatability_rows(files, poses, cfg: rp.Config) -> list:
         for i, j in ((0, 2), (3, 5), (0, 3), (1, 4), (2, 5), (0, 5)):
             travelled = float(np.hypot(poses[j][0] - poses[i][0], poses[j][1] - poses[i][1]))
             grid = np.arange(5.0, 15.0, 0.1) + 0.05 + travelled
-            cells = {}
+            cells, measured = {}, []
             for calibrated in (False, True):
                 a, b = results(i, calibrated), results(j, calibrated)
                 for wheel in ("left", "right"):
@@ -251,8 +252,31 @@ def repeatability_rows(files, poses, cfg: rp.Config) -> list:
                                          rp.world_profile(pb.s, pb.z, travelled, grid), 0.1)
                     text = "–" if x.correlation is None else f"{x.correlation:.2f}, {x.rms_m * 100:.2f}"
                     cells[wheel] = text if not calibrated else f"{cells[wheel]} → {text}"
-            rows.append([f"{i} and {j}", f"{travelled:.2f}", cells["left"], cells["right"]])
+                    if calibrated:
+                        measured.append(measured_bins(pa, pb, travelled, grid))
+            rows.append([f"{i} and {j}", f"{travelled:.2f}", cells["left"], cells["right"], *measured])
     return rows
+
+
+def measured_bins(pa, pb, travelled: float, grid) -> str:
+    """The bins both profiles measured (not gap-filled): their count, the RMS of their height difference (its
+    line removed) and the RMS the bins' own noise predicts (the roughness stage's bin variance, method.md §4), cm."""
+    def on_grid(p, values, at):
+        return rp.world_profile(p.s, np.asarray(values, float), at, grid)
+
+    def variance(p):
+        spread, count = np.asarray(p.spread, float), np.asarray(p.count, float)
+        return np.where(count >= 3, np.pi / 2 * spread ** 2 / np.maximum(count, 1),
+                        np.where(count == 2, spread ** 2 / 2, spread ** 2))
+
+    za, zb = on_grid(pa, pa.z, 0.0), on_grid(pb, pb.z, travelled)
+    va, vb = on_grid(pa, variance(pa), 0.0), on_grid(pb, variance(pb), travelled)
+    both = (on_grid(pa, pa.count, 0.0) > 0) & (on_grid(pb, pb.count, travelled) > 0) & np.isfinite(va + vb + za + zb)
+    if both.sum() < 3:
+        return "–"
+    d, s = (za - zb)[both], grid[both]
+    d = d - np.polyval(np.polyfit(s, d, 1), s)
+    return f"{both.sum()}: {np.sqrt(np.mean(d ** 2)) * 100:.2f} / {np.sqrt(np.mean((va + vb)[both])) * 100:.2f}"
 
 
 def main(argv=None) -> int:
