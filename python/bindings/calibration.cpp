@@ -32,6 +32,9 @@ std::vector<std::vector<std::int32_t>> frame_beams(const std::vector<rp::PointsV
     const bool unnumbered = std::all_of(beams.begin(), beams.end(), [](const py::object& b) { return b.is_none(); });
     if (!unnumbered) {
         for (std::size_t k = 0; k < views.size(); ++k) {
+            if (beams[k].is_none())
+                throw std::invalid_argument("calibrate_beams: frame " + std::to_string(k) +
+                                            " has no beam numbers while others have: give them for every frame or none");
             const Beams b = py::cast<Beams>(beams[k]);
             out[k].assign(b.data(), b.data() + b.size());
         }

@@ -285,6 +285,14 @@ def test_a_surface_calibration_from_one_street_smooths_another(tmp_path):
         assert after[wheel]["gd_n0"] < before[wheel]["gd_n0"]
 
 
+@pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
+def test_beam_numbers_for_some_frames_only_are_an_error():
+    frames = [rp.io.read(f) for f in KITTI_FRAMES[:3]]
+    mixed = [(frames[0], surface.rings_in_scan_order(frames[0])), frames[1], frames[2]]
+    with pytest.raises(ValueError, match="frame 1 has no beam numbers"):
+        rp.calibrate_beams(mixed, method="surface", config=rp.Config(sensor_height=1.73))
+
+
 def test_cli_surface_calibration_needs_three_frames_and_scan_order(tmp_path):
     r = run_cli("calibrate", *KITTI_FRAMES[:2], "--sensor-height", 1.73, "--method", "surface", "-o", tmp_path / "b.yaml")
     assert r.returncode != 0 and "too short" in r.stderr and KITTI_FRAMES[0].name in r.stderr
