@@ -19,8 +19,8 @@ inline void check_beam_index(std::int32_t beam, int beam_count) {
                                     std::to_string(beam_count) + "-beam sensor");
 }
 
-/// J_δ = −r·(R ∂u/∂θ)_z of a point p at range r > 0: reported at r along u(θ, φ), it lies at p + r·δ·∂u/∂θ when
-/// its beam truly points δ higher, so its base-frame height moves by −J_δ·δ (≈ horizontal range for a level sensor).
+/// J_δ = −r·(R ∂u/∂θ)_z of a point p at range r > 0 (≈ −horizontal range for a level sensor): its base-frame
+/// height is off the road by J_δ·δ when its beam truly points δ higher than the sensor places it (method.md §8).
 inline double elevation_jacobian(const double p[3], double r, const RigidTransform& T) {
     const double el = std::asin(std::clamp(p[2] / r, -1.0, 1.0)), az = std::atan2(p[1], p[0]);
     const double du[3] = {-std::sin(el) * std::cos(az), -std::sin(el) * std::sin(az), std::cos(el)};
