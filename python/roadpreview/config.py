@@ -120,6 +120,8 @@ class FusionConfig:
     behind_m: float = 0.0  #: fused profiles start this far behind the wheels (already-driven road)
     align: bool = True  #: remove the plane between a frame's heights and the map's before fusing
     align_tilt_sigma: float = 1e-4  #: rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
+    #: m, the excess disagreement is measured on the shared cells this close to the line ahead (the lane, not verges)
+    align_excess_half_width_m: float = 2.0
 
 
 @dataclass

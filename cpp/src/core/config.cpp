@@ -69,7 +69,7 @@ void from_json(const json& j, FusionMethod& m) {
 }
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cell_m, map_length_m, point_noise_m,
                                                 frame_rate_hz, max_time_gap_s, behind_m, align,
-                                                align_tilt_sigma)
+                                                align_tilt_sigma, align_excess_half_width_m)
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(StereoConfig, min_disparity, num_disparities, block_size, p1, p2,
                                                 disp12_max_diff, pre_filter_cap, uniqueness_ratio,
@@ -290,6 +290,7 @@ void validate(const Config& c) {
     require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
     require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
     require(positive(f.align_tilt_sigma), "fusion.align_tilt_sigma must be > 0");
+    require(positive(f.align_excess_half_width_m), "fusion.align_excess_half_width_m must be > 0");
     validate_stereo(c.stereo);
 }
 

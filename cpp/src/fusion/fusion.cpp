@@ -366,10 +366,19 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
         if (!s.inlier) variances[s.index] += std::pow(s.difference - plane.dot(v[s.index]), 2);
     // Disagreement of the rest beyond their variances (per-beam offsets, seams between frames) is error common
     // to every frame that no cell's spread sees. Measured on the real OS1-128 and HDL-64E recordings it is the
-    // same at every range (method.md §7), so one variance, the excess, joins every cell of the frame.
+    // same at every range (method.md §7), so one variance, the excess, joins every cell of the frame. It is
+    // measured in the lane ahead, where the profiles are read: a verge's vegetation disagrees from frame to frame
+    // by centimetres more than a road does (KITTI) and is no measure of the road's cells.
+    const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
+    const auto in_lane = [&](const Shared& s) {  // |lateral offset| from the line ahead
+        return std::abs(-sin_yaw * v[s.index][1] + cos_yaw * v[s.index][2]) <= cfg_.fusion.align_excess_half_width_m;
+    };
+    const bool lane_only = std::count_if(shared.begin(), shared.end(), [&](const Shared& s) {
+                               return s.inlier && in_lane(s);
+                           }) >= static_cast<std::ptrdiff_t>(kMinAlignCells);
     double weighted = 0.0, weights = 0.0;
     for (const Shared& s : shared) {
-        if (!s.inlier) continue;
+        if (!s.inlier || (lane_only && !in_lane(s))) continue;
         const double residual = s.difference - plane.dot(v[s.index]), weight = 1.0 / (s.variance * s.variance);
         weighted += weight * (residual * residual - s.variance);
         weights += weight;

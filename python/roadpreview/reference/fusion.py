@@ -190,9 +190,14 @@ class FusedMap:
         # The disagreement left beyond the variances is error common to every frame that no cell's spread sees,
         # the same at every range on real recordings: its weighted mean joins every cell of the frame; the first
         # time, the map's cells (from frames never compared) take half of it.
-        residual = difference[inlier] - v[inlier] @ plane
-        weights = 1 / total[inlier] ** 2
-        excess = max(0.0, float(np.sum(weights * (residual ** 2 - total[inlier])) / np.sum(weights)))
+        # Measured in the lane ahead, where the profiles are read (not on the verges), when it holds enough cells.
+        c, s = math.cos(self.pose[2]), math.sin(self.pose[2])
+        lane = inlier & (np.abs(-s * offsets[shared, 0] + c * offsets[shared, 1])
+                         <= self.cfg.fusion.align_excess_half_width_m)
+        use = lane if lane.sum() >= _MIN_ALIGN_CELLS else inlier
+        residual = difference[use] - v[use] @ plane
+        weights = 1 / total[use] ** 2
+        excess = max(0.0, float(np.sum(weights * (residual ** 2 - total[use])) / np.sum(weights)))
         if not self.map_has_excess:
             excess /= 2
             for cell in self.cells.values():

@@ -107,6 +107,9 @@ struct FusionConfig {
     double behind_m = 0.0;         ///< fused profiles start this far behind the wheels (already-driven road)
     bool align = true;             ///< remove the plane between a frame's heights and the map's before fusing
     double align_tilt_sigma = 1e-4;   ///< rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
+    /// m: the disagreement beyond the cells' variances (the excess) is measured on the shared cells this close to
+    /// the line ahead of the vehicle — the lane the profiles are read from, not the verges (method.md §7)
+    double align_excess_half_width_m = 2.0;
 };
 
 /// Stereo cameras (docs/method.md §12): OpenCV StereoSGBM's settings, the disparity noise behind each point's
