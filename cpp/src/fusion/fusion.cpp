@@ -23,6 +23,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMedianVarianceFactor = M_PI / 2;  // Var(median of n Gaussians) ≈ (π/2)σ²/n
 constexpr double kMinVariance = 1e-12;              // m²; keeps a noise-free cell's Kalman gain defined
 constexpr std::size_t kMinAlignCells = 10;  // fewer cells shared with the map leave the frame as it is
+// The excess is a variance estimated from n cells, uncertain by about √(2/n) of itself: the lane alone measures it
+// when it holds this many (±10 %), else all shared cells do (a sparse sensor's lane holds a few rings' cells).
+constexpr std::ptrdiff_t kMinExcessCells = 200;
 constexpr double kMadToSigma = 1.4826;        // σ of a Gaussian from its median absolute deviation
 constexpr double kOutlierSigmas = 3.0;        // cells farther than this from the alignment plane are outliers
 // Single points take the pooled variance of their 5 m band of range: a point's height error is its range error
@@ -375,7 +378,7 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     };
     const bool lane_only = std::count_if(shared.begin(), shared.end(), [&](const Shared& s) {
                                return s.inlier && in_lane(s);
-                           }) >= static_cast<std::ptrdiff_t>(kMinAlignCells);
+                           }) >= kMinExcessCells;
     double weighted = 0.0, weights = 0.0;
     for (const Shared& s : shared) {
         if (!s.inlier || (lane_only && !in_lane(s))) continue;

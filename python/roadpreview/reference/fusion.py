@@ -26,6 +26,7 @@ from .support import pooled_variances
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
 _MIN_VARIANCE = 1e-12
 _MIN_ALIGN_CELLS = 10  # fewer cells shared with the map leave the frame as it is
+_MIN_EXCESS_CELLS = 200  # lane cells that measure the excess alone (a variance from n cells: ±√(2/n))
 _MAD_TO_SIGMA = 1.4826  # σ of a Gaussian from its median absolute deviation
 _OUTLIER_SIGMAS = 3.0  # cells farther than this from the alignment plane are outliers
 # A single point's variance is pooled over its 5 m band of range (its height error shrinks with range), from the
@@ -190,11 +191,12 @@ class FusedMap:
         # The disagreement left beyond the variances is error common to every frame that no cell's spread sees,
         # the same at every range on real recordings: its weighted mean joins every cell of the frame; the first
         # time, the map's cells (from frames never compared) take half of it.
-        # Measured in the lane ahead, where the profiles are read (not on the verges), when it holds enough cells.
+        # Measured in the lane ahead, where the profiles are read (not on the verges), when it holds enough cells
+        # for a ±10 % estimate of a variance (√(2/n)); a sparse sensor's lane holds a few rings' cells.
         c, s = math.cos(self.pose[2]), math.sin(self.pose[2])
         lane = inlier & (np.abs(-s * offsets[shared, 0] + c * offsets[shared, 1])
                          <= self.cfg.fusion.align_excess_half_width_m)
-        use = lane if lane.sum() >= _MIN_ALIGN_CELLS else inlier
+        use = lane if lane.sum() >= _MIN_EXCESS_CELLS else inlier
         residual = difference[use] - v[use] @ plane
         weights = 1 / total[use] ** 2
         excess = max(0.0, float(np.sum(weights * (residual ** 2 - total[use])) / np.sum(weights)))
