@@ -11,6 +11,8 @@
 
 #include "roadpreview/calibration/calibration.hpp"
 
+#include "core/median.hpp"
+
 namespace roadpreview {
 namespace {
 
@@ -108,12 +110,9 @@ std::vector<std::int32_t> rings_in_order(PointsView points) {
     return ring;
 }
 
-// The mean of the two middle values for an even count; NaN for none.
+// core/median.hpp's median of a copy; NaN for none.
 double median_of(std::vector<double> v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    return v.size() % 2 ? *mid : 0.5 * (*mid + *std::max_element(v.begin(), mid));
+    return v.empty() ? std::numeric_limits<double>::quiet_NaN() : median(v.begin(), v.end());
 }
 
 // The median elevation (deg) of each ring beyond 4 m; NaN for a ring without such points.

@@ -11,6 +11,8 @@
 #include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/core/frames.hpp"
 
+#include "core/median.hpp"
+
 #include "beam_geometry.hpp"
 
 namespace roadpreview {
@@ -25,13 +27,9 @@ constexpr double kMedianEfficiency = 1.2533;  // Ïƒ of a median of n Gaussians â
 double deg(double rad) { return rad * 180.0 / kPi; }
 double rad(double deg) { return deg * kPi / 180.0; }
 
-// The mean of the two middle values for an even count; NaN for none.
+// core/median.hpp's median of a copy; NaN for none.
 double median(std::vector<double> v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    if (v.size() % 2) return *mid;
-    return 0.5 * (*mid + *std::max_element(v.begin(), mid));
+    return v.empty() ? std::numeric_limits<double>::quiet_NaN() : roadpreview::median(v.begin(), v.end());
 }
 
 Eigen::Matrix<double, kTerms, 1> terms(double x, double y) {
