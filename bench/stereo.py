@@ -6,14 +6,19 @@ and the time per pair.
     1–10 cm under the left wheel and plain road under the right, driven at 10 m/s, 10 Hz; disparity noise
     0.25 px, 2 % invalid pixels. Bump height = crest minus the road 1–2.5 m around it (bench/accuracy.py),
     scored in the frames with the bump 5–15 m ahead; the plain road is the right wheel's profile 5–15 m ahead;
-    frame by frame (none), the paper's moving average (ema, α = 0.5) and the Kalman map;
+    frame by frame (none), the paper's moving average (ema, α = 0.5) and the Kalman map; ``--noise sgbm`` draws
+    the disparity noise as measured on the real pair (sim.SGBM_ON_KITTI: 0.3 px, correlated along the rows);
   * the real pair of ../shared/data/stereo/stereo_rcnn_kitti_object (StereoSGBM in C++) against the Velodyne
     scan of the same instant, both in one base frame (on the road below the Velodyne): the wheel-path profiles'
     RMS difference per distance band and the ISO class of each; a picture;
+  * the noise of that pair's disparities: the Velodyne's road points projected into both images give the true
+    disparity of the pixels they fall on; SGBM's error there per depth band, and how it is correlated along the
+    rows and across them (each laser ring's median error removed: the rings' own calibration errors);
   * the time per KITTI pair (1242 × 375): reading, matching (road rows only, and the whole image), points and
     the pipeline, with 1 and 2 OpenCV threads.
 
-    python bench/stereo.py [--quick] [--jobs N] [--runs N] [--picture PATH]
+    python bench/stereo.py [--quick] [--jobs N] [--runs N] [--picture PATH] [--parts paper,real,noise,timing]
+                           [--noise independent|sgbm]
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import numpy as np
 
 import roadpreview as rp
 from roadpreview import sim
+from roadpreview.reference.surface_calibration import rings_in_scan_order
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from accuracy import bump_height, detrended_rms, md_table, run_in_pool  # noqa: E402
@@ -50,6 +56,7 @@ BUMP_RANGE_M = (5.0, 15.0)
 HEIGHTS_M = tuple(h / 100 for h in range(1, 11))
 METHODS = (("none", True), ("ema", True), ("kalman", True), ("kalman", False))  # (fusion, range variances)
 BANDS_M = ((5, 10), (10, 15), (15, 20), (20, 30), (30, 40))
+LIDAR_RANGE_SIGMA_M = 0.02  # the HDL-64E's range accuracy (its manual: < 2 cm): the truth's own disparity error
 
 
 def method_name(method: str, variances: bool) -> str:
@@ -57,11 +64,14 @@ def method_name(method: str, variances: bool) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ the paper
-def paper_run(item: tuple[float, int]) -> dict:
-    """One bump height and frame count: frames rendered once, processed by every method; per-frame bump and road
-    errors."""
-    height_m, frame_count = item
-    camera = sim.kitti_stereo()
+NOISE_MODELS = {"independent": {}, "sgbm": sim.SGBM_ON_KITTI}  # disparity noise of the simulated camera
+
+
+def paper_run(item: tuple[float, int, str]) -> dict:
+    """One bump height, frame count and noise model: frames rendered once, processed by every method; per-frame
+    bump and road errors."""
+    height_m, frame_count, noise = item
+    camera = sim.kitti_stereo(**NOISE_MODELS[noise])
     bump = sim.SpeedBump(BUMP_X_M, height_m, BUMP_LENGTH_M, y_min_m=0.8 - BUMP_HALF_WIDTH_M,
                          y_max_m=0.8 + BUMP_HALF_WIDTH_M)
     scene = sim.Scene(sim.Road(bumps=(bump,)))
@@ -111,6 +121,75 @@ def print_paper(results: list[dict]) -> None:
 
 
 # ------------------------------------------------------------------------------------------------ real pair
+def disparity_errors(pair_dir: Path = PAIR) -> dict:
+    """SGBM's disparity error at the pixels the Velodyne's road points fall on (bilinear in the disparity image,
+    all four neighbours valid): the true disparity is u₂ − u₃ of the point projected by P2 and P3."""
+    m = kitti_matrices(pair_dir / "calib.txt")
+    velo_to_rect = np.eye(4)
+    velo_to_rect[:3, :] = m["Tr_velo_to_cam"].reshape(3, 4)
+    r0 = np.eye(4)
+    r0[:3, :3] = m["R0_rect"].reshape(3, 3)
+    points = rp.io.read(pair_dir / "lidar.bin")
+    ground = rp.Estimator(rp.Config(sensor_height=LIDAR_HEIGHT_M)).process(points, 5.0, 0.0).ground_mask
+    rect = r0 @ velo_to_rect @ np.c_[points[:, :3], np.ones(len(points))].T
+    p2, p3 = m["P2"].reshape(3, 4) @ rect, m["P3"].reshape(3, 4) @ rect
+    depth = p2[2]
+    u = p2[0] / np.where(depth > 1, depth, np.nan)
+    v = p2[1] / np.where(depth > 1, depth, np.nan)
+    found = rp.io.stereo_points(pair_dir / "left.png", pair_dir / "right.png", pair_dir / "calib.txt",
+                                config=rp.Config(sensor_height=LIDAR_HEIGHT_M))
+    disparity = found.disparity
+    rows, cols = disparity.shape
+    inside = np.asarray(ground, bool) & (u >= 0) & (u < cols - 1) & (v >= found.first_row) & (v < rows - 1)
+    i = np.flatnonzero(inside)
+    u0, v0 = np.floor(u[i]).astype(int), np.floor(v[i]).astype(int)
+    a, b = u[i] - u0, v[i] - v0
+    corners = np.stack([disparity[v0, u0], disparity[v0, u0 + 1], disparity[v0 + 1, u0], disparity[v0 + 1, u0 + 1]])
+    valid = np.all(corners > 0, axis=0)
+    sgbm = corners[0] * (1 - a) * (1 - b) + corners[1] * a * (1 - b) + corners[2] * (1 - a) * b + corners[3] * a * b
+    i, keep = i[valid], valid
+    ring = rings_in_scan_order(points)[i]  # KITTI lists its points ring by ring
+    truth = p2[0][i] / depth[i] - p3[0][i] / p3[2][i]
+    return {"error": sgbm[keep] - truth, "truth": truth, "depth": depth[i], "u": u[i], "v": v[i], "ring": ring,
+            "range_m": np.linalg.norm(points[i, :3], axis=1)}
+
+
+def robust_sigma(x: np.ndarray) -> float:
+    return float(1.4826 * np.median(np.abs(x - np.median(x))))
+
+
+def print_noise(errors: dict, gross_px: float = 1.5) -> None:
+    """The error per depth band, then its correlation along and across the rows after each ring's median error
+    (the LiDAR ring's own calibration error, with any error common to the ring) is removed."""
+    e, depth = errors["error"], errors["depth"]
+    clean = np.abs(e - np.median(e)) < gross_px
+    rows = []
+    for lo, hi in ((5, 10), (10, 15), (15, 20), (20, 30), (30, 45)):
+        band = (depth >= lo) & (depth < hi)
+        lidar_px = np.median(errors["truth"][band] * LIDAR_RANGE_SIGMA_M / errors["range_m"][band])
+        rows.append([f"{lo}–{hi}", int(band.sum()), f"{np.median(e[band]):+.3f}", f"{robust_sigma(e[band]):.3f}",
+                     f"{np.mean(~clean[band]) * 100:.1f}", f"{lidar_px:.3f}"])
+    print("## Disparity noise of the real pair (StereoSGBM against the Velodyne's road points)\n")
+    print(md_table(["depth m", "points", "median error px", "robust σ px", f"beyond {gross_px:g} px %",
+                    "the truth's own error (2 cm in range) px"], rows) + "\n")
+    ring_median = {r: np.median(e[clean & (errors["ring"] == r)]) for r in np.unique(errors["ring"][clean])}
+    residual = (e - np.array([ring_median.get(r, np.nan) for r in errors["ring"]]))[clean]
+    u, v = errors["u"][clean], errors["v"][clean]
+    from scipy.spatial import cKDTree  # the test extra's scipy: pairs of points within 40 px
+    pairs = cKDTree(np.c_[u, v]).query_pairs(40.0, output_type="ndarray")
+    du, dv = np.abs(np.diff(u[pairs], axis=1))[:, 0], np.abs(np.diff(v[pairs], axis=1))[:, 0]
+    x, y = residual[pairs[:, 0]], residual[pairs[:, 1]]
+    rows = []
+    for lo, hi in ((1, 3), (3, 6), (6, 10), (10, 15), (15, 25), (25, 40)):
+        along, across = (dv < 1) & (du >= lo) & (du < hi), (du < 2) & (dv >= lo) & (dv < hi)
+        rows.append([f"{lo}–{hi}", *(f"{np.corrcoef(x[s], y[s])[0, 1]:.2f} ({s.sum()})" if s.sum() > 30 else "–"
+                                     for s in (along, across))])
+    print(f"Each ring's median error removed: robust σ {robust_sigma(residual):.3f} px; the rings' medians spread "
+          f"{robust_sigma(np.array(list(ring_median.values()))):.3f} px ({len(ring_median)} rings).\n")
+    print(md_table(["separation px", "correlation along a row, Δv < 1 px (pairs)",
+                    "correlation across rows, Δu < 2 px (pairs)"], rows) + "\n")
+
+
 def kitti_matrices(path: Path) -> dict:
     out = {}
     for line in path.read_text().splitlines():
@@ -250,7 +329,9 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="worker processes")
     parser.add_argument("--runs", type=int, default=15, help="timing runs per setting")
     parser.add_argument("--picture", type=Path, help="write the stereo-vs-LiDAR profile picture here")
-    parser.add_argument("--parts", default="paper,real,timing", help="comma-separated parts to run")
+    parser.add_argument("--parts", default="paper,real,noise,timing", help="comma-separated parts to run")
+    parser.add_argument("--noise", choices=sorted(NOISE_MODELS), default="independent",
+                        help="the simulated camera's disparity noise in the paper's experiment")
     args = parser.parse_args(argv)
     heights, frames = ((0.05,), 4) if args.quick else (HEIGHTS_M, FRAMES)
     runs = 3 if args.quick else args.runs
@@ -260,9 +341,10 @@ def main(argv=None) -> int:
     print(f"- Python {platform.python_version()}, numpy {np.__version__}, roadpreview {rp.__version__}; "
           f"1-min load {os.getloadavg()[0]:.1f}\n")
     if "paper" in parts:
-        results = run_in_pool(paper_run, [(h, frames) for h in heights], args.jobs,
+        results = run_in_pool(paper_run, [(h, frames, args.noise) for h in heights], args.jobs,
                               lambda r: f"bump {r['height'] * 100:.0f} cm")
-        print(f"- {len(heights)} sequences of {frames} frames at 10 Hz, {SPEED_MPS:g} m/s; "
+        print(f"- {len(heights)} sequences of {frames} frames at 10 Hz, {SPEED_MPS:g} m/s, {args.noise} disparity "
+              f"noise {NOISE_MODELS[args.noise] or '(0.25 px)'}; "
               f"{time.perf_counter() - start:.0f} s on {args.jobs} worker(s)\n")
         print_paper(results)
     if not (PAIR / "left.png").exists():
@@ -273,6 +355,8 @@ def main(argv=None) -> int:
         print_real(pair)
         if args.picture:
             save_picture(pair, args.picture)
+    if "noise" in parts:
+        print_noise(disparity_errors())
     if "timing" in parts:
         print_timing(time_pair(runs), runs)
     print(f"1-min load at the end: {os.getloadavg()[0]:.1f}")

@@ -9,3 +9,4 @@ def test_bench_stereo_quick():
     assert "| kalman |" in out
     if (STEREO_PAIR / "left.png").exists():
         assert "## Real KITTI pair" in out and "## Time per KITTI pair" in out
+        assert "## Disparity noise of the real pair" in out and "| 10–15 |" in out

@@ -194,6 +194,27 @@ def test_simulated_bump_under_the_left_wheel(tmp_path):
     assert np.percentile(np.abs(right[near] - truth["right"][near]), 95) < 0.01
 
 
+
+def test_simulated_disparity_noise_correlated_like_a_block_matcher():
+    sigma, (along, across) = 0.3, (15.0, 2.0)
+    field = sim.correlated_noise((300, 1200), sigma, (along, across), np.random.default_rng(3))
+    assert field.std() == pytest.approx(sigma, rel=0.05)
+    corr = lambda a, b: np.corrcoef(a.ravel(), b.ravel())[0, 1]  # noqa: E731
+    assert corr(field[:, 15:], field[:, :-15]) == pytest.approx(np.exp(-1), abs=0.05)  # one length along a row
+    assert corr(field[2:], field[:-2]) == pytest.approx(np.exp(-1), abs=0.05)  # one length across the rows
+    assert corr(field[:, 60:], field[:, :-60]) == pytest.approx(np.exp(-4), abs=0.05)
+    camera = sim.kitti_stereo(**sim.SGBM_ON_KITTI)
+    road = sim.Scene(sim.Road())
+    frame = sim.render(road, camera, sim.Pose(), np.random.default_rng(0))
+    seen = frame.disparity > 0
+    err = np.where(seen, frame.disparity - camera.focal_px * camera.baseline_m / frame.depth_m, np.nan)
+    rows = err[250:260, 100:1100]  # a road strip: the errors of neighbouring pixels in a row move together
+    pairs = np.isfinite(rows[:, 5:]) & np.isfinite(rows[:, :-5])
+    assert np.corrcoef(rows[:, 5:][pairs], rows[:, :-5][pairs])[0, 1] > 0.6
+    assert np.nanstd(err) == pytest.approx(0.3, rel=0.1)
+    with pytest.raises(ValueError, match="noise_correlation_px"):
+        sim.kitti_stereo(noise_correlation_px=(15.0, -1.0))
+
 @pytest.mark.skipif(not (PAIR / "left.png").exists(), reason="shared KITTI stereo pair not available")
 def test_real_kitti_pair_agrees_with_its_lidar_scan():
     import sys

@@ -21,7 +21,7 @@ from .scene import LABEL_NONE, LABEL_OBSTACLE, LABEL_ROAD, Box, Scene, cast
 from . import roadside  # roadside scenes: python/roadpreview/sim/roadside.py
 from .range_sensor import (BenchTrack, ProfileTrack, RangeDrive, RangeSensorModel, bench_counts, bench_profile, bench_reference,
                            bench_road, drive_readings, laser, layout_yaml, measured_distance, ultrasonic)
-from .stereo import StereoCamera, StereoFrame, drive_stereo, kitti_stereo, render
+from .stereo import SGBM_ON_KITTI, StereoCamera, StereoFrame, correlated_noise, drive_stereo, kitti_stereo, render
 
 __all__ = [
     "Box", "Frame", "ISO_CLASSES", "LABEL_NONE", "LABEL_OBSTACLE", "LABEL_ROAD", "Lidar", "PRESETS", "Pose",
@@ -30,5 +30,5 @@ __all__ = [
     "os1_128", "preset", "ring_profiles", "scan", "trajectory", "truth_profiles", "vlp_16", "wheel_path_xy",
     "BenchTrack", "ProfileTrack", "RangeDrive", "RangeSensorModel", "bench_counts", "bench_profile", "bench_reference", "bench_road",
     "drive_readings", "laser", "layout_yaml", "measured_distance", "ultrasonic",
-    "StereoCamera", "StereoFrame", "drive_stereo", "kitti_stereo", "render",
+    "SGBM_ON_KITTI", "StereoCamera", "StereoFrame", "correlated_noise", "drive_stereo", "kitti_stereo", "render",
 ]
