@@ -147,10 +147,10 @@ def disparity_errors(pair_dir: Path = PAIR) -> dict:
     corners = np.stack([disparity[v0, u0], disparity[v0, u0 + 1], disparity[v0 + 1, u0], disparity[v0 + 1, u0 + 1]])
     valid = np.all(corners > 0, axis=0)
     sgbm = corners[0] * (1 - a) * (1 - b) + corners[1] * a * (1 - b) + corners[2] * (1 - a) * b + corners[3] * a * b
-    i, keep = i[valid], valid
+    i, sgbm = i[valid], sgbm[valid]
     ring = rings_in_scan_order(points)[i]  # KITTI lists its points ring by ring
     truth = p2[0][i] / depth[i] - p3[0][i] / p3[2][i]
-    return {"error": sgbm[keep] - truth, "truth": truth, "depth": depth[i], "u": u[i], "v": v[i], "ring": ring,
+    return {"error": sgbm - truth, "truth": truth, "depth": depth[i], "u": u[i], "v": v[i], "ring": ring,
             "range_m": np.linalg.norm(points[i, :3], axis=1)}
 
 

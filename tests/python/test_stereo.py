@@ -194,7 +194,6 @@ def test_simulated_bump_under_the_left_wheel(tmp_path):
     assert np.percentile(np.abs(right[near] - truth["right"][near]), 95) < 0.01
 
 
-
 def test_simulated_disparity_noise_correlated_like_a_block_matcher():
     sigma, (along, across) = 0.3, (15.0, 2.0)
     field = sim.correlated_noise((300, 1200), sigma, (along, across), np.random.default_rng(3))
@@ -214,6 +213,7 @@ def test_simulated_disparity_noise_correlated_like_a_block_matcher():
     assert np.nanstd(err) == pytest.approx(0.3, rel=0.1)
     with pytest.raises(ValueError, match="noise_correlation_px"):
         sim.kitti_stereo(noise_correlation_px=(15.0, -1.0))
+
 
 @pytest.mark.skipif(not (PAIR / "left.png").exists(), reason="shared KITTI stereo pair not available")
 def test_real_kitti_pair_agrees_with_its_lidar_scan():
