@@ -10,3 +10,4 @@ def test_bench_stereo_quick():
     if (STEREO_PAIR / "left.png").exists():
         assert "## Real KITTI pair" in out and "## Time per KITTI pair" in out
         assert "## Disparity noise of the real pair" in out and "| 10–15 |" in out
+        assert "## The bins' noise, simulated" in out and "| as measured (sim.SGBM_ON_KITTI) | 5–10 |" in out
