@@ -198,7 +198,7 @@ def bin_noise_rows(seeds: int = 6) -> list[list[str]]:
     rows = []
     for name, noise in models:
         camera = sim.kitti_stereo(**noise)
-        errors, model = {band: [] for band in BANDS_M[:3]}, {band: [] for band in BANDS_M[:3]}
+        errors, stated = {band: [] for band in BANDS_M[:3]}, {band: [] for band in BANDS_M[:3]}
         with tempfile.TemporaryDirectory() as tmp:
             calib = camera.write_calibration(Path(tmp) / "stereo.yaml")
             cfg = rp.Config(extrinsics=camera.extrinsics(), obstacles={"enabled": False})
@@ -212,11 +212,11 @@ def bin_noise_rows(seeds: int = 6) -> list[list[str]]:
                     for lo, hi in errors:
                         w = (s >= lo) & (s < hi) & (count >= 3) & np.isfinite(z)
                         errors[(lo, hi)].extend(z[w])
-                        model[(lo, hi)].extend(np.sqrt(np.pi / 2 * spread[w] ** 2 / count[w]))
+                        stated[(lo, hi)].extend(np.sqrt(np.pi / 2 * spread[w] ** 2 / count[w]))
         for band in errors:
-            actual, stated = np.sqrt(np.mean(np.square(errors[band]))), np.median(model[band])
+            actual, median_stated = np.sqrt(np.mean(np.square(errors[band]))), np.median(stated[band])
             rows.append([name, f"{band[0]}–{band[1]}", len(errors[band]), f"{actual * 100:.2f}",
-                         f"{stated * 100:.2f}", f"{actual / stated:.1f}"])
+                         f"{median_stated * 100:.2f}", f"{actual / median_stated:.1f}"])
     return rows
 
 
