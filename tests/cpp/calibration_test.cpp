@@ -44,16 +44,23 @@ rp::Config level_sensor() {
     return cfg;
 }
 
-rp::BeamCalibration calibrate_drive(int frames, double step_m) {
-    std::mt19937 rng(5);
-    rp::BeamCalibrator calibrator(level_sensor(), kBeams);
+// `frames` scans of the flat road drawn from `seed`, each handed to add_frame(frame index, points, beams).
+template <class AddFrame>
+void drive(unsigned seed, int frames, AddFrame add_frame) {
+    std::mt19937 rng(seed);
     for (int f = 0; f < frames; ++f) {
         std::vector<float> xyz;
         std::vector<std::int32_t> beams;
         scan(rng, xyz, beams);
-        const auto view = rp::points_view(xyz.data(), static_cast<Eigen::Index>(beams.size()), 3);
-        calibrator.add_frame(view, beams, rp::Pose2{f * step_m, 0.0, 0.0});
+        add_frame(f, rp::points_view(xyz.data(), static_cast<Eigen::Index>(beams.size()), 3), beams);
     }
+}
+
+rp::BeamCalibration calibrate_drive(int frames, double step_m) {
+    rp::BeamCalibrator calibrator(level_sensor(), kBeams);
+    drive(5, frames, [&](int f, rp::PointsView view, const std::vector<std::int32_t>& beams) {
+        calibrator.add_frame(view, beams, rp::Pose2{f * step_m, 0.0, 0.0});
+    });
     return calibrator.solve();
 }
 
@@ -193,14 +200,10 @@ namespace {
 
 // A drive of `frames` frames of the flat road, from anywhere (the surface calibration needs no poses).
 rp::BeamCalibration calibrate_on_surface(int frames) {
-    std::mt19937 rng(11);
     rp::SurfaceCalibrator calibrator(level_sensor(), kBeams);
-    for (int f = 0; f < frames; ++f) {
-        std::vector<float> xyz;
-        std::vector<std::int32_t> beams;
-        scan(rng, xyz, beams);
-        calibrator.add_frame(rp::points_view(xyz.data(), static_cast<Eigen::Index>(beams.size()), 3), beams);
-    }
+    drive(11, frames, [&](int, rp::PointsView view, const std::vector<std::int32_t>& beams) {
+        calibrator.add_frame(view, beams);
+    });
     return calibrator.solve();
 }
 

@@ -21,15 +21,16 @@
 namespace roadpreview {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using detail::deg;
+using detail::gauge_columns;
+using detail::kPi;
+using detail::rad;
+
 constexpr double kPriorElevationRad = 0.5 * kPi / 180.0;  // the priors only regularise what the data leave open
 constexpr double kPriorRangeM = 0.1;
 constexpr double kPriorOffsetM = 0.5;
 constexpr double kPriorSlope = 0.02;
 constexpr double kGaugePrecision = 1e12;  // 1/rad²: holds the two gauge directions at zero
-
-double deg(double rad) { return rad * 180.0 / kPi; }
-double rad(double deg) { return deg * kPi / 180.0; }
 
 using Obs = BeamCalibrator::Observation;
 
@@ -75,19 +76,6 @@ std::vector<double> beam_reach(const std::vector<Obs>& obs, int beams) {
     for (std::size_t b = 0; b < reach.size(); ++b)
         if (weight[b] > 0) reach[b] = sum[b] / weight[b];
     return reach;
-}
-
-// Rows 1, mean/reach, reach/mean for the beams in `members` (whose reach is finite).
-Eigen::MatrixXd gauge_columns(const std::vector<double>& reach, const std::vector<int>& members) {
-    double mean = 0.0;
-    for (int b : members) mean += reach[static_cast<std::size_t>(b)];
-    mean /= std::max<std::size_t>(members.size(), 1);
-    Eigen::MatrixXd basis(static_cast<Eigen::Index>(members.size()), 3);
-    for (Eigen::Index k = 0; k < basis.rows(); ++k) {
-        const double r = reach[static_cast<std::size_t>(members[static_cast<std::size_t>(k)])];
-        basis.row(k) << 1.0, mean / r, r / mean;
-    }
-    return basis;
 }
 
 // The offsets the ground cannot tell from the mounting or the road's shape (method.md §8): a common one (tilts

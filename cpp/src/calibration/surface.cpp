@@ -18,14 +18,13 @@
 namespace roadpreview {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using detail::deg;
+using detail::rad;
+
 constexpr int kTerms = 6;         // 1, x, y, x², xy, y²
 constexpr double kScaleM = 10.0;  // x and y in tens of metres: a well-conditioned normal matrix
 constexpr double kMadToSigma = 1.4826;
 constexpr double kMedianEfficiency = 1.2533;  // σ of a median of n Gaussians ≈ 1.2533·σ/√n
-
-double deg(double rad) { return rad * 180.0 / kPi; }
-double rad(double deg) { return deg * kPi / 180.0; }
 
 // core/median.hpp's median of a copy; NaN for none.
 double median(std::vector<double> v) {
@@ -155,20 +154,13 @@ BeamCalibration SurfaceCalibrator::solve() const {
                                std::to_string(options_.min_beams));
     // Relative, as BeamCalibrator's: less the least-squares fit a + b·mean/reach + c·reach/mean over the beams
     // determined (a pitch, a height and a sag of the road, which the ground cannot tell from offsets).
-    const auto reach = [this](int b) {
-        return reach_sum_[static_cast<std::size_t>(b)] / reach_weight_[static_cast<std::size_t>(b)];
-    };
-    double mean = 0.0;
-    for (int b : determined) mean += reach(b);
-    mean /= static_cast<double>(determined.size());
-    Eigen::MatrixXd basis(static_cast<Eigen::Index>(determined.size()), 3);
+    std::vector<double> reach(values_.size(), std::numeric_limits<double>::quiet_NaN());  // mean −J: its range
+    for (std::size_t b = 0; b < reach.size(); ++b)
+        if (reach_weight_[b] > 0) reach[b] = reach_sum_[b] / reach_weight_[b];
+    const Eigen::MatrixXd basis = detail::gauge_columns(reach, determined);
     Eigen::VectorXd d(static_cast<Eigen::Index>(determined.size()));
-    for (std::size_t k = 0; k < determined.size(); ++k) {
-        const auto b = static_cast<std::size_t>(determined[k]);
-        const double r = reach(determined[k]);
-        basis.row(static_cast<Eigen::Index>(k)) << 1.0, mean / r, r / mean;
-        d[static_cast<Eigen::Index>(k)] = delta[b];
-    }
+    for (std::size_t k = 0; k < determined.size(); ++k)
+        d[static_cast<Eigen::Index>(k)] = delta[static_cast<std::size_t>(determined[k])];
     const Eigen::VectorXd relative = d - basis * basis.colPivHouseholderQr().solve(d);
 
     BeamCalibration out;
