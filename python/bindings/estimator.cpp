@@ -8,27 +8,41 @@ void bind_estimator(py::module_& m) {
         .def("process", [](rp::Estimator& est, py::handle points, double speed, double yaw_rate, const std::string& source,
                            std::optional<double> timestamp, const std::string& yaw_rate_source,
                            std::optional<std::array<double, 3>> pose,
-                           std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> range_variances) {
+                           std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> range_variances,
+                           std::optional<py::array> error_groups) {
             py::object holder;
             const rp::PointsView view = points_from(points, holder);
             rp::FrameMotion motion{timestamp, std::nullopt};
             if (pose) motion.pose = rp::Pose2{(*pose)[0], (*pose)[1], (*pose)[2]};
-            const float* variances = nullptr;
-            if (range_variances) {
-                if (range_variances->ndim() != 1 || range_variances->shape(0) != view.rows())
-                    throw py::value_error("range_variances must be a 1-D array with one entry per point (" +
+            const auto one_per_point = [&](const py::array& a, const char* name) {
+                if (a.ndim() != 1 || a.shape(0) != view.rows())
+                    throw py::value_error(std::string(name) + " must be a 1-D array with one entry per point (" +
                                           std::to_string(view.rows()) + "), got shape " +
-                                          py::str(range_variances->attr("shape")).cast<std::string>());
-                variances = range_variances->data();
+                                          py::str(a.attr("shape")).cast<std::string>());
+            };
+            rp::PointErrors errors;
+            if (range_variances) {
+                one_per_point(*range_variances, "range_variances");
+                errors.range_variances_m2 = range_variances->data();
+            }
+            py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> groups;
+            if (error_groups) {
+                if (error_groups->dtype().kind() != 'i' && error_groups->dtype().kind() != 'u')
+                    throw py::type_error("error_groups must be an integer array, got dtype " +
+                                         py::str(error_groups->dtype()).cast<std::string>());
+                one_per_point(*error_groups, "error_groups");
+                groups = error_groups->cast<py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>>();
+                errors.error_groups = groups.data();
             }
             rp::Result r;
             {
                 py::gil_scoped_release release;
-                r = est.process(view, speed, yaw_rate, source, motion, variances);
+                r = est.process(view, speed, yaw_rate, source, motion, errors);
             }
             r.yaw_rate_source = yaw_rate_source;
             return r;
         }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
-           py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none())
+           py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none(),
+           py::arg("error_groups") = py::none())
         .def("reset", &rp::Estimator::reset, "Forgets the fused map, the pose and the clock");
 }

@@ -65,6 +65,8 @@ py::dict points_dict(rp::StereoPoints&& p, int first_row) {
                                      {py::ssize_t(sizeof(float))}, s.range_variances.data(), owner);
     d["pixels"] = py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(s.pixels.size())},
                             {py::ssize_t(sizeof(std::int32_t))}, s.pixels.data(), owner);
+    d["error_groups"] = py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(s.error_groups.size())},
+                                  {py::ssize_t(sizeof(std::int32_t))}, s.error_groups.data(), owner);
     d["first_row"] = first_row;
     return d;
 }
@@ -158,6 +160,11 @@ void bind_io(py::module_& m) {
             return read_only(py::array(py::dtype::of<float>(), {static_cast<py::ssize_t>(v.size())},
                                        {py::ssize_t(sizeof(float))}, v.data(), self));
         }, "float32 m² per point: variance along its line of sight (stereo); empty when unknown")
+        .def_property_readonly("error_groups", [](py::object self) {
+            const auto& g = self.cast<const rp::Frame&>().error_groups;
+            return read_only(py::array(py::dtype::of<std::int32_t>(), {static_cast<py::ssize_t>(g.size())},
+                                       {py::ssize_t(sizeof(std::int32_t))}, g.data(), self));
+        }, "int32 per point: points with one id share their range error (stereo); empty when unknown")
         .def_property_readonly("imu_timestamps", [](const rp::Frame& f) {
             std::vector<double> t;
             for (const auto& s : f.imu) t.push_back(s.timestamp);

@@ -141,6 +141,10 @@ class StereoConfig:
     mode: str = "sgbm_3way"  #: "sgbm" (5 directions), "hh" (8), "sgbm_3way" or "hh4"
     threads: int = 0  #: OpenCV threads for matching; 0: OpenCV's default (all cores)
     disparity_sigma_px: float = 0.4  #: σ_d of a matched disparity; a point's range σ is z²·σ_d/(f·B)·r/z
+    #: px, how far matching errors stay correlated along a row and across rows (KITTI pair, SGBM: 15, 2): points
+    #: within one tile of twice these share an error group (``error_groups``); 0: every pixel its own
+    error_correlation_along_px: float = 15.0
+    error_correlation_across_px: float = 2.0
     max_depth_m: float = 40.0  #: farther points are dropped; rows that only see beyond it are not matched
     road_rise_m: float = 2.0  #: the road may rise this far above the base plane at max_depth_m
 

@@ -21,7 +21,8 @@ class Estimator:
         self._impl = core().Estimator(self.config.to_json())
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
-                timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None, range_variances=None):
+                timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None, range_variances=None,
+                error_groups=None):
         """One frame.
 
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
@@ -34,6 +35,8 @@ class Estimator:
         pose: (x, y, yaw) of the vehicle in the odometry frame (m, m, rad), used instead of that integration.
         range_variances: (N,) m², each point's variance along its line of sight (a stereo frame's
         ``range_variances``); it sets a floor under the noise of the profiles' bins and the map's cells.
+        error_groups: (N,) integers, points with one id share their range error (a stereo frame's
+        ``error_groups``); a bin or a map cell counts each group once when it rates its median's noise.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
         if pose is not None:
@@ -41,7 +44,7 @@ class Estimator:
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
         return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose,
-                                  range_variances)
+                                  range_variances, error_groups)
 
     def reset(self):
         """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""

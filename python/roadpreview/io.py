@@ -143,6 +143,9 @@ class StereoPoints:
     points: np.ndarray  #: (N, 4) float32: x, y, z (m, camera frame: x ahead, y left, z up), grey level 0..1
     range_variances: np.ndarray  #: (N,) float32 m²: variance of each point's distance along its line of sight
     pixels: np.ndarray  #: (N,) int32: row · width + column of each point's pixel in the left image
+    #: (N,) int32: each point's error group, its tile of 2·stereo.error_correlation_along_px columns by
+    #: 2·stereo.error_correlation_across_px rows: points of one tile share a matching error
+    error_groups: np.ndarray
     first_row: int  #: the first image row matched (rows above it see no road within stereo.max_depth_m)
     disparity: np.ndarray  #: (rows, columns) float32 px, 0 where invalid
 
@@ -164,7 +167,8 @@ def stereo_points(left, right, calib: PathLike, *, disparity=None, config=None) 
     as_input = (lambda x: os.fspath(x) if isinstance(x, (str, os.PathLike)) else x)
     found, disp = core().stereo_points(as_input(left), as_input(right), os.fspath(calib), as_input(disparity),
                                        cfg.to_json())
-    return StereoPoints(found["points"], found["range_variances"], found["pixels"], found["first_row"], disp)
+    return StereoPoints(found["points"], found["range_variances"], found["pixels"], found["error_groups"],
+                        found["first_row"], disp)
 
 
 def open_stereo(left: Optional[PathLike] = None, right: Optional[PathLike] = None, calib: Optional[PathLike] = None, *,
@@ -173,8 +177,8 @@ def open_stereo(left: Optional[PathLike] = None, right: Optional[PathLike] = Non
 
     left, right: image files or directories of PNGs (paired in name order); disparity: a 16-bit disparity PNG or a
     directory of them (used instead of matching). Each frame has ``.points`` ((N, 4) float32, camera frame),
-    ``.range_variances`` (m² per point; pass them to ``Estimator.process(..., range_variances=...)``), ``.source``
-    and ``.frame_id``. The camera's pose comes from ``config`` (sensor_height / extrinsics), else from the
+    ``.range_variances`` (m² per point) and ``.error_groups`` (pass both to ``Estimator.process(...,
+    range_variances=..., error_groups=...)``), ``.source`` and ``.frame_id``. The camera's pose comes from ``config`` (sensor_height / extrinsics), else from the
     calibration YAML; neither raises ValueError.
     """
     from .config import Config

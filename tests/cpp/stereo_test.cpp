@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "roadpreview/roadpreview.hpp"
 
@@ -131,6 +132,23 @@ TEST(StereoPoints, FrontoParallelPlaneAndRangeVariance) {
     EXPECT_EQ(rp::disparity_to_points(d, 0, c, cfg).points.rows(), 0);
 }
 
+TEST(StereoPoints, ErrorGroupsAreTilesOfTwiceTheCorrelationLengths) {
+    const rp::StereoCalibration c = simple_calibration();
+    const rp::DisparityImage d = rp::DisparityImage::Constant(100, 640, 20.0f);
+    rp::StereoConfig cfg;
+    cfg.error_correlation_along_px = 15.0;  // tiles of 30 columns by 4 rows, 22 tiles per row (640 / 30 rounded up)
+    cfg.error_correlation_across_px = 2.0;
+    const rp::StereoPoints p = rp::disparity_to_points(d, 10, c, cfg);
+    ASSERT_EQ(p.error_groups.size(), p.pixels.size());
+    for (std::size_t i = 0; i < p.pixels.size(); i += 97) {
+        const int v = p.pixels[i] / 640, u = p.pixels[i] % 640;
+        EXPECT_EQ(p.error_groups[i], v / 4 * 22 + u / 30) << "pixel " << u << ", " << v;
+    }
+    cfg.error_correlation_along_px = cfg.error_correlation_across_px = 0.0;  // every pixel its own group
+    const rp::StereoPoints own = rp::disparity_to_points(d, 10, c, cfg);
+    EXPECT_EQ(own.error_groups, own.pixels);
+}
+
 TEST(StereoPoints, FirstRoadRowOfALevelCamera) {
     const rp::StereoCalibration c = simple_calibration();
     rp::StereoConfig cfg;
@@ -172,4 +190,43 @@ TEST(StereoPoints, PipelineTakesRangeVariancesAsAFloorUnderTheBinsSpread) {
     EXPECT_GT(compared, 20u);
     f.range_variances.pop_back();
     EXPECT_THROW(noisy.process(f, 5.0, 0.0), std::invalid_argument);
+}
+
+TEST(StereoPoints, PipelineCountsEachErrorGroupOnce) {
+    // The same noisy ground with and without error groups: the heights agree; with all points in one group a
+    // bin's spread is √count times larger (its median is as uncertain as one point), with a group per point equal.
+    const rp::StereoCalibration c = simple_calibration();
+    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
+    std::mt19937 rng(5);
+    std::normal_distribution<float> noise(0.0f, 0.2f);
+    for (int v = 61; v < 240; ++v)
+        for (int u = 0; u < 640; ++u) d(v, u) = static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5) + noise(rng);
+    rp::Config cfg;
+    cfg.sensor_height = 1.5;
+    cfg.obstacles.enabled = false;
+    const rp::StereoPoints p = rp::disparity_to_points(d, 0, c, cfg.stereo);
+    rp::Frame f;
+    f.points = p.points;
+    f.range_variances = p.range_variances;
+    const rp::Result alone = rp::Estimator(cfg).process(f, 5.0, 0.0);
+    f.error_groups.assign(p.pixels.size(), 7);
+    const rp::Result one = rp::Estimator(cfg).process(f, 5.0, 0.0);
+    f.error_groups = p.pixels;
+    const rp::Result each = rp::Estimator(cfg).process(f, 5.0, 0.0);
+    std::size_t compared = 0;
+    for (std::size_t k = 0; k < alone.left.spread.size(); ++k) {
+        if (!(alone.left.count[k] >= 2)) continue;
+        EXPECT_DOUBLE_EQ(one.left.z[k], alone.left.z[k]);
+        EXPECT_NEAR(one.left.spread[k], alone.left.spread[k] * std::sqrt(alone.left.count[k]), 1e-9);
+        EXPECT_DOUBLE_EQ(each.left.spread[k], alone.left.spread[k]);
+        ++compared;
+    }
+    EXPECT_GT(compared, 20u);
+    f.error_groups.pop_back();
+    try {
+        rp::Estimator(cfg).process(f, 5.0, 0.0);
+        ADD_FAILURE() << "error groups for all but one point were accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("error groups for"), std::string::npos) << e.what();
+    }
 }

@@ -70,9 +70,23 @@ def test_ground_plane_disparity_gives_points_on_the_ground_cpp_and_reference(cal
     np.testing.assert_array_equal(found.pixels, pixels[keep])
     np.testing.assert_allclose(found.points[:, :3], points[keep], rtol=1e-6, atol=1e-5)
     np.testing.assert_allclose(found.range_variances, variances[keep], rtol=1e-5)
+    np.testing.assert_array_equal(found.error_groups, rp.reference.stereo.error_groups(pixels[keep], 640, cfg.stereo))
     np.testing.assert_allclose(found.points[:, 2], -HEIGHT_M, atol=1e-5)  # every point 1.5 m below the camera
     v = found.pixels // 640
     np.testing.assert_allclose(found.points[:, 0], CAMERA["fx"] * HEIGHT_M / (v - CAMERA["cy"]), rtol=1e-6)
+
+
+@pytest.mark.parametrize("along, across", [(15.0, 2.0), (1.5, 0.25), (0.0, 0.0)])
+def test_error_groups_are_tiles_of_twice_the_correlation_lengths(calib, along, across):
+    cfg = cfg_for(max_depth_m=1000.0, error_correlation_along_px=along, error_correlation_across_px=across)
+    found = rp.io.stereo_points(None, None, calib, disparity=ground_disparity(), config=cfg)
+    v, u = np.divmod(found.pixels, 640)
+    columns, rows = max(1, int(2 * along + 0.5)), max(1, int(2 * across + 0.5))  # 30×4, 3×1 (1.5 rounds up), 1×1
+    np.testing.assert_array_equal(found.error_groups, v // rows * -(-640 // columns) + u // columns)
+    same_tile = (v // rows == v[0] // rows) & (u // columns == u[0] // columns)
+    assert np.count_nonzero(found.error_groups == found.error_groups[0]) == np.count_nonzero(same_tile)
+    with pytest.raises(ValueError, match="error_correlation"):
+        rp.Estimator(cfg_for(error_correlation_along_px=-1.0))
 
 
 def test_kitti_calibration_baseline_cpp_and_reference():
@@ -134,6 +148,7 @@ def test_png_files_any_bit_depth_and_open_stereo(tmp_path, calib):
     assert [f.frame_id for f in frames] == [0, 1]
     assert frames[0].source.endswith("000000.png")
     assert len(frames[0].range_variances) == len(frames[0].points) > 10000
+    assert len(frames[0].error_groups) == len(frames[0].points)
     # The 16-bit copy is scaled back to 8 bit by the pair's maximum: grey levels may round one step apart.
     assert len(frames[1].points) == pytest.approx(len(frames[0].points), rel=0.02)
     np.testing.assert_allclose(np.median(frames[1].points[:, :3], axis=0), np.median(frames[0].points[:, :3], axis=0),
@@ -141,37 +156,94 @@ def test_png_files_any_bit_depth_and_open_stereo(tmp_path, calib):
 
 
 # ------------------------------------------------------------------------------------------- pipeline
-def test_range_variances_cpp_against_reference(calib):
+@pytest.mark.parametrize("grouped", [False, True])
+def test_range_variances_cpp_against_reference(calib, grouped):
     rng = np.random.default_rng(3)
     d = ground_disparity() + rng.normal(0, 0.2, (240, 640)).astype(np.float32) * (ground_disparity() > 0)
     cfg = rp.Config(sensor_height=HEIGHT_M, obstacles={"enabled": False})
     found = rp.io.stereo_points(None, None, calib, disparity=d, config=cfg)
     points = np.ascontiguousarray(found.points)
-    cpp = rp.Estimator(cfg).process(points, 5.0, 0.05, range_variances=found.range_variances)
-    ref = rp.reference.process(points, 5.0, 0.05, cfg, range_variances=found.range_variances)
+    groups = found.error_groups if grouped else None
+    cpp = rp.Estimator(cfg).process(points, 5.0, 0.05, range_variances=found.range_variances, error_groups=groups)
+    ref = rp.reference.process(points, 5.0, 0.05, cfg, range_variances=found.range_variances, error_groups=groups)
     assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
     plain = rp.Estimator(cfg).process(points, 5.0, 0.05)
     backed = np.asarray(cpp.left.count) >= 2
     assert (np.asarray(cpp.left.spread)[backed] >= np.asarray(plain.left.spread)[backed] - 1e-9).all()
     assert (np.asarray(cpp.left.spread)[backed] > np.asarray(plain.left.spread)[backed] + 1e-4).any()
+    np.testing.assert_array_equal(cpp.left.z, plain.left.z)  # the errors rate the heights, they do not move them
     with pytest.raises(ValueError, match="one entry per point"):
         rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=found.range_variances[:-1])
+    with pytest.raises(ValueError, match="error_groups must be a 1-D array with one entry per point"):
+        rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups[:-1])
+    with pytest.raises(TypeError, match="error_groups must be an integer array"):
+        rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups.astype(float))
 
 
-def test_fused_range_variances_cpp_against_reference(calib):
+def test_error_groups_count_a_bin_s_shared_errors_once(calib):
+    """A bin's spread grows by √(points / distinct groups): all of a bin's points in one group state one point's
+    noise for its median, each point its own group changes nothing."""
+    d = ground_disparity()
+    cfg = rp.Config(sensor_height=HEIGHT_M, obstacles={"enabled": False}, profile={"level": False})
+    found = rp.io.stereo_points(None, None, calib, disparity=d, config=cfg)
+    points = np.ascontiguousarray(found.points)
+    variances = found.range_variances
+    alone = rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=variances)
+    each = rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=variances,
+                                     error_groups=np.arange(len(points), dtype=np.int32))
+    one = rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=variances,
+                                    error_groups=np.zeros(len(points), np.int64))
+    count, spread = np.asarray(alone.left.count), np.asarray(alone.left.spread)
+    backed = count >= 2
+    assert backed.sum() > 20
+    np.testing.assert_allclose(np.asarray(each.left.spread)[backed], spread[backed], rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(one.left.spread)[backed], spread[backed] * np.sqrt(count[backed]),
+                               rtol=1e-9)
+
+
+def test_stated_bin_noise_holds_under_correlated_matching_errors(tmp_path):
+    """With SGBM's errors (sim.SGBM_ON_KITTI: correlated over ~15 px along a row), a flat road's bins 5–10 m ahead err
+    2.7 times the σ their points would state as independent; counted by error group, the stated σ covers the error
+    (bench/stereo.py --parts noise)."""
+    camera = sim.kitti_stereo(**sim.SGBM_ON_KITTI)
+    calib = camera.write_calibration(tmp_path / "kitti.yaml")
+    cfg = rp.Config(extrinsics=camera.extrinsics(), obstacles={"enabled": False},
+                    stereo={"disparity_sigma_px": sim.SGBM_ON_KITTI["disparity_noise_px"]})
+    errors, stated = [], {False: [], True: []}
+    for seed in range(3):
+        frame = sim.render(sim.Scene(sim.Road()), camera, sim.Pose(), np.random.default_rng(seed))
+        found = rp.io.stereo_points(None, None, calib, disparity=frame.disparity, config=cfg)
+        for grouped in (False, True):
+            res = rp.Estimator(cfg).process(found.points, 10.0, 0.0, range_variances=found.range_variances,
+                                            error_groups=found.error_groups if grouped else None)
+            for p in (res.left, res.right):
+                s, z, count, spread = (np.asarray(a) for a in (p.s, p.z, p.count, p.spread))
+                near = (s >= 5) & (s < 10) & (count >= 3) & np.isfinite(z)
+                errors.extend(z[near] if grouped else [])
+                stated[grouped].extend(np.sqrt(np.pi / 2 * spread[near] ** 2 / count[near]))
+    actual = np.sqrt(np.mean(np.square(errors)))
+    assert actual / np.median(stated[False]) > 2.0  # points as independent: far too confident
+    assert 0.8 < actual / np.median(stated[True]) < 1.2
+
+
+def test_fused_range_variances_and_error_groups_cpp_against_reference(calib):
     rng = np.random.default_rng(4)
     cfg = rp.Config(sensor_height=HEIGHT_M, obstacles={"enabled": False}, fusion={"method": "kalman"})
-    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    est, state, ungrouped = rp.Estimator(cfg), rp.reference.FusedMap(cfg), rp.Estimator(cfg)
     for k in range(3):
         d = ground_disparity() + rng.normal(0, 0.2, (240, 640)).astype(np.float32) * (ground_disparity() > 0)
         found = rp.io.stereo_points(None, None, calib, disparity=d, config=cfg)
         points = np.ascontiguousarray(found.points)
-        cpp = est.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances)
+        cpp = est.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances,
+                          error_groups=found.error_groups)
         ref = rp.reference.process_fused(state, points, 5.0, 0.0, timestamp=0.1 * k,
-                                         range_variances=found.range_variances)
+                                         range_variances=found.range_variances, error_groups=found.error_groups)
         for c, r in ((cpp.left, ref.left), (cpp.right, ref.right)):
             np.testing.assert_allclose(c.z, r.z, atol=1e-4, equal_nan=True)
             np.testing.assert_allclose(c.spread, r.spread, rtol=1e-3, atol=1e-6, equal_nan=True)
+        alone = ungrouped.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances)
+    # a cell's points share their tiles' errors: the map's stated noise is larger for counting each tile once
+    assert np.nanmedian(np.asarray(cpp.left.spread) / np.asarray(alone.left.spread)) > 1.5
 
 
 def test_simulated_bump_under_the_left_wheel(tmp_path):

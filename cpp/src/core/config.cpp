@@ -74,7 +74,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, method, alpha, cel
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(StereoConfig, min_disparity, num_disparities, block_size, p1, p2,
                                                 disp12_max_diff, pre_filter_cap, uniqueness_ratio,
                                                 speckle_window_size, speckle_range, mode, threads,
-                                                disparity_sigma_px, max_depth_m, road_rise_m)
+                                                disparity_sigma_px, error_correlation_along_px,
+                                                error_correlation_across_px, max_depth_m, road_rise_m)
 
 void to_json(json& j, const Config& c) {
     j = json{{"sensor_height", c.sensor_height ? json(*c.sensor_height) : json(nullptr)},
@@ -206,6 +207,9 @@ void validate_stereo(const StereoConfig& s) {
             "stereo.mode must be \"sgbm\", \"hh\", \"sgbm_3way\" or \"hh4\", got \"" + s.mode + "\"");
     require(s.threads >= 0, "stereo.threads must be >= 0");
     require(positive(s.disparity_sigma_px), "stereo.disparity_sigma_px must be > 0");
+    require(s.error_correlation_along_px >= 0.0 && s.error_correlation_along_px <= 1e4 &&
+                s.error_correlation_across_px >= 0.0 && s.error_correlation_across_px <= 1e4,
+            "stereo.error_correlation_along_px and error_correlation_across_px must be within 0..10000");
     require(positive(s.max_depth_m), "stereo.max_depth_m must be > 0");
     require(std::isfinite(s.road_rise_m), "stereo.road_rise_m must be finite");
 }

@@ -132,16 +132,19 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
     out.cloud->height = 1;
 }
 
-void roi_height_variances(const float* range_variances_m2, const RigidTransform& T, RoiCloud& roi) {
+void roi_point_errors(const PointErrors& errors, const RigidTransform& T, RoiCloud& roi) {
+    roi.error_group.clear();
+    if (errors.error_groups)
+        for (const std::int32_t row : roi.input_index) roi.error_group.push_back(errors.error_groups[row]);
     roi.height_variance.clear();
-    if (!range_variances_m2) return;
+    if (!errors.range_variances_m2) return;
     roi.height_variance.resize(roi.input_index.size());
     for (std::size_t i = 0; i < roi.input_index.size(); ++i) {
         const auto& p = roi.cloud->points[i];
         const double dx = p.x - T.t[0], dy = p.y - T.t[1], dz = p.z - T.t[2];
         const double squared_range = dx * dx + dy * dy + dz * dz;
         const double uz2 = squared_range > 0.0 ? dz * dz / squared_range : 1.0;
-        const double v = range_variances_m2[roi.input_index[i]];
+        const double v = errors.range_variances_m2[roi.input_index[i]];
         roi.height_variance[i] = static_cast<float>(std::isfinite(v) && v > 0.0 ? uz2 * v : 0.0);
     }
 }

@@ -23,6 +23,7 @@ struct RoiCloud {
     std::vector<std::int32_t> input_order;  ///< the ROI points' positions in the order of their input rows
     std::int64_t finite = 0;                ///< input rows with finite x, y, z
     std::vector<float> height_variance;     ///< m² per ROI point (from its range variance); empty when unknown
+    std::vector<std::int32_t> error_group;  ///< each ROI point's input error group; empty when unknown
 
     Eigen::Index size() const { return static_cast<Eigen::Index>(input_index.size()); }
     PointsView view() const {  // pcl::PointXYZ is x, y, z + one padding float
@@ -44,8 +45,9 @@ struct RoiCloud {
 /// buffers.
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out);
 
-/// Each ROI point's height variance from its input row's range variance (nullptr: clears them): an error along
-/// the line of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction.
-void roi_height_variances(const float* range_variances_m2, const RigidTransform& T, RoiCloud& roi);
+/// Each ROI point's height variance from its input row's range variance (none: cleared): an error along the line
+/// of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction; and its input
+/// row's error group (none: cleared).
+void roi_point_errors(const PointErrors& errors, const RigidTransform& T, RoiCloud& roi);
 
 }  // namespace roadpreview

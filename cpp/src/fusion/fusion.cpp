@@ -203,6 +203,7 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
 void TemporalFusion::reserve_cells(std::size_t cells) {
     touched_.reserve(cells);
     for (auto* v : {&medians_, &spreads_, &cell_z_, &variances_, &pooled_, &deviations_}) v->reserve(cells);
+    cell_groups_.reserve(cells);
     offsets_.reserve(cells);
     counts_.reserve(cells);
     bands_.reserve(cells);
@@ -220,7 +221,12 @@ void TemporalFusion::link(std::int64_t slot, std::size_t i) {
 }
 
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-                          const std::vector<float>* height_variances) {
+                          const std::vector<float>* height_variances,
+                          const std::vector<std::int32_t>* error_groups) {
+    if (height_variances && height_variances->size() != mask.size())
+        throw std::invalid_argument("fuse: height_variances and mask differ in length");
+    if (error_groups && error_groups->size() != mask.size())
+        throw std::invalid_argument("fuse: error_groups and mask differ in length");
     const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
     next_.assign(static_cast<std::size_t>(points.rows()), -1);
     std::vector<std::int64_t>& touched = touched_;
@@ -250,21 +256,25 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     bands_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
+        cell_groups_.clear();
         double variance_sum = 0.0, x_sum = 0.0, y_sum = 0.0;
         auto& head = head_[static_cast<std::size_t>(touched[c])];
         for (std::int32_t i = head; i >= 0; i = next_[static_cast<std::size_t>(i)]) {
             cell_z.push_back(z_[static_cast<std::size_t>(i)]);
+            if (error_groups) cell_groups_.push_back((*error_groups)[static_cast<std::size_t>(i)]);
             variance_sum += variance_[static_cast<std::size_t>(i)];
             x_sum += xy_[static_cast<std::size_t>(i)][0];
             y_sum += xy_[static_cast<std::size_t>(i)][1];
         }
         head = -1;
         counts_[c] = static_cast<std::int32_t>(cell_z.size());
-        spreads[c] = cell_z.size() >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / counts_[c])
-                                        : kNaN;
+        const double n = counts_[c];
+        const auto groups = error_groups ? distinct_count(cell_groups_.begin(), cell_groups_.end()) : cell_z.size();
+        spreads[c] = n >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / n,
+                                           n / static_cast<double>(groups))
+                            : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
         const auto [x, y] = map_.centre(touched[c]);
-        const double n = static_cast<double>(cell_z.size());
         offsets_[c] = {x_sum / n - x, y_sum / n - y};
         const double dx = x - pose_.x_m, dy = y - pose_.y_m;  // sqrt, not hypot: metres, and every cell of a frame
         bands_[c] = static_cast<std::int32_t>(std::sqrt(dx * dx + dy * dy) / kPoolBandM);

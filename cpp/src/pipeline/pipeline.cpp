@@ -103,12 +103,13 @@ struct Estimator::Impl {
     RoughnessScratch roughness_scratch;
 
     void run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-             const FrameMotion& motion, const float* range_variances_m2, Result& r);
+             const FrameMotion& motion, const PointErrors& errors, Result& r);
     void start_frame(double speed_mps, double yaw_rate_rps, const std::string& source, const FrameMotion& motion,
                      Result& r);
-    void find_ground(PointsView points, const float* range_variances_m2, Result& r);
+    void find_ground(PointsView points, const PointErrors& errors, Result& r);
     void find_obstacles_in(Result& r);
-    void build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances);
+    void build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                              const std::vector<std::int32_t>* error_groups);
     void rate(Result& r);
 };
 
@@ -160,9 +161,9 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
     r.status = FrameStatus::Ok;
 }
 
-void Estimator::Impl::find_ground(PointsView points, const float* range_variances_m2, Result& r) {
+void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
     crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi);  // behind reversing
-    roi_height_variances(range_variances_m2, sensor_to_base, roi);
+    roi_point_errors(errors, sensor_to_base, roi);
     fit_ground(roi, cfg.ground, ground_scratch, ground);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
@@ -180,7 +181,8 @@ void Estimator::Impl::find_obstacles_in(Result& r) {
     r.obstacles->assign(clustering.clusters.begin(), clustering.clusters.end());
 }
 
-void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances) {
+void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                                           const std::vector<std::int32_t>* error_groups) {
     const bool crossed = cfg.obstacles.enabled && r.plane;  // without a plane (profiles from the map): none
     const BlockedBins* blocked = crossed ? &crossings.blocked : nullptr;
     if (fusion) {
@@ -190,7 +192,7 @@ void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const 
         const bool local = cfg.profile.level && cfg.profile.level_local && r.plane;
         if (local) fit_local_ground(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path, profile_scratch);
         build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked, local,
-                       height_variances, profile_scratch, r.left, r.right);
+                       height_variances, error_groups, profile_scratch, r.left, r.right);
     }
     if (!cfg.obstacles.enabled) return;
     for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {
@@ -224,7 +226,7 @@ void Estimator::Impl::rate(Result& r) {
 }
 
 void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                          const FrameMotion& motion, const float* range_variances_m2, Result& r) {
+                          const FrameMotion& motion, const PointErrors& errors, Result& r) {
     auto mark = Clock::now();
     const auto start = mark;
     r.timing_ms = {};
@@ -242,8 +244,9 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     }
     r.timing_ms.fusion = ms_since(mark);
 
-    find_ground(points, range_variances_m2, r);
+    find_ground(points, errors, r);
     const std::vector<float>* height_variances = roi.height_variance.empty() ? nullptr : &roi.height_variance;
+    const std::vector<std::int32_t>* error_groups = roi.error_group.empty() ? nullptr : &roi.error_group;
     r.timing_ms.ground = ms_since(mark);
 
     r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
@@ -254,7 +257,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
     // Stopped: the same view again and again is not new evidence, so the map holds.
     if (fusion && r.plane && r.path.status != PathStatus::Stopped)
-        fusion->fuse(roi.view(), ground.mask, L, height_variances);
+        fusion->fuse(roi.view(), ground.mask, L, height_variances, error_groups);
     r.timing_ms.fusion += ms_since(mark);
     r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
     if (r.status != FrameStatus::Ok) {
@@ -263,7 +266,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     } else {
         if (cfg.obstacles.enabled && r.plane) cross_paths(roi, clustering, r, L, cfg, crossings);
         r.timing_ms.obstacles += ms_since(mark);
-        build_wheel_profiles(r, L, height_variances);
+        build_wheel_profiles(r, L, height_variances, error_groups);
         r.timing_ms.profile = ms_since(mark);
         rate(r);
         r.timing_ms.roughness = ms_since(mark);
@@ -298,6 +301,9 @@ Status check_frame(const Frame& frame) noexcept {
     if (!frame.range_variances.empty() && frame.range_variances.size() != rows)
         return Status::error(StatusCode::InvalidArgument, "%s: %zu range variances for %zu points",
                              frame.source.c_str(), frame.range_variances.size(), rows);
+    if (!frame.error_groups.empty() && frame.error_groups.size() != rows)
+        return Status::error(StatusCode::InvalidArgument, "%s: %zu error groups for %zu points",
+                             frame.source.c_str(), frame.error_groups.size(), rows);
     return {};
 }
 
@@ -305,8 +311,9 @@ void throw_unless_ok(const Status& s) {
     if (!s) throw std::invalid_argument(s.message());
 }
 
-const float* range_variances_of(const Frame& frame) {
-    return frame.range_variances.empty() ? nullptr : frame.range_variances.data();
+PointErrors errors_of(const Frame& frame) {
+    return {frame.range_variances.empty() ? nullptr : frame.range_variances.data(),
+            frame.error_groups.empty() ? nullptr : frame.error_groups.data()};
 }
 
 PointsView points_of(const Frame& frame) { return points_view(frame.points.data(), frame.points.rows(), 4); }
@@ -346,9 +353,9 @@ Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_r
 }
 
 Result Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                          const FrameMotion& motion, const float* range_variances_m2) {
+                          const FrameMotion& motion, const PointErrors& errors) {
     Result r;
-    process(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, r);
+    process(points, speed_mps, yaw_rate_rps, source, motion, errors, r);
     return r;
 }
 
@@ -364,13 +371,13 @@ void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps
 void Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
                         Result& out) {
     throw_unless_ok(check_frame(frame));
-    process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, range_variances_of(frame), out);
+    process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, errors_of(frame), out);
 }
 
 void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                        const FrameMotion& motion, const float* range_variances_m2, Result& out) {
+                        const FrameMotion& motion, const PointErrors& errors, Result& out) {
     throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps));
-    impl_->run(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, out);
+    impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out);
 }
 
 Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, Result& out) noexcept {
@@ -387,16 +394,16 @@ Status Estimator::try_process(const Frame& frame, double speed_mps, double yaw_r
                               Result& out) noexcept {
     Status s = check_frame(frame);
     if (!s) return s;
-    return try_process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, range_variances_of(frame),
+    return try_process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, errors_of(frame),
                        out);
 }
 
 Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                              const FrameMotion& motion, const float* range_variances_m2, Result& out) noexcept {
+                              const FrameMotion& motion, const PointErrors& errors, Result& out) noexcept {
     Status s = check_input(points, speed_mps, yaw_rate_rps);
     if (!s) return s;
     return without_exceptions(
-        [&] { impl_->run(points, speed_mps, yaw_rate_rps, source, motion, range_variances_m2, out); });
+        [&] { impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out); });
 }
 
 }  // namespace roadpreview

@@ -18,7 +18,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Bins the hits of one wheel (counting sort by bin), takes per-bin medians outside blocked bins, fills short gaps.
 void bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileConfig& cfg,
-                 const std::vector<std::uint8_t>* blocked, ProfileScratch& s, Profile& p) {
+                 const std::vector<std::uint8_t>* blocked, bool grouped, ProfileScratch& s, Profile& p) {
     if (blocked) p.blocked.assign(blocked->begin(), blocked->end());
     else p.blocked.assign(bins, 0);
     if (p.blocked.size() != bins) throw std::invalid_argument("blocked bins do not match the profile's bins");
@@ -33,16 +33,28 @@ void bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileCo
     s.start.assign(bins + 1, 0);
     for (std::size_t k = 0; k < bins; ++k) s.start[k + 1] = s.start[k] + static_cast<std::size_t>(p.count[k]);
     s.sorted.resize(hits.size());
+    s.sorted_group.resize(grouped ? hits.size() : 0);
     s.next.assign(s.start.begin(), s.start.end() - 1);
-    for (const Hit& h : hits) s.sorted[s.next[static_cast<std::size_t>(h.bin)]++] = h.z;
+    for (const Hit& h : hits) {
+        const std::size_t at = s.next[static_cast<std::size_t>(h.bin)]++;
+        s.sorted[at] = h.z;
+        if (grouped) s.sorted_group[at] = h.group;
+    }
 
     p.z.assign(bins, kNaN);
     p.spread.assign(bins, kNaN);
+    const auto group_at = [&](std::size_t k) {
+        return s.sorted_group.begin() + static_cast<std::ptrdiff_t>(s.start[k]);
+    };
     for (std::size_t k = 0; k < bins; ++k) {
         if (p.count[k] == 0 || p.blocked[k]) continue;  // an obstacle's points are not road
         const auto first = s.sorted.begin() + static_cast<std::ptrdiff_t>(s.start[k]);
         const auto last = s.sorted.begin() + static_cast<std::ptrdiff_t>(s.start[k + 1]);
-        if (p.count[k] > 1) p.spread[k] = noise_spread(sample_spread(first, last), s.variance_sum[k] / p.count[k]);
+        if (p.count[k] > 1) {
+            const double n = p.count[k];
+            const double groups = grouped ? static_cast<double>(distinct_count(group_at(k), group_at(k + 1))) : n;
+            p.spread[k] = noise_spread(sample_spread(first, last), s.variance_sum[k] / n, n / groups);
+        }
         p.z[k] = median(first, last);
     }
     fill_gaps(p.z, cfg.ds_m, cfg.max_gap_m, &p.blocked);
@@ -233,10 +245,13 @@ namespace {
 template <class Height>
 void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                          const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                         const BlockedBins* blocked, const std::vector<float>* height_variances, Height&& height,
-                         ProfileScratch& s, Profile& left, Profile& right) {
+                         const BlockedBins* blocked, const std::vector<float>* height_variances,
+                         const std::vector<std::int32_t>* error_groups, Height&& height, ProfileScratch& s,
+                         Profile& left, Profile& right) {
     if (height_variances && height_variances->size() != mask.size())
         throw std::invalid_argument("height_variances and mask differ in length");
+    if (error_groups && error_groups->size() != mask.size())
+        throw std::invalid_argument("error_groups and mask differ in length");
     if (paths.status == PathStatus::Stopped) {
         clear_bins(left);
         clear_bins(right);
@@ -255,39 +270,43 @@ void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mas
             // s < preview but s/ds can round up to `bins`: such a point belongs to the last bin.
             const auto bin = std::min(static_cast<std::size_t>(*arc / cfg.ds_m), bins - 1);
             const double variance = height_variances ? (*height_variances)[static_cast<std::size_t>(i)] : 0.0;
-            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), *zl, variance});
+            const std::int32_t group = error_groups ? (*error_groups)[static_cast<std::size_t>(i)] : -1;
+            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), *zl, variance, group});
         }
     }
-    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, s, left);
-    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, s, right);
+    const bool grouped = error_groups != nullptr;
+    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, grouped, s, left);
+    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, grouped, s,
+                right);
 }
 
 }  // namespace
 
 void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                     const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
-                    bool level_local, const std::vector<float>* height_variances, ProfileScratch& s, Profile& left,
-                    Profile& right) {
+                    bool level_local, const std::vector<float>* height_variances,
+                    const std::vector<std::int32_t>* error_groups, ProfileScratch& s, Profile& left, Profile& right) {
     if (level_local)
-        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances,
+        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups,
                             [&](Eigen::Index i, double) { return local_height(points, i, s); }, s, left, right);
     else
-        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances,
+        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups,
                             [](Eigen::Index, double z_levelled) { return z_levelled; }, s, left, right);
 }
 
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
                              const BlockedBins* blocked, const std::vector<double>* local_z,
-                             const std::vector<float>* height_variances) {
+                             const std::vector<float>* height_variances,
+                             const std::vector<std::int32_t>* error_groups) {
     if (local_z && local_z->size() != mask.size()) throw std::invalid_argument("local_z and mask differ in length");
     ProfileScratch s;
     WheelProfiles out;
     const auto height = [&](Eigen::Index i, double z_levelled) {
         return local_z ? (*local_z)[static_cast<std::size_t>(i)] : z_levelled;
     };
-    build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, height, s, out.left,
-                        out.right);
+    build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups, height, s,
+                        out.left, out.right);
     return out;
 }
 

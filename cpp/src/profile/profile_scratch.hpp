@@ -11,16 +11,19 @@
 
 namespace roadpreview {
 
-/// A ground point in a wheel's corridor: its bin, height and height variance (m², 0 when unknown).
+/// A ground point in a wheel's corridor: its bin, height, height variance (m², 0 when unknown) and error group
+/// (−1 when unknown).
 struct Hit {
     std::int32_t bin;
     double z;
     double variance;
+    std::int32_t group;
 };
 
 struct ProfileScratch {
     std::vector<Hit> hits[2];  // left, right
     std::vector<double> variance_sum, sorted;
+    std::vector<std::int32_t> sorted_group;
     std::vector<std::size_t> start, next;
     // the local ground model (fit_local_ground)
     struct CorridorPoint {
@@ -49,7 +52,7 @@ double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s);
 /// `s` (local_height, asked only of the points in a wheel's corridor) instead of their levelled z.
 void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                     const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
-                    bool level_local, const std::vector<float>* height_variances, ProfileScratch& s, Profile& left,
-                    Profile& right);
+                    bool level_local, const std::vector<float>* height_variances,
+                    const std::vector<std::int32_t>* error_groups, ProfileScratch& s, Profile& left, Profile& right);
 
 }  // namespace roadpreview

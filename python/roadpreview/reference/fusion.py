@@ -20,7 +20,7 @@ from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
-from .stereo import height_variances
+from .stereo import groups_per_bin, height_variances
 from .support import pooled_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
@@ -133,9 +133,10 @@ class FusedMap:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x0 + c * xy[:, 0] - s * xy[:, 1], y0 + s * xy[:, 0] + c * xy[:, 1]])
 
-    def fuse(self, levelled_ground: np.ndarray, variances=None):
+    def fuse(self, levelled_ground: np.ndarray, variances=None, error_groups=None):
         """Median per cell of the frame's levelled ground points, fused into the map. The points' height
-        ``variances`` (m²), when given, raise each cell's spread to the root of their mean (method.md §12)."""
+        ``variances`` (m²), when given, raise each cell's spread to the root of their mean, and their
+        ``error_groups`` scale it by √(points / distinct groups) in the cell (method.md §12)."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
@@ -145,6 +146,8 @@ class FusedMap:
         if variances is not None:
             mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
+        if error_groups is not None:
+            spreads *= np.sqrt(counts / groups_per_bin(inverse.ravel(), error_groups, len(counts)))
         medians = np.array([np.median(z) for z in groups])
         # As the roughness stage rates a bin's median, with the pooled variance of a point in the cell's 5 m band of
         # range for single points, and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
@@ -258,9 +261,9 @@ class FusedResult:
 
 
 def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, pose=None,
-                  range_variances=None) -> FusedResult:
+                  range_variances=None, error_groups=None) -> FusedResult:
     """One frame through the fusing pipeline without obstacles (cfg.obstacles is not consulted); with the points'
-    ``range_variances`` (m², stereo) as in method.md §12."""
+    ``range_variances`` (m², stereo) and ``error_groups`` as in method.md §12."""
     cfg = state.cfg
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
@@ -271,12 +274,14 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     base_xyz, finite = to_base_frame(points, cfg)
     variances = None if range_variances is None else \
         height_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
+    groups = None if error_groups is None else np.asarray(error_groups)[finite]
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
-        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz, None if variances is None else variances[ground])
+        state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz,
+                   None if variances is None else variances[ground], None if groups is None else groups[ground])
     status["frames"] = state.fused
     # A map that holds data stands in for a frame without ground: the profiles are read from it.
     reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \

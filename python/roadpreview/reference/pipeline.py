@@ -65,19 +65,19 @@ def _clusters(base_xyz, ground, plane, cfg: Config):
     return find_obstacles(base_xyz, ground, plane, cfg)
 
 
-def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=None) -> Result:
+def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=None, error_groups=None) -> Result:
     """Road profiles and roughness of one frame. Bad input raises ValueError; an empty scene, no ground
     or a stopped vehicle give a result with the reason (checked in that order). ``range_variances`` (m², one per
-    point: a stereo frame's) raise the profile bins' spreads (method.md §12)."""
+    point: a stereo frame's) and ``error_groups`` (one per point) raise the profile bins' spreads (method.md §12)."""
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
-    result = _process(points, speed, yaw_rate, cfg, range_variances)
+    result = _process(points, speed, yaw_rate, cfg, range_variances, error_groups)
     result.speed, result.yaw_rate, result.config = speed, yaw_rate, cfg
     return result
 
 
-def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances=None) -> Result:
+def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances=None, error_groups=None) -> Result:
     path = plan_path(speed, yaw_rate, cfg)
     if path["status"] != "stopped":
         cfg = roi_facing(cfg, speed)  # reversing looks behind
@@ -88,6 +88,12 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances
             raise ValueError(f"range_variances must have one entry per point ({len(points)}), got shape "
                              f"{np.shape(range_variances)}")
         variances = height_variances(base_xyz, np.asarray(range_variances)[finite], cfg)
+    groups = None
+    if error_groups is not None:
+        if np.shape(error_groups) != (len(points),):
+            raise ValueError(f"error_groups must have one entry per point ({len(points)}), got shape "
+                             f"{np.shape(error_groups)}")
+        groups = np.asarray(error_groups)[finite]
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)
     labels = np.full(len(points), -1, dtype=np.int32)
@@ -106,7 +112,7 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances
     if path["status"] == "stopped":
         return _without_profiles(ground_mask, plane, counts, path, "vehicle stopped", cfg, obstacles, labels)
     left, right = (_wheel(base_xyz, ground, finite_labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg,
-                          variances) for wheel in ("left", "right"))
+                          variances, groups) for wheel in ("left", "right"))
     vehicle = vehicle_roughness(left.z, right.z, cfg.profile.ds_m, cfg, count_left=left.count,
                                 spread_left=left.spread, count_right=right.count, spread_right=right.spread)
     vehicle = vehicle_from_wheels(vehicle, left.roughness, right.roughness)
@@ -114,14 +120,17 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances
     return Result(ground_mask, plane, counts, path, left, right, vehicle, None, obstacles, labels)
 
 
-def _wheel(base_xyz, ground, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config, variances=None):
+def _wheel(base_xyz, ground, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config, variances=None,
+           groups=None):
     """One wheel's profile, stopping at the obstacles in its path when clustering is on."""
     ground_variances = None if variances is None else variances[ground]
+    ground_groups = None if groups is None else groups[ground]
     if not cfg.obstacles.enabled:
         return wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg,
-                             height_variances=ground_variances)
+                             height_variances=ground_variances, error_groups=ground_groups)
     in_path = wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg)
     blocked = blocked_bins(in_path.s_start, in_path.s_end, cfg)
-    profile = wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg, blocked, ground_variances)
+    profile = wheel_profile(base_xyz[ground], plane, path, wheel, speed, yaw_rate, cfg, blocked, ground_variances,
+                            ground_groups)
     profile.obstacles = in_path
     return profile

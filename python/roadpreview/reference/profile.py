@@ -14,6 +14,7 @@ from .path import wheel_y
 from .iri import Iri, wheel_iri
 from .roughness import Roughness, analyze_roughness
 from .runs import true_runs
+from .stereo import groups_per_bin
 
 # Tolerance on "run length ≤ max_gap_m", so that e.g. 3 bins × 0.1 m count as 0.3 m.
 _GAP_LENGTH_TOLERANCE = 1e-9
@@ -64,10 +65,11 @@ def bin_count(cfg: Config) -> int:
 
 
 def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config,
-                   variances=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   variances=None, error_groups=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(median z, count, spread) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m; the spread is
     the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points. With the
-    points' height ``variances`` (m²) it is at least the root of their mean in the bin (method.md §12)."""
+    points' height ``variances`` (m²) it is at least the root of their mean in the bin, and with their
+    ``error_groups`` it is scaled by √(points / distinct groups) in the bin (method.md §12)."""
     k_bins = bin_count(cfg)
     kept = (s >= 0) & (s < cfg.profile.preview_length_m)
     # s just below the preview length can round to bin K; it still belongs to the last bin.
@@ -90,6 +92,9 @@ def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config,
         mean_variance = np.bincount(k, weights=np.asarray(variances, float)[kept][order], minlength=k_bins)
         mean_variance /= np.maximum(count, 1)
         spread[multi] = np.sqrt(np.maximum(spread[multi] ** 2, mean_variance[multi]))
+    if error_groups is not None:
+        groups = groups_per_bin(k, np.asarray(error_groups)[kept][order], k_bins)
+        spread[multi] *= np.sqrt(count[multi] / groups[multi])
     return median, count, spread
 
 
@@ -198,12 +203,12 @@ def empty_profile(reason: str) -> Profile:
 
 
 def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
-                  cfg: Config | None = None, blocked=None, height_variances=None) -> Profile:
+                  cfg: Config | None = None, blocked=None, height_variances=None, error_groups=None) -> Profile:
     """Height profile along one wheel's path from ground points (levelled by ``plane`` unless it is None),
     with its roughness analysed. A stopped path gives an empty profile with reason "vehicle stopped".
     ``blocked`` bins (obstacles, method.md §5) get no height and are not interpolated across.
     With ``profile.level_local`` the heights are those of :func:`local_ground_heights` (method.md §3);
-    ``height_variances`` (m², one per point) raise the bins' spreads (method.md §12)."""
+    ``height_variances`` (m², one per point) and ``error_groups`` raise the bins' spreads (method.md §12)."""
     cfg = cfg or Config()
     if path["status"] == "stopped":
         return empty_profile("vehicle stopped")
@@ -214,7 +219,8 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
             xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg, path)
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
     variances = None if height_variances is None else np.asarray(height_variances, float)[in_corridor]
-    median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg, variances)
+    groups = None if error_groups is None else np.asarray(error_groups)[in_corridor]
+    median, count, spread = bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg, variances, groups)
     blocked = np.zeros(len(median), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
     median[blocked] = np.nan  # an obstacle's points are not road
     spread[blocked] = np.nan

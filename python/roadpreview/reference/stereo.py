@@ -1,4 +1,5 @@
-"""Stereo cameras (docs/method.md §12): calibration, disparity → depth → points and their range variances.
+"""Stereo cameras (docs/method.md §12): calibration, disparity → depth → points, their range variances and their
+error groups.
 
 Camera frame as roadpreview reads it: origin at the left camera's optical centre, x along the optical axis, y left,
 z up; a pixel (u right, v down) at disparity d has depth z = fx·B/d and lies (u − cx)·z/fx to the right and
@@ -77,3 +78,23 @@ def height_variances(base_xyz, range_variances, cfg: Config) -> np.ndarray:
     uz2 = np.divide(ray[:, 2] ** 2, squared, out=np.ones(len(ray)), where=squared > 0)
     v = np.asarray(range_variances, float)
     return np.where(np.isfinite(v) & (v > 0), uz2 * v, 0.0)
+
+
+def error_groups(pixels, width: int, stereo: StereoConfig | None = None) -> np.ndarray:
+    """Each point's error group from its pixel index (row · width + column): the tile of 2·error_correlation_along_px
+    columns by 2·error_correlation_across_px rows (at least one each, rounded half up) it lies in, numbered row by
+    row. SGBM's errors are correlated over about that extent, so a tile's points hold about one independent error."""
+    stereo = stereo or StereoConfig()
+    tile_columns = max(1, math.floor(2 * stereo.error_correlation_along_px + 0.5))
+    tile_rows = max(1, math.floor(2 * stereo.error_correlation_across_px + 0.5))
+    v, u = np.divmod(np.asarray(pixels, np.int64), width)
+    return (v // tile_rows * -(-width // tile_columns) + u // tile_columns).astype(np.int32)
+
+
+def groups_per_bin(bins, groups, minlength: int) -> np.ndarray:
+    """How many distinct error groups each bin (or cell) index in ``bins`` holds."""
+    bins = np.asarray(bins, np.int64)
+    if len(bins) == 0:
+        return np.zeros(minlength, np.int64)
+    pairs = np.unique(np.column_stack([bins, np.asarray(groups, np.int64)]), axis=0)
+    return np.bincount(pairs[:, 0], minlength=minlength)

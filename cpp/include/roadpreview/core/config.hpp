@@ -128,6 +128,10 @@ struct StereoConfig {
     std::string mode = "sgbm_3way";    ///< "sgbm" (5 directions), "hh" (8), "sgbm_3way" or "hh4"
     int threads = 0;                   ///< OpenCV threads for matching; 0: OpenCV's default (all cores)
     double disparity_sigma_px = 0.4;   ///< σ_d of a matched disparity: range variance (z²·σ_d/(f·B))² per point
+    /// px, how far matching errors stay correlated along a row and across rows (KITTI pair, SGBM: 15, 2):
+    /// points within one tile of twice these share an error group (Frame::error_groups); 0: every pixel its own
+    double error_correlation_along_px = 15.0;
+    double error_correlation_across_px = 2.0;
     double max_depth_m = 40.0;         ///< farther points are dropped; rows that only see beyond it are not matched
     double road_rise_m = 2.0;          ///< the road may rise this far above the base plane at max_depth_m
 };

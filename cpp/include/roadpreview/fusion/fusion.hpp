@@ -112,9 +112,11 @@ public:
     /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
     /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
-    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread).
+    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean, and with
+    /// `error_groups` (one per point, see PointErrors) a cell counts each group of its points once (noise_spread).
     void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-              const std::vector<float>* height_variances = nullptr);
+              const std::vector<float>* height_variances = nullptr,
+              const std::vector<std::int32_t>* error_groups = nullptr);
     /// Fuses height samples into the map: per cell the inverse-variance mean of its samples and that mean's
     /// variance, fused like a frame's cell (not aligned: the samples carry their own datum). Samples outside the
     /// window are skipped; returns the cells updated.
@@ -158,6 +160,7 @@ private:
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
     std::vector<float> variance_;  // this frame's point height variances, by point (reused)
+    std::vector<std::int32_t> cell_groups_;  // the error groups of one cell's points (reused)
     std::vector<std::array<double, 2>> xy_;  // this frame's points in the odometry frame, by point (reused)
     // Per cell of the frame (reused): its slot, median, spread, count, variance, and the heights of one cell.
     std::vector<std::int64_t> touched_;

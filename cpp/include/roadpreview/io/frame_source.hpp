@@ -44,6 +44,9 @@ struct Frame {
     /// m², one per point: variance of its distance from the sensor along its line of sight (stereo cameras);
     /// empty when unknown (LiDAR). Estimator::process takes it to rate the profiles' and the map's noise.
     std::vector<float> range_variances;
+    /// one per point: points with the same id share their range error (a stereo matcher's errors, correlated
+    /// over neighbouring pixels), so a bin counts them as one measurement; empty: every point's error its own
+    std::vector<std::int32_t> error_groups;
     FrameDiagnostics diagnostics;
     std::string sequence_break;       ///< files: why this frame does not continue the previous one; empty if it does
     /// live: steady-clock time (s) the datagram that completed the frame arrived; 0 from files, and for a frame

@@ -54,6 +54,9 @@ struct StereoPoints {
     PointMatrix points;                  ///< camera frame x, y, z (m) and the left image's grey level (0..1; 0 without)
     std::vector<float> range_variances;  ///< m², variance of each point's distance along its line of sight
     std::vector<std::int32_t> pixels;    ///< row · width + column of each point's pixel
+    /// each point's error group: its tile of 2·stereo.error_correlation_along_px columns by
+    /// 2·stereo.error_correlation_across_px rows (row-major tile index), whose points share a matching error
+    std::vector<std::int32_t> error_groups;
 };
 
 /// Depth z = fx·B/d of every valid pixel in rows [first_row, rows) nearer than stereo.max_depth_m, its point
@@ -90,7 +93,8 @@ struct StereoInputs {
 StereoInputs expand_stereo_inputs(const StereoInputs& inputs);
 
 /// Frames from stereo pairs: one per pair (or disparity image), points in the camera frame (see
-/// StereoCalibration) with their range variances in Frame::range_variances; frame_id = index of the pair.
+/// StereoCalibration) with their range variances in Frame::range_variances and error groups in
+/// Frame::error_groups; frame_id = index of the pair.
 /// Matching uses config.stereo; the camera's pose (for the road rows) is config's extrinsics, else the
 /// calibration's. Throws std::invalid_argument when neither gives a pose.
 class StereoSource : public FrameSource {

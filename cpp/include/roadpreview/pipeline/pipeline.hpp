@@ -99,12 +99,12 @@ public:
     /// The same with the frame's timestamp (copied to the result) and, optionally, its pose for the fusion.
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                    const FrameMotion& motion);
-    /// The same with each point's range variance (m², one per row, or nullptr when unknown; see
-    /// Frame::range_variances): it sets a floor under the noise of the profiles' bins and of the map's cells
-    /// (docs/method.md §12). LiDAR frames pass nullptr and are processed exactly as before.
+    /// The same with what the source states about its points' errors (see PointErrors; a `const float*` of range
+    /// variances converts to it). LiDAR frames state nothing and are processed exactly as before.
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                   const FrameMotion& motion, const float* range_variances_m2);
-    /// A frame of a FrameSource: its points, source and range variances (checked: one per point or none).
+                   const FrameMotion& motion, const PointErrors& errors);
+    /// A frame of a FrameSource: its points, source, range variances and error groups (checked: one per point or
+    /// none).
     Result process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion = {});
 
     /// The real-time forms of the above: the result goes into `out`, reusing its buffers.
@@ -112,7 +112,7 @@ public:
     void process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                  const FrameMotion& motion, Result& out);
     void process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                 const FrameMotion& motion, const float* range_variances_m2, Result& out);
+                 const FrameMotion& motion, const PointErrors& errors, Result& out);
     void process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion, Result& out);
 
     /// The real-time forms without exceptions: Ok, or the code and message of what process() would have thrown
@@ -121,7 +121,7 @@ public:
     Status try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                        const FrameMotion& motion, Result& out) noexcept;
     Status try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
-                       const FrameMotion& motion, const float* range_variances_m2, Result& out) noexcept;
+                       const FrameMotion& motion, const PointErrors& errors, Result& out) noexcept;
     Status try_process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
                        Result& out) noexcept;
 

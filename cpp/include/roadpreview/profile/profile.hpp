@@ -24,8 +24,9 @@ struct Profile {
     std::vector<double> s;             ///< m, bin centres
     std::vector<double> z;             ///< m, median height per bin (levelled), NaN where missing
     std::vector<std::int32_t> count;   ///< points per bin (0 for interpolated bins)
-    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points (a
-                                       ///< fused map's bins: the spread giving the map's variance, one point's too)
+    std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points;
+                                       ///< raised by stated point errors (build_profiles); a fused map's bins:
+                                       ///< the spread giving the map's variance, one point's too
     Roughness roughness;
     std::vector<std::uint8_t> blocked;  ///< 1 where an obstacle covers the bin (z is NaN there), docs/method.md §5
     std::optional<std::vector<PathObstacle>> obstacles;  ///< in this wheel's path; nullopt: clustering is off
@@ -85,11 +86,13 @@ struct BlockedBins {
 /// With `local_z` (one per point), a ground point's height is local_z[i] instead of its levelled z (the
 /// positions along and across the path stay those that `L` gives): levelling by the local ground model. With
 /// `height_variances` (m² per point, e.g. stereo depth noise) a bin's spread is at least the root of its points'
-/// mean variance (noise_spread).
+/// mean variance; with `error_groups` (one per point, see PointErrors) it is scaled by √(points per distinct
+/// group) so that the bin's rated noise counts each group once (docs/method.md §12).
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
                              const BlockedBins* blocked = nullptr, const std::vector<double>* local_z = nullptr,
-                             const std::vector<float>* height_variances = nullptr);
+                             const std::vector<float>* height_variances = nullptr,
+                             const std::vector<std::int32_t>* error_groups = nullptr);
 
 /// Linear interpolation across interior runs of NaN no longer than max_gap_m. With `blocked`, a blocked bin
 /// counts as missing and a run holding one is left as it is: nothing is interpolated across an obstacle.

@@ -32,6 +32,10 @@ StereoPoints disparity_to_points(const DisparityImage& disparity, int first_row,
     const double fb = calib.fx_px * calib.baseline_m;       // px·m: z = fb / d
     const double min_disparity = fb / cfg.max_depth_m;      // nearer than max_depth_m
     const double sigma_factor = cfg.disparity_sigma_px / fb;  // σ_z = z²·σ_d/(f·B)
+    // Error groups: tiles of twice the correlation lengths, the extent that holds about one independent error
+    const Eigen::Index tile_cols = std::max<Eigen::Index>(1, std::lround(2.0 * cfg.error_correlation_along_px));
+    const Eigen::Index tile_rows = std::max<Eigen::Index>(1, std::lround(2.0 * cfg.error_correlation_across_px));
+    const Eigen::Index tiles_per_row = (cols + tile_cols - 1) / tile_cols;
     StereoPoints out;
     const Eigen::Index first = std::clamp<Eigen::Index>(first_row, 0, rows);
     Eigen::Index valid = 0;
@@ -40,6 +44,7 @@ StereoPoints disparity_to_points(const DisparityImage& disparity, int first_row,
     out.points.resize(valid, 4);
     out.range_variances.resize(static_cast<std::size_t>(valid));
     out.pixels.resize(static_cast<std::size_t>(valid));
+    out.error_groups.resize(static_cast<std::size_t>(valid));
     Eigen::Index i = 0;
     for (Eigen::Index v = first; v < rows; ++v) {
         for (Eigen::Index u = 0; u < cols; ++u) {
@@ -55,6 +60,8 @@ StereoPoints disparity_to_points(const DisparityImage& disparity, int first_row,
             const double sigma_range = sigma_factor * z * std::sqrt(z * z + right * right + down * down);  // σ_z·r/z
             out.range_variances[static_cast<std::size_t>(i)] = static_cast<float>(sigma_range * sigma_range);
             out.pixels[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(v * cols + u);
+            out.error_groups[static_cast<std::size_t>(i)] =
+                static_cast<std::int32_t>(v / tile_rows * tiles_per_row + u / tile_cols);
             ++i;
         }
     }

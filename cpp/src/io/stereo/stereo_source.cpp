@@ -97,6 +97,7 @@ std::optional<Frame> StereoSource::next() {
     Frame f;
     f.points = std::move(points.points);
     f.range_variances = std::move(points.range_variances);
+    f.error_groups = std::move(points.error_groups);
     f.source = name;
     f.frame_id = static_cast<std::int64_t>(i);
     return f;
