@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Optional
 
+import numpy as np
+
 from ._native import core
 from .config import Config
 
@@ -43,6 +45,13 @@ class Estimator:
             pose = tuple(float(v) for v in pose)
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
+        if error_groups is not None:
+            error_groups = np.asarray(error_groups)
+            int32 = np.iinfo(np.int32)
+            if error_groups.dtype.kind in "iu" and error_groups.size and (
+                    error_groups.min() < int32.min or error_groups.max() > int32.max):
+                raise ValueError(f"error_groups must fit in int32, got values {error_groups.min()}…"
+                                 f"{error_groups.max()}")
         return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose,
                                   range_variances, error_groups)
 

@@ -178,6 +178,8 @@ def test_range_variances_cpp_against_reference(calib, grouped):
         rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups[:-1])
     with pytest.raises(TypeError, match="error_groups must be an integer array"):
         rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups.astype(float))
+    with pytest.raises(ValueError, match="error_groups must fit in int32"):
+        rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups.astype(np.int64) + 2 ** 31)
 
 
 def test_error_groups_count_a_bin_s_shared_errors_once(calib):
