@@ -271,7 +271,7 @@ void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mas
             const auto bin = std::min(static_cast<std::size_t>(*arc / cfg.ds_m), bins - 1);
             const double variance = height_variances ? (*height_variances)[static_cast<std::size_t>(i)] : 0.0;
             const std::int32_t group = error_groups ? (*error_groups)[static_cast<std::size_t>(i)] : -1;
-            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), *zl, variance, group});
+            s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), group, *zl, variance});
         }
     }
     const bool grouped = error_groups != nullptr;

@@ -11,13 +11,13 @@
 
 namespace roadpreview {
 
-/// A ground point in a wheel's corridor: its bin, height, height variance (m², 0 when unknown) and error group
-/// (−1 when unknown).
+/// A ground point in a wheel's corridor: its bin, error group (−1 when unknown), height and height variance (m², 0
+/// when unknown).
 struct Hit {
     std::int32_t bin;
+    std::int32_t group;  // beside bin: 24 bytes, no padding
     double z;
     double variance;
-    std::int32_t group;
 };
 
 struct ProfileScratch {
