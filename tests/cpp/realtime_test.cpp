@@ -105,6 +105,18 @@ TEST(Realtime, SimulatedFrameAllocatesNothingOnceWarmWithEmaFusion) {
     expect_no_allocations(frame_allocations({simulated_frame()}, kitti_config(rp::FusionMethod::Ema), 5, 12), 5);
 }
 
+// Frames that state their points' errors, as stereo frames do (range variances, error groups of 16 points): the
+// ROI's copies of them, the bins' and the cells' group counts reuse their buffers too.
+TEST(Realtime, FramesWithPointErrorsAllocateNothingOnceWarmWithKalmanFusion) {
+    std::vector<rp::Frame> frames = kitti_frames();
+    for (rp::Frame& f : frames) {
+        const auto n = static_cast<std::size_t>(f.points.rows());
+        f.range_variances.assign(n, 1e-4f);
+        for (std::size_t i = 0; i < n; ++i) f.error_groups.push_back(static_cast<std::int32_t>(i / 16));
+    }
+    expect_no_allocations(frame_allocations(frames, kitti_config(rp::FusionMethod::Kalman), 5, 20), 5);
+}
+
 // Range-sensor samples fused into the map between frames (a preview sensor's window, README "Range sensors"):
 // once its per-slot lists have grown, a batch of samples allocates nothing either.
 TEST(Realtime, RangeSamplesEnterTheMapWithoutAllocatingOnceWarm) {
