@@ -178,8 +178,8 @@ def open_stereo(left: Optional[PathLike] = None, right: Optional[PathLike] = Non
     left, right: image files or directories of PNGs (paired in name order); disparity: a 16-bit disparity PNG or a
     directory of them (used instead of matching). Each frame has ``.points`` ((N, 4) float32, camera frame),
     ``.range_variances`` (m² per point) and ``.error_groups`` (pass both to ``Estimator.process(...,
-    range_variances=..., error_groups=...)``), ``.source`` and ``.frame_id``. The camera's pose comes from ``config`` (sensor_height / extrinsics), else from the
-    calibration YAML; neither raises ValueError.
+    range_variances=..., error_groups=...)``), ``.source`` and ``.frame_id``. The camera's pose comes from
+    ``config`` (sensor_height / extrinsics), else from the calibration YAML; neither raises ValueError.
     """
     from .config import Config
 
