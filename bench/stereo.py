@@ -194,17 +194,20 @@ def print_noise(errors: dict, gross_px: float = 1.5) -> None:
                     "correlation across rows, Δu < 2 px (pairs)"], rows) + "\n")
 
 
-def bin_noise_rows(seeds: int = 6) -> list[list[str]]:
+def bin_noise_rows(seeds: int = 6) -> tuple[list[list[str]], list[list[str]]]:
     """One simulated frame of a flat road per seed and noise model: each wheel-path bin's height error (the truth
     is 0) against the σ the roughness stage gives its median, √(π/2 · spread² / count) (docs/method.md §4), with
-    the points counted as independent and with their error groups (each group once)."""
+    the points counted as independent and with their error groups (each group once), 5–20 m ahead; and, farther,
+    the bins of a single point against the σ their point states (its spread)."""
     models = (("independent, 0.25 px", {}), ("independent, 0.3 px", {"disparity_noise_px": 0.3}),
               ("as measured (sim.SGBM_ON_KITTI)", sim.SGBM_ON_KITTI))
-    rows = []
+    far_bands = BANDS_M[3:]
+    rows, single_rows = [], []
     for name, noise in models:
         camera = sim.kitti_stereo(**noise)
         errors = {band: [] for band in BANDS_M[:3]}
         stated = {grouped: {band: [] for band in BANDS_M[:3]} for grouped in (False, True)}
+        single = {band: ([], []) for band in far_bands}  # errors, stated σ
         with tempfile.TemporaryDirectory() as tmp:
             calib = camera.write_calibration(Path(tmp) / "stereo.yaml")
             cfg = rp.Config(extrinsics=camera.extrinsics(), obstacles={"enabled": False})
@@ -223,13 +226,21 @@ def bin_noise_rows(seeds: int = 6) -> list[list[str]]:
                             if not grouped:  # the heights do not depend on the groups
                                 errors[(lo, hi)].extend(z[w])
                             stated[grouped][(lo, hi)].extend(np.sqrt(np.pi / 2 * spread[w] ** 2 / count[w]))
+                        for lo, hi in far_bands if grouped else ():
+                            w = (s >= lo) & (s < hi) & (count == 1) & np.isfinite(z)
+                            single[(lo, hi)][0].extend(z[w])
+                            single[(lo, hi)][1].extend(spread[w])
         for band in errors:
             actual = np.sqrt(np.mean(np.square(errors[band])))
             as_points, as_groups = (np.median(stated[g][band]) for g in (False, True))
             rows.append([name, f"{band[0]}–{band[1]}", len(errors[band]), f"{actual * 100:.2f}",
                          f"{as_points * 100:.2f}", f"{actual / as_points:.1f}", f"{as_groups * 100:.2f}",
                          f"{actual / as_groups:.1f}"])
-    return rows
+        for band, (err, sigma) in single.items():
+            actual = np.sqrt(np.mean(np.square(err)))
+            single_rows.append([name, f"{band[0]}–{band[1]}", len(err), f"{actual * 100:.2f}",
+                                f"{np.median(sigma) * 100:.2f}", f"{actual / np.median(sigma):.1f}"])
+    return rows, single_rows
 
 
 def kitti_matrices(path: Path) -> dict:
@@ -401,10 +412,13 @@ def main(argv=None) -> int:
     if "noise" in parts:
         print_noise(disparity_errors())
         print("## The bins' noise, simulated (a flat road, one frame per seed, σ_d 0.4 px in the config)\n")
+        rows, single_rows = bin_noise_rows(2 if args.quick else 6)
         print(md_table(["disparity noise", "distance m", "bins", "height error RMS cm",
                         "stated σ, points independent, median cm", "error / stated",
-                        "stated σ, error groups, median cm", "error / stated"],
-                       bin_noise_rows(2 if args.quick else 6)) + "\n")
+                        "stated σ, error groups, median cm", "error / stated"], rows) + "\n")
+        print("Bins of a single point, against the σ their point states:\n")
+        print(md_table(["disparity noise", "distance m", "bins", "height error RMS cm", "stated σ, median cm",
+                        "error / stated"], single_rows) + "\n")
     if "timing" in parts:
         print_timing(time_pair(runs), runs)
     print(f"1-min load at the end: {os.getloadavg()[0]:.1f}")

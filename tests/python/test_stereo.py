@@ -244,8 +244,10 @@ def test_fused_range_variances_and_error_groups_cpp_against_reference(calib):
             np.testing.assert_allclose(c.z, r.z, atol=1e-4, equal_nan=True)
             np.testing.assert_allclose(c.spread, r.spread, rtol=1e-3, atol=1e-6, equal_nan=True)
         alone = ungrouped.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances)
-    # a cell's points share their tiles' errors: the map's stated noise is larger for counting each tile once
-    assert np.nanmedian(np.asarray(cpp.left.spread) / np.asarray(alone.left.spread)) > 1.5
+    # a cell's points share their tiles' errors: counting each tile once, the map states more noise, nowhere less
+    # (where the lane's excess or a floor rules a cell's variance, the same)
+    ratio = np.asarray(cpp.left.spread) / np.asarray(alone.left.spread)
+    assert (ratio[np.isfinite(ratio)] >= 1 - 1e-9).all() and np.nanmax(ratio) > 1.5
 
 
 def test_simulated_bump_under_the_left_wheel(tmp_path):

@@ -31,8 +31,8 @@ inline double sample_spread(std::vector<double>::const_iterator first, std::vect
 /// The spread a bin or cell reports for its noise: the sample spread of its heights, raised to the root of its
 /// points' mean height variance when the sensor states one (stereo: correlated matching errors hide from the
 /// sample spread), and scaled by √(points per error group) when its points share errors in groups, so that
-/// spread²/points, the way the roughness stage and the map rate a median, counts each group once. NaN stays NaN
-/// (fewer than two points).
+/// spread²/points, the way the roughness stage rates a bin's median, counts each group once. NaN stays NaN (fewer
+/// than two points).
 inline double noise_spread(double sample_spread, double mean_point_variance, double points_per_group = 1.0) {
     if (std::isnan(sample_spread)) return sample_spread;
     return std::sqrt(std::max(sample_spread * sample_spread, mean_point_variance) * points_per_group);

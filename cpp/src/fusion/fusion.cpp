@@ -206,6 +206,7 @@ void TemporalFusion::reserve_cells(std::size_t cells) {
     cell_groups_.reserve(cells);
     offsets_.reserve(cells);
     counts_.reserve(cells);
+    measurements_.reserve(cells);
     bands_.reserve(cells);
     // no cell lies farther from the vehicle than the map's half-diagonal, less than its side
     pool_buffers_.reserve(static_cast<std::size_t>(map_.side() * map_.cell_m() / kPoolBandM) + 1, cells);
@@ -253,6 +254,7 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     spreads.resize(cells);
     offsets_.resize(cells);
     counts_.resize(cells);
+    measurements_.resize(cells);
     bands_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         cell_z.clear();
@@ -268,11 +270,10 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         }
         head = -1;
         counts_[c] = static_cast<std::int32_t>(cell_z.size());
+        measurements_[c] = static_cast<std::int32_t>(
+            error_groups ? distinct_count(cell_groups_.begin(), cell_groups_.end()) : cell_z.size());
         const double n = counts_[c];
-        const auto groups = error_groups ? distinct_count(cell_groups_.begin(), cell_groups_.end()) : cell_z.size();
-        spreads[c] = n >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / n,
-                                           n / static_cast<double>(groups))
-                            : kNaN;
+        spreads[c] = n >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / n) : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
         const auto [x, y] = map_.centre(touched[c]);
         offsets_[c] = {x_sum / n - x, y_sum / n - y};
@@ -281,7 +282,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     }
     // Each median's variance r as the roughness stage rates a bin's, with the pooled point variance of the cell's
     // range band (pooled_variances) for a single point, and as a floor under a cell's own spread: r is a weight
-    // in the Kalman gain and the alignment, where two points that happen to agree would outweigh a hundred.
+    // in the Kalman gain and the alignment, where two points that happen to agree would outweigh a hundred. The
+    // median counts as many measurements as the cell holds error groups (its points without groups).
     const bool pooled = pooled_variances(counts_.data(), spreads.data(), bands_.data(), cells, kPoolMaxSpread,
                                          kMinPoolCells, pool_buffers_, pooled_);
     const double single_point = cfg_.fusion.point_noise_m * cfg_.fusion.point_noise_m;  // no spread anywhere
@@ -289,7 +291,7 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     for (std::size_t c = 0; c < cells; ++c) {
         const double point = pooled ? pooled_[c] : single_point;
         const double own = counts_[c] >= 2 ? std::max(point, spreads[c] * spreads[c]) : point;
-        const double n = counts_[c], of_median = n >= 3 ? kMedianVarianceFactor / n : 1.0 / n;  // 1, 2: the mean
+        const double n = measurements_[c], of_median = n >= 3 ? kMedianVarianceFactor / n : 1.0 / n;  // 1, 2: mean
         variances_[c] = std::max(of_median * own, kMinVariance);
     }
     if (cfg_.fusion.align) align(touched, variances_, medians);

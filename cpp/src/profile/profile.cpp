@@ -54,6 +54,8 @@ void bin_profile(const std::vector<Hit>& hits, std::size_t bins, const ProfileCo
             const double n = p.count[k];
             const double groups = grouped ? static_cast<double>(distinct_count(group_at(k), group_at(k + 1))) : n;
             p.spread[k] = noise_spread(sample_spread(first, last), s.variance_sum[k] / n, n / groups);
+        } else if (s.variance_sum[k] > 0.0) {  // one point: the variance its sensor states, not a pool of others'
+            p.spread[k] = std::sqrt(s.variance_sum[k]);
         }
         p.z[k] = median(first, last);
     }

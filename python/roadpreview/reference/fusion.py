@@ -135,8 +135,8 @@ class FusedMap:
 
     def fuse(self, levelled_ground: np.ndarray, variances=None, error_groups=None):
         """Median per cell of the frame's levelled ground points, fused into the map. The points' height
-        ``variances`` (m²), when given, raise each cell's spread to the root of their mean, and their
-        ``error_groups`` scale it by √(points / distinct groups) in the cell (method.md §12)."""
+        ``variances`` (m²), when given, raise each cell's spread to the root of their mean, and with their
+        ``error_groups`` a cell's median counts as one measurement per distinct group (method.md §12)."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
@@ -146,8 +146,8 @@ class FusedMap:
         if variances is not None:
             mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
-        if error_groups is not None:
-            spreads *= np.sqrt(counts / groups_per_bin(inverse.ravel(), error_groups, len(counts)))
+        # the median counts as one measurement per error group (per point without groups)
+        measurements = counts if error_groups is None else groups_per_bin(inverse.ravel(), error_groups, len(counts))
         medians = np.array([np.median(z) for z in groups])
         # As the roughness stage rates a bin's median, with the pooled variance of a point in the cell's 5 m band of
         # range for single points, and as a floor under the cell's own spread (r weighs the cell in the Kalman gain).
@@ -156,7 +156,7 @@ class FusedMap:
         if pooled is None:  # no cell with two points: the configured noise of one point
             pooled = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
         point = np.where(counts >= 2, np.fmax(pooled, spreads ** 2), pooled)
-        variances = np.where(counts >= 3, _MEDIAN_VARIANCE_FACTOR / counts, 1 / counts) * point
+        variances = np.where(measurements >= 3, _MEDIAN_VARIANCE_FACTOR / measurements, 1 / measurements) * point
         variances = np.maximum(variances, _MIN_VARIANCE)
         if self.cfg.fusion.align:
             medians, variances = self.align(keys, medians, variances)

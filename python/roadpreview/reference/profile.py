@@ -68,8 +68,9 @@ def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config,
                    variances=None, error_groups=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(median z, count, spread) per bin k = floor(s/ds) for points with 0 <= s < preview_length_m; the spread is
     the sample standard deviation (n − 1 in the denominator) of the bin's heights, NaN below 2 points. With the
-    points' height ``variances`` (m²) it is at least the root of their mean in the bin, and with their
-    ``error_groups`` it is scaled by √(points / distinct groups) in the bin (method.md §12)."""
+    points' height ``variances`` (m²) it is at least the root of their mean in the bin (a single point's: the root
+    of its own), and with their ``error_groups`` it is scaled by √(points / distinct groups) in the bin (method.md
+    §12)."""
     k_bins = bin_count(cfg)
     kept = (s >= 0) & (s < cfg.profile.preview_length_m)
     # s just below the preview length can round to bin K; it still belongs to the last bin.
@@ -92,6 +93,8 @@ def bin_statistics(s: np.ndarray, z: np.ndarray, cfg: Config,
         mean_variance = np.bincount(k, weights=np.asarray(variances, float)[kept][order], minlength=k_bins)
         mean_variance /= np.maximum(count, 1)
         spread[multi] = np.sqrt(np.maximum(spread[multi] ** 2, mean_variance[multi]))
+        single = (count == 1) & (mean_variance > 0)  # one point: the variance its sensor states
+        spread[single] = np.sqrt(mean_variance[single])
     if error_groups is not None:
         groups = groups_per_bin(k, np.asarray(error_groups)[kept][order], k_bins)
         spread[multi] *= np.sqrt(count[multi] / groups[multi])

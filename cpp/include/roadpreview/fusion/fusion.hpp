@@ -112,8 +112,8 @@ public:
     /// status.reset) when time runs backwards or jumps by more than fusion.max_time_gap_s.
     void advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status);
     /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
-    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean, and with
-    /// `error_groups` (one per point, see PointErrors) a cell counts each group of its points once (noise_spread).
+    /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread),
+    /// and with `error_groups` (one per point, see PointErrors) its median counts as one measurement per group.
     void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
               const std::vector<float>* height_variances = nullptr,
               const std::vector<std::int32_t>* error_groups = nullptr);
@@ -167,6 +167,7 @@ private:
     std::vector<double> medians_, spreads_, cell_z_, variances_, pooled_;
     std::vector<std::array<double, 2>> offsets_;  // each touched cell's points' mean offset from its centre
     std::vector<std::int32_t> counts_, bands_;
+    std::vector<std::int32_t> measurements_;  // each touched cell's independent measurements: its error groups
     PoolBuffers pool_buffers_;
     std::vector<Eigen::Vector3d> align_v_;  // align's scratch
     std::vector<SharedCell> shared_;

@@ -25,8 +25,9 @@ struct Profile {
     std::vector<double> z;             ///< m, median height per bin (levelled), NaN where missing
     std::vector<std::int32_t> count;   ///< points per bin (0 for interpolated bins)
     std::vector<double> spread;        ///< m, sample standard deviation of the bin's heights, NaN below 2 points;
-                                       ///< raised by stated point errors (build_profiles); a fused map's bins:
-                                       ///< the spread giving the map's variance, one point's too
+                                       ///< raised by stated point errors, and one point's stated σ
+                                       ///< (build_profiles); a fused map's bins: the spread giving the map's
+                                       ///< variance, one point's too
     Roughness roughness;
     std::vector<std::uint8_t> blocked;  ///< 1 where an obstacle covers the bin (z is NaN there), docs/method.md §5
     std::optional<std::vector<PathObstacle>> obstacles;  ///< in this wheel's path; nullopt: clustering is off
@@ -86,8 +87,9 @@ struct BlockedBins {
 /// With `local_z` (one per point), a ground point's height is local_z[i] instead of its levelled z (the
 /// positions along and across the path stay those that `L` gives): levelling by the local ground model. With
 /// `height_variances` (m² per point, e.g. stereo depth noise) a bin's spread is at least the root of its points'
-/// mean variance; with `error_groups` (one per point, see PointErrors) it is scaled by √(points per distinct
-/// group) so that the bin's rated noise counts each group once (docs/method.md §12).
+/// mean variance (a single point's spread is the root of its own); with `error_groups` (one per point, see
+/// PointErrors) it is scaled by √(points per distinct group) so that the bin's rated noise counts each group once
+/// (docs/method.md §12).
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                              const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
                              const BlockedBins* blocked = nullptr, const std::vector<double>* local_z = nullptr,
