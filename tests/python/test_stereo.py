@@ -176,6 +176,8 @@ def test_range_variances_cpp_against_reference(calib, grouped):
         rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=found.range_variances[:-1])
     with pytest.raises(ValueError, match="error_groups must be a 1-D array with one entry per point"):
         rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups[:-1])
+    with pytest.raises(ValueError, match="error_groups must have one entry per point"):
+        rp.reference.process(points, 5.0, 0.0, cfg, error_groups=found.error_groups[:-1])
     with pytest.raises(TypeError, match="error_groups must be an integer array"):
         rp.Estimator(cfg).process(points, 5.0, 0.0, error_groups=found.error_groups.astype(float))
     with pytest.raises(ValueError, match="error_groups must fit in int32"):
@@ -244,6 +246,8 @@ def test_fused_range_variances_and_error_groups_cpp_against_reference(calib):
             np.testing.assert_allclose(c.z, r.z, atol=1e-4, equal_nan=True)
             np.testing.assert_allclose(c.spread, r.spread, rtol=1e-3, atol=1e-6, equal_nan=True)
         alone = ungrouped.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances)
+    with pytest.raises(ValueError, match="error_groups must have one entry per point"):
+        rp.reference.process_fused(state, points, 5.0, 0.0, timestamp=0.4, error_groups=found.error_groups[:-1])
     # a cell's points share their tiles' errors: counting each tile once, the map states more noise, nowhere less
     # (where the lane's excess or a floor rules a cell's variance, the same)
     ratio = np.asarray(cpp.left.spread) / np.asarray(alone.left.spread)

@@ -21,6 +21,15 @@ def check_points(points) -> np.ndarray:
     return points
 
 
+def check_per_point(values, points: np.ndarray, name: str) -> np.ndarray | None:
+    """``values`` (None passes) as an array of one entry per row of ``points``; another shape is a ValueError."""
+    if values is None:
+        return None
+    if np.shape(values) != (len(points),):
+        raise ValueError(f"{name} must have one entry per point ({len(points)}), got shape {np.shape(values)}")
+    return np.asarray(values)
+
+
 def rotation_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """R = Rz(yaw) · Ry(pitch) · Rx(roll)."""
     cr, sr = math.cos(roll), math.sin(roll)

@@ -14,7 +14,7 @@ from typing import Optional
 import numpy as np
 
 from ..config import Config
-from .frames import check_points, to_base_frame
+from .frames import check_per_point, check_points, to_base_frame
 from .ground import NO_GROUND, ground_model, roi_facing
 from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
@@ -272,9 +272,11 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, finite = to_base_frame(points, cfg)
+    range_variances = check_per_point(range_variances, points, "range_variances")
+    error_groups = check_per_point(error_groups, points, "error_groups")
     variances = None if range_variances is None else \
-        height_variances(base_xyz, np.asarray(range_variances, float)[finite], cfg)
-    groups = None if error_groups is None else np.asarray(error_groups)[finite]
+        height_variances(base_xyz, range_variances.astype(float)[finite], cfg)
+    groups = None if error_groups is None else error_groups[finite]
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)

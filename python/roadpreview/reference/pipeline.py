@@ -8,7 +8,7 @@ from typing import Optional
 import numpy as np
 
 from ..config import Config
-from .frames import check_points, to_base_frame
+from .frames import check_per_point, check_points, to_base_frame
 from .ground import ground_model, roi_facing, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
@@ -82,18 +82,10 @@ def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances
     if path["status"] != "stopped":
         cfg = roi_facing(cfg, speed)  # reversing looks behind
     base_xyz, finite = to_base_frame(points, cfg)
-    variances = None
-    if range_variances is not None:
-        if np.shape(range_variances) != (len(points),):
-            raise ValueError(f"range_variances must have one entry per point ({len(points)}), got shape "
-                             f"{np.shape(range_variances)}")
-        variances = height_variances(base_xyz, np.asarray(range_variances)[finite], cfg)
-    groups = None
-    if error_groups is not None:
-        if np.shape(error_groups) != (len(points),):
-            raise ValueError(f"error_groups must have one entry per point ({len(points)}), got shape "
-                             f"{np.shape(error_groups)}")
-        groups = np.asarray(error_groups)[finite]
+    range_variances = check_per_point(range_variances, points, "range_variances")
+    error_groups = check_per_point(error_groups, points, "error_groups")
+    variances = None if range_variances is None else height_variances(base_xyz, range_variances[finite], cfg)
+    groups = None if error_groups is None else error_groups[finite]
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)
     labels = np.full(len(points), -1, dtype=np.int32)
