@@ -192,6 +192,35 @@ TEST(StereoPoints, PipelineTakesRangeVariancesAsAFloorUnderTheBinsSpread) {
     EXPECT_THROW(noisy.process(f, 5.0, 0.0), std::invalid_argument);
 }
 
+TEST(StereoPoints, PipelineGivesASinglePointBinItsOwnStatedSigma) {
+    // Every 40th column of a flat ground: far bins hold one point. With range variances such a bin states its
+    // point's σ (the roughness stage would otherwise give it a pool of the other bins' spreads); without, none.
+    const rp::StereoCalibration c = simple_calibration();
+    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
+    for (int v = 61; v < 240; ++v)
+        for (int u = 0; u < 640; u += 40) d(v, u) = static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5);
+    rp::Config cfg;
+    cfg.sensor_height = 1.5;
+    cfg.obstacles.enabled = false;
+    const rp::StereoPoints p = rp::disparity_to_points(d, 0, c, cfg.stereo);
+    rp::Frame f;
+    f.points = p.points;
+    const rp::Result without = rp::Estimator(cfg).process(f, 5.0, 0.0);
+    f.range_variances = p.range_variances;
+    const rp::Result with = rp::Estimator(cfg).process(f, 5.0, 0.0);
+    std::size_t single = 0;
+    for (const auto* wheel : {&with.left, &with.right}) {
+        const rp::Profile& plain = wheel == &with.left ? without.left : without.right;
+        for (std::size_t k = 0; k < wheel->spread.size(); ++k) {
+            if (wheel->count[k] != 1) continue;
+            EXPECT_TRUE(std::isnan(plain.spread[k]));
+            EXPECT_GT(wheel->spread[k], 1e-3) << "bin " << k;
+            ++single;
+        }
+    }
+    EXPECT_GT(single, 5u);
+}
+
 TEST(StereoPoints, PipelineCountsEachErrorGroupOnce) {
     // The same noisy ground with and without error groups: the heights agree; with all points in one group a
     // bin's spread is √count times larger (its median is as uncertain as one point), with a group per point equal.
