@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <utility>
 
 #include "roadpreview/roadpreview.hpp"
 
@@ -29,6 +30,27 @@ rp::StereoCalibration simple_calibration() {
     c.baseline_m = 0.5;
     c.source = "test";
     return c;
+}
+
+// The pipeline's config for a camera 1.5 m above flat ground (obstacles off).
+rp::Config flat_ground_config() {
+    rp::Config cfg;
+    cfg.sensor_height = 1.5;
+    cfg.obstacles.enabled = false;
+    return cfg;
+}
+
+// The points of simple_calibration()'s camera 1.5 m above flat ground, every `column_step`-th column, each
+// disparity plus `noise_px` (σ, seeded) of Gaussian noise.
+rp::StereoPoints flat_ground_points(int column_step = 1, float noise_px = 0.0f) {
+    const rp::StereoCalibration c = simple_calibration();
+    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
+    std::mt19937 rng(5);
+    std::normal_distribution<float> unit(0.0f, 1.0f);
+    for (int v = 61; v < 240; ++v)
+        for (int u = 0; u < 640; u += column_step)
+            d(v, u) = static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5) + noise_px * unit(rng);
+    return rp::disparity_to_points(d, 0, c, flat_ground_config().stereo);
 }
 
 template <typename F>
@@ -166,14 +188,9 @@ TEST(StereoPoints, FirstRoadRowOfALevelCamera) {
 TEST(StereoPoints, PipelineTakesRangeVariancesAsAFloorUnderTheBinsSpread) {
     // A flat ground plane 1.5 m below the camera, exactly on the plane: the sample spread is 0, the variance floor
     // is what the bins report.
-    const rp::StereoCalibration c = simple_calibration();
-    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
-    for (int v = 61; v < 240; ++v) d.row(v).setConstant(static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5));
-    rp::Config cfg;
-    cfg.sensor_height = 1.5;
-    cfg.obstacles.enabled = false;
+    const rp::Config cfg = flat_ground_config();
+    const rp::StereoPoints p = flat_ground_points();
     rp::Frame f;
-    rp::StereoPoints p = rp::disparity_to_points(d, 0, c, cfg.stereo);
     f.points = p.points;
     rp::Estimator plain(cfg);
     const rp::Result without = plain.process(f, 5.0, 0.0);
@@ -195,26 +212,19 @@ TEST(StereoPoints, PipelineTakesRangeVariancesAsAFloorUnderTheBinsSpread) {
 TEST(StereoPoints, PipelineGivesASinglePointBinItsOwnStatedSigma) {
     // Every 40th column of a flat ground: far bins hold one point. With range variances such a bin states its
     // point's σ (the roughness stage would otherwise give it a pool of the other bins' spreads); without, none.
-    const rp::StereoCalibration c = simple_calibration();
-    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
-    for (int v = 61; v < 240; ++v)
-        for (int u = 0; u < 640; u += 40) d(v, u) = static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5);
-    rp::Config cfg;
-    cfg.sensor_height = 1.5;
-    cfg.obstacles.enabled = false;
-    const rp::StereoPoints p = rp::disparity_to_points(d, 0, c, cfg.stereo);
+    const rp::Config cfg = flat_ground_config();
+    const rp::StereoPoints p = flat_ground_points(40);
     rp::Frame f;
     f.points = p.points;
     const rp::Result without = rp::Estimator(cfg).process(f, 5.0, 0.0);
     f.range_variances = p.range_variances;
     const rp::Result with = rp::Estimator(cfg).process(f, 5.0, 0.0);
     std::size_t single = 0;
-    for (const auto* wheel : {&with.left, &with.right}) {
-        const rp::Profile& plain = wheel == &with.left ? without.left : without.right;
-        for (std::size_t k = 0; k < wheel->spread.size(); ++k) {
-            if (wheel->count[k] != 1) continue;
-            EXPECT_TRUE(std::isnan(plain.spread[k]));
-            EXPECT_GT(wheel->spread[k], 1e-3) << "bin " << k;
+    for (auto [stated, plain] : {std::pair{&with.left, &without.left}, std::pair{&with.right, &without.right}}) {
+        for (std::size_t k = 0; k < stated->spread.size(); ++k) {
+            if (stated->count[k] != 1) continue;
+            EXPECT_TRUE(std::isnan(plain->spread[k]));
+            EXPECT_GT(stated->spread[k], 1e-3) << "bin " << k;
             ++single;
         }
     }
@@ -224,16 +234,8 @@ TEST(StereoPoints, PipelineGivesASinglePointBinItsOwnStatedSigma) {
 TEST(StereoPoints, PipelineCountsEachErrorGroupOnce) {
     // The same noisy ground with and without error groups: the heights agree; with all points in one group a
     // bin's spread is √count times larger (its median is as uncertain as one point), with a group per point equal.
-    const rp::StereoCalibration c = simple_calibration();
-    rp::DisparityImage d = rp::DisparityImage::Zero(240, 640);
-    std::mt19937 rng(5);
-    std::normal_distribution<float> noise(0.0f, 0.2f);
-    for (int v = 61; v < 240; ++v)
-        for (int u = 0; u < 640; ++u) d(v, u) = static_cast<float>(c.baseline_m * (v - c.cy_px) / 1.5) + noise(rng);
-    rp::Config cfg;
-    cfg.sensor_height = 1.5;
-    cfg.obstacles.enabled = false;
-    const rp::StereoPoints p = rp::disparity_to_points(d, 0, c, cfg.stereo);
+    const rp::Config cfg = flat_ground_config();
+    const rp::StereoPoints p = flat_ground_points(1, 0.2f);
     rp::Frame f;
     f.points = p.points;
     f.range_variances = p.range_variances;
