@@ -286,9 +286,9 @@ def time_reference(frame: Frame, method: str, repeat: int):
     return [ms for ms, _, _ in runs], runs[-1][1]
 
 
-def time_default(points: np.ndarray, sensor_height: float, repeat: int):
-    """Per-run stage times (ms) of the default pipeline (obstacles on) and the last result."""
-    est = rp.Estimator(rp.Config(sensor_height=sensor_height))
+def time_default(points: np.ndarray, sensor_height: float, repeat: int, threads: int = 1):
+    """Per-run stage times (ms) of the default pipeline (obstacles on) on `threads` threads and the last result."""
+    est = rp.Estimator(rp.Config(sensor_height=sensor_height, threads=threads))
     for _ in range(CPP_WARMUP):
         est.process(points, SPEED_MPS, YAW_RATE_RPS)
     runs = []
@@ -317,9 +317,9 @@ def same_answer(ordered, shuffled, permutation: np.ndarray) -> bool:
 def run_default(frame: Frame, args) -> dict:
     print(f"{frame.name}: default pipeline ordered and shuffled, ×{args.repeat} each", file=sys.stderr)
     permutation = np.random.default_rng(SHUFFLE_SEED).permutation(len(frame.points))
-    ordered, res_ordered = time_default(frame.points, frame.sensor_height, args.repeat)
+    ordered, res_ordered = time_default(frame.points, frame.sensor_height, args.repeat, args.threads)
     shuffled, res_shuffled = time_default(np.ascontiguousarray(frame.points[permutation]), frame.sensor_height,
-                                          args.repeat)
+                                          args.repeat, args.threads)
     return {"frame": frame.name, "n": len(frame.points), "ordered": ordered, "shuffled": shuffled,
             "roi": res_ordered.points["roi"], "clusters": len(res_ordered.obstacles.count),
             "same": same_answer(res_ordered, res_shuffled, permutation)}
@@ -521,7 +521,7 @@ def print_counts(results: list[dict]) -> None:
 def print_default(results: list[dict], args) -> None:
     print(f"## Timing: default pipeline (ground {rp.Config().ground.method} + obstacles + roughness), sensor "
           "order vs shuffled (Result.timing_ms, ms)\n")
-    print(f"Median (min–max) of {args.repeat} runs after {CPP_WARMUP} warm-up, single-threaded; motion "
+    print(f"Median (min–max) of {args.repeat} runs after {CPP_WARMUP} warm-up, {'single-threaded' if args.threads == 1 else f'{args.threads} threads'}; motion "
           f"{SPEED_MPS} m/s, {YAW_RATE_RPS} rad/s; shuffled = one random permutation of the rows (seed "
           f"{SHUFFLE_SEED}); \"same\" = the shuffled frame gave the ordered frame's ground mask, cluster labels, "
           "plane and profiles.\n")
@@ -573,6 +573,7 @@ def parse_args(argv=None):
     parser.add_argument("--quick", action="store_true", help="3 C++ runs and 1 reference run (smoke test)")
     parser.add_argument("--ouster-meta", type=Path, default=OUSTER_META,
                         help="Ouster metadata JSON with beam_altitude_angles")
+    parser.add_argument("--threads", type=int, default=1, help="threads a frame may use in the default pipeline's table")
     parser.add_argument("--default-only", action="store_true",
                         help="only the default pipeline's table, ordered vs shuffled")
     args = parser.parse_args(argv)

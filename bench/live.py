@@ -13,7 +13,7 @@ the region of interest, which end at the region's last column; "after the rotati
 latency to the rotation's last packet (negative: the result came before it).
 Prints a Markdown table on stdout, progress on stderr. The issue's target: p99 ≤ 5 ms at 1×.
 
-Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--quick]``
+Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--threads 1,2] [--quick]``
 """
 
 from __future__ import annotations
@@ -67,21 +67,21 @@ def pipeline_times(output: Path) -> list[float]:
         return [json.loads(line)["timing_ms"]["total"] for line in lines]
 
 
-def measure(rate: str, loops: int, roi_columns: bool) -> dict:
+def measure(rate: str, loops: int, roi_columns: bool, threads: int) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         output = Path(tmp) / "live.jsonl"
-        out = run_live(rate, loops, roi_columns, output)
+        out = run_live(rate, loops, roi_columns, threads, output)
         times = pipeline_times(output)
     # Nearest rank (the ⌈q·n⌉-th smallest), the rule of the CLI's latency percentiles.
     out["pipeline_p99_ms"] = float(np.percentile(times, 99, method="inverted_cdf"))
     return out
 
 
-def run_live(rate: str, loops: int, roi_columns: bool, output: Path) -> dict:
+def run_live(rate: str, loops: int, roi_columns: bool, threads: int, output: Path) -> dict:
     port = free_port_pair()
     load_before = os.getloadavg()[0]
     run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(META), "--speed", SPEED_MPS,
-                            "--sensor-height", HEIGHT_M, "--timeout", "3", "-o", str(output),
+                            "--sensor-height", HEIGHT_M, "--timeout", "3", "--threads", str(threads), "-o", str(output),
                             *(["--roi-columns"] if roi_columns else [])],
                            stderr=subprocess.PIPE, text=True)
     try:
@@ -105,7 +105,7 @@ def run_live(rate: str, loops: int, roi_columns: bool, output: Path) -> dict:
     # With --roi-columns a frame ends at the region's last column: the rotation's later columns still take time.
     window = re.search(r"columns \d+–(\d+) decoded, \d+ of the (\d+)", err)
     before_end_ms = (int(window[2]) - 1 - int(window[1])) / int(window[2]) * ROTATION_MS if window else 0.0
-    return {"rate": rate, "roi_columns": roi_columns, "frames": int(summary[1]), "expected": 3 * loops,
+    return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "frames": int(summary[1]), "expected": 3 * loops,
             "pipeline_ms": float(summary[2]), "received": int(live[1]), "dropped": int(live[2]),
             "affected": int(live[3]), "p50": float(live[5]), "p99": float(live[6]), "max": float(live[7]),
             "before_end_ms": before_end_ms, "load": (load_before, os.getloadavg()[0])}
@@ -115,24 +115,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--loops", type=int, default=100, help="times through the 3-frame capture (default 100)")
     parser.add_argument("--rates", default="1,10", help="replay rates, comma-separated ('max' allowed)")
+    parser.add_argument("--threads", default="1", help="threads a frame may use (the run's --threads), comma-separated")
     parser.add_argument("--quick", action="store_true", help="5 loops at 1x (smoke test)")
     args = parser.parse_args()
     loops, rates = (5, ["1"]) if args.quick else (args.loops, args.rates.split(","))
     rows = []
     for rate in rates:
-        for roi_columns in (False, True):
-            log(f"replaying {PCAP.name} {loops} times at {rate}x{', --roi-columns' if roi_columns else ''}")
-            rows.append(measure(rate, loops, roi_columns))
+        for threads in (int(t) for t in args.threads.split(",")):
+            for roi_columns in (False, True):
+                log(f"replaying {PCAP.name} {loops} times at {rate}x, {threads} thread(s)"
+                    f"{', --roi-columns' if roi_columns else ''}")
+                rows.append(measure(rate, loops, roi_columns, threads))
     print(f"Live latency, {PCAP.name} ({META.name}), default pipeline, sensor height {HEIGHT_M} m, "
           f"{os.cpu_count()} cores\n")
-    print("| rate | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
+    print("| rate | threads | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
           "| pipeline median ms | pipeline p99 ms | datagrams | dropped by the queue | frames affected "
           "| 1-min load before / after | p99 ≤ 5 ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
         frame = "region's columns" if r["roi_columns"] else "whole rotation"
-        print(f"| {r['rate']}× | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} | {r['p99']:.2f} "
+        print(f"| {r['rate']}× | {r['threads']} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} | {r['p99']:.2f} "
               f"| {r['max']:.2f} | {r['p50'] - r['before_end_ms']:.2f} | {r['pipeline_ms']:.2f} "
               f"| {r['pipeline_p99_ms']:.2f} | {r['received']} "
               f"| {r['dropped']} | {r['affected']} | {r['load'][0]:.1f} / {r['load'][1]:.1f} "

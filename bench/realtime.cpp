@@ -2,7 +2,7 @@
 // Benchmark of the real-time API on the bundled KITTI frames: per-frame time of process() returning a new Result
 // against process(..., out) reusing one, and the heap allocations of each per frame (a counting operator new),
 // for the default pipeline (zone ground, obstacles on) with fusion none, EMA and Kalman.
-//   realtime_bench [--frames N] [--warmup W] [--fusion none|ema|kalman]     (bench/README.md)
+//   realtime_bench [--frames N] [--warmup W] [--fusion none|ema|kalman] [--threads T]     (bench/README.md)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -66,12 +66,13 @@ double load_average() {
 }  // namespace
 
 int main(int argc, char** argv) {
-    int frames = 60, warmup = 5;
+    int frames = 60, warmup = 5, threads = 1;
     std::string only;  // one fusion method (a profiler's run), else all three
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--frames")) frames = std::max(1, std::atoi(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--warmup")) warmup = std::max(0, std::atoi(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--fusion")) only = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--threads")) threads = std::max(1, std::atoi(argv[i + 1]));
     }
     if (!only.empty() && only != "none" && only != "ema" && only != "kalman") {
         std::fprintf(stderr, "realtime_bench: --fusion must be none, ema or kalman, got \"%s\"\n", only.c_str());
@@ -80,8 +81,8 @@ int main(int argc, char** argv) {
     std::vector<rp::Frame> kitti;
     for (const char* name : {"000000.bin", "000001.bin", "000002.bin"})
         kitti.push_back(rp::read_frame(std::string(ROADPREVIEW_TEST_DATA) + "/semantickitti/" + name));
-    std::printf("KITTI frames 000000-000002 cycled, %d measured after %d warm-up, load average %.2f\n\n", frames,
-                warmup, load_average());
+    std::printf("KITTI frames 000000-000002 cycled, %d measured after %d warm-up, %d thread(s), load average %.2f\n\n",
+                frames, warmup, threads, load_average());
     std::printf("| fusion | call | median ms | p90 ms | allocations per frame (median) | max |\n");
     std::printf("|---|---|---|---|---|---|\n");
     const std::pair<rp::FusionMethod, const char*> methods[] = {
@@ -91,6 +92,7 @@ int main(int argc, char** argv) {
         rp::Config cfg;
         cfg.sensor_height = 1.73;
         cfg.fusion.method = method;
+        cfg.threads = threads;
         rp::Estimator fresh(cfg), reusing(cfg);
         rp::Result out;
         Sample returning, reused;  // the two calls take turns frame by frame: both see the same load

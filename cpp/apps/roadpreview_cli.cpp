@@ -38,6 +38,7 @@ struct RunOptions {
     std::string ground;
     std::string clusters;
     double cluster_tolerance = 0.0;
+    int threads = 1;
     double frame_rate = 0.0;
     std::string config_file;
     std::string output;
@@ -91,6 +92,7 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
         cfg.fusion.method = o.fusion == "ema" ? rp::FusionMethod::Ema
                             : o.fusion == "kalman" ? rp::FusionMethod::Kalman : rp::FusionMethod::None;
     if (given(run, "--alpha")) cfg.fusion.alpha = o.alpha;
+    if (given(run, "--threads")) cfg.threads = o.threads;
     if (given(run, "--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
     rp::validate(cfg);
     return cfg;
@@ -652,6 +654,8 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
     run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
         ->check(positive_finite());
+    run_cmd->add_option("--threads", o.threads, "Threads one frame may use; the same answer for any number (default 1)")
+        ->check(CLI::Range(1, rp::kMaxThreads));
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
         ->check(positive_finite());  // pcap frames carry their own timestamps
     run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")

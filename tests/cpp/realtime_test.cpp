@@ -101,6 +101,58 @@ TEST(Realtime, KittiFramesAllocateNothingOnceWarmWithTheDefaultPipeline) {  // z
     expect_no_allocations(frame_allocations(kitti_frames(), kitti_config(rp::FusionMethod::None), 5, 20), 5);
 }
 
+TEST(Realtime, KittiFramesAllocateNothingOnceWarmOnTwoThreads) {  // the zones' buffers, one set per thread
+    rp::Config cfg = kitti_config(rp::FusionMethod::Kalman);
+    cfg.threads = 2;
+    expect_no_allocations(frame_allocations(kitti_frames(), cfg, 5, 20), 5);
+}
+
+// A frame on several threads gives the answer of one, bit for bit: the crop's runs of rows, the zones' azimuth
+// groups and the obstacles beside the profiles (or the map) only share out work whose results do not depend on
+// its order.
+TEST(Realtime, ThreadsDoNotChangeTheResult) {
+    const std::vector<rp::Frame> frames = kitti_frames();
+    for (const rp::FusionMethod fusion : {rp::FusionMethod::None, rp::FusionMethod::Kalman}) {
+        std::vector<rp::Estimator> estimators;
+        for (const int threads : {1, 2, 3}) {
+            rp::Config cfg = kitti_config(fusion);
+            cfg.threads = threads;
+            estimators.emplace_back(cfg);
+        }
+        for (int k = 0; k < 6; ++k) {
+            const rp::Frame& f = frames[static_cast<std::size_t>(k) % frames.size()];
+            std::vector<rp::Result> results;
+            for (rp::Estimator& est : estimators) results.push_back(est.process(f, 5.0, 0.1, motion_at(k)));
+            const rp::Result& one = results[0];
+            ASSERT_TRUE(one.plane);
+            ASSERT_TRUE(one.obstacles && !one.obstacles->empty());
+            ASSERT_GT(one.left.count.size(), 0u);
+            for (std::size_t t = 1; t < results.size(); ++t) {
+                const rp::Result& r = results[t];
+                SCOPED_TRACE("frame " + std::to_string(k) + ", " + std::to_string(t + 1) + " threads, fusion " +
+                             rp::to_string(fusion));
+                EXPECT_EQ(r.points.roi, one.points.roi);
+                EXPECT_EQ(r.points.ground, one.points.ground);
+                EXPECT_EQ(*r.plane, *one.plane);
+                EXPECT_EQ(r.ground_mask, one.ground_mask);
+                EXPECT_EQ(r.cluster_labels, one.cluster_labels);
+                EXPECT_EQ(r.obstacles->size(), one.obstacles->size());
+                for (auto [p, q] : {std::pair{&r.left, &one.left}, std::pair{&r.right, &one.right}}) {
+                    EXPECT_EQ(p->count, q->count);
+                    EXPECT_EQ(p->blocked, q->blocked);
+                    for (std::size_t b = 0; b < q->z.size(); ++b) {
+                        EXPECT_TRUE(p->z[b] == q->z[b] || (std::isnan(p->z[b]) && std::isnan(q->z[b]))) << "bin " << b;
+                        EXPECT_TRUE(p->spread[b] == q->spread[b] || (std::isnan(p->spread[b]) && std::isnan(q->spread[b])));
+                    }
+                    EXPECT_EQ(p->roughness.iso_class, q->roughness.iso_class);
+                    EXPECT_EQ(p->roughness.gd_n0, q->roughness.gd_n0);
+                    EXPECT_EQ(p->roughness.iri.value, q->roughness.iri.value);
+                }
+            }
+        }
+    }
+}
+
 TEST(Realtime, SimulatedFrameAllocatesNothingOnceWarmWithEmaFusion) {
     expect_no_allocations(frame_allocations({simulated_frame()}, kitti_config(rp::FusionMethod::Ema), 5, 12), 5);
 }

@@ -52,3 +52,26 @@ TEST(ZoneModel, PatchLookupAgreesWithABinarySearch) {
         }
     }
 }
+
+// The azimuth groups that can be fitted apart: every ring's sector boundaries fall on the groups' boundaries, and a
+// patch's inner reference (the inner patch holding its central azimuth) lies in its own group.
+TEST(ZoneModel, AzimuthGroupsHoldEachPatchsInnerReference) {
+    const auto groups_of = [](std::vector<int> sectors) {
+        rp::GroundConfig cfg;
+        cfg.zone_ring_edges_m.resize(sectors.size() + 1);
+        std::iota(cfg.zone_ring_edges_m.begin(), cfg.zone_ring_edges_m.end(), 1.0);
+        cfg.zone_sectors = std::move(sectors);
+        return rp::ZoneModel(cfg);
+    };
+    EXPECT_EQ(rp::ZoneModel(rp::GroundConfig{}).azimuth_groups(), 8);  // 16, 24, …, 160 sectors
+    EXPECT_EQ(groups_of({3, 160}).azimuth_groups(), 1);
+    EXPECT_EQ(groups_of({12, 18, 30}).azimuth_groups(), 6);
+    const rp::ZoneModel zones(rp::GroundConfig{});
+    const int groups = zones.azimuth_groups();
+    for (int ring = 1; ring < zones.rings(); ++ring)
+        for (int sector = 0; sector < zones.sectors(ring); ++sector) {
+            const auto inner = (2 * sector + 1) * zones.sectors(ring - 1) / (2 * zones.sectors(ring));
+            EXPECT_EQ(sector / (zones.sectors(ring) / groups), inner / (zones.sectors(ring - 1) / groups))
+                << "ring " << ring << ", sector " << sector;
+        }
+}

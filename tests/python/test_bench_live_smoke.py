@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Smoke test of ``bench/live.py --quick``: the 1× rows, whole rotations and the region's columns, with every frame
-written and latency figures."""
+"""Smoke test of ``bench/live.py --quick``: the 1× rows on one thread, whole rotations and the region's columns, with
+every frame written and latency figures."""
 
 import re
 
@@ -10,7 +10,7 @@ from paths import run_bench
 def test_live_bench_prints_the_rows_at_recorded_speed():
     out = run_bench("live.py", "--quick")
     rows = {}
-    for row in re.finditer(r"\| 1× \| (whole rotation|region's columns) \| (\d+) \((\d+)\) \| ([\d.]+) \| ([\d.]+) "
+    for row in re.finditer(r"\| 1× \| 1 \| (whole rotation|region's columns) \| (\d+) \((\d+)\) \| ([\d.]+) \| ([\d.]+) "
                            r"\| ([\d.]+) \| (-?[\d.]+) \| ([\d.]+) \| ([\d.]+) \| (\d+) \| (\d+) \| (\d+) "
                            r"\| [\d.]+ / [\d.]+ "
                            r"\| (yes|no) \|", out):

@@ -144,11 +144,27 @@ def test_config_keywords_nested_dicts_and_files(tmp_path):
         (dict(sensor_height=1.7, extrinsics=rp.Extrinsics(z_m=1.7)), "not both"),
         (dict(ground={"method": "magic"}), "ground.method"),
         (dict(roughness={"band_min_cpm": 5.0}), "band_min_cpm"),
+        (dict(threads=0), "threads must be between 1 and 64, got 0"),
+        (dict(threads=65), "threads must be between 1 and 64, got 65"),
+        (dict(threads=1.5), "threads"),
     ],
 )
 def test_invalid_configs_are_rejected_naming_the_field(kwargs, words):
     with pytest.raises(ValueError, match=words):
         rp.Estimator(rp.Config(**kwargs))
+
+
+def test_threads_give_the_answer_of_one_thread(kitti):
+    """The crop's runs of rows, the zones' azimuth groups, the obstacles beside the profiles: the same result."""
+    one, two = (rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, threads=n)) for n in (1, 2))
+    a, b = (est.process(kitti, 5.0, 0.1) for est in (one, two))
+    assert np.array_equal(a.ground_mask, b.ground_mask) and np.array_equal(a.cluster_labels, b.cluster_labels)
+    assert np.array_equal(a.plane, b.plane) and len(a.obstacles.count) > 0
+    for wheel in ("left", "right"):
+        pa, pb = getattr(a, wheel), getattr(b, wheel)
+        assert np.array_equal(pa.z, pb.z, equal_nan=True) and np.array_equal(pa.count, pb.count)
+    line_a, line_b = (json.loads(r.to_json()) for r in (a, b))
+    assert {**line_a, "timing_ms": None} == {**line_b, "timing_ms": None}
 
 
 def test_unknown_config_fields_are_rejected(tmp_path):

@@ -42,6 +42,17 @@ def test_cli_line_equals_python_to_dict(tmp_path):
     assert line == expected
 
 
+def test_threads_flag_gives_the_same_lines_and_rejects_zero():
+    def without_timing(threads):
+        out = lines(run("run", KITTI_FRAMES[0].parent, "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT,
+                        "--threads", threads, "-q").stdout)
+        return [{**line, "timing_ms": None} for line in out]
+
+    assert without_timing(2) == without_timing(1)
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--threads", 0, check=False)
+    assert proc.returncode != 0 and "--threads" in proc.stderr
+
+
 def test_flags_override_the_config_file(tmp_path):
     cfg = tmp_path / "cfg.json"
     cfg.write_text(json.dumps({"sensor_height": 1.0, "ground": {"method": "ransac"}, "track_width": 1.4}))

@@ -82,6 +82,7 @@ void to_json(json& j, const Config& c) {
              {"extrinsics", c.extrinsics ? json(*c.extrinsics) : json(nullptr)},
              {"track_width", c.track_width},
              {"tire_width", c.tire_width},
+             {"threads", c.threads},
              {"ground", c.ground},
              {"path", c.path},
              {"profile", c.profile},
@@ -98,6 +99,7 @@ void from_json(const json& j, Config& c) {
     if (j.contains("extrinsics") && !j["extrinsics"].is_null()) c.extrinsics = j["extrinsics"].get<Extrinsics>();
     c.track_width = j.value("track_width", defaults.track_width);
     c.tire_width = j.value("tire_width", defaults.tire_width);
+    c.threads = j.value("threads", defaults.threads);
     c.ground = j.value("ground", defaults.ground);
     c.path = j.value("path", defaults.path);
     c.profile = j.value("profile", defaults.profile);
@@ -230,6 +232,8 @@ void validate(const Config& c) {
     require(positive(c.track_width), "track_width must be > 0 m");
     require(positive(c.tire_width), "tire_width must be > 0 m");
     require(c.tire_width < c.track_width, "tire_width must be smaller than track_width");
+    require(c.threads >= 1 && c.threads <= kMaxThreads,
+            "threads must be between 1 and " + std::to_string(kMaxThreads) + ", got " + std::to_string(c.threads));
 
     const GroundConfig& g = c.ground;
     require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/parallel.hpp"
 #include "core/roi_cloud.hpp"
 
 namespace roadpreview {
@@ -65,63 +66,93 @@ constexpr double kCellEdgeM = 1.0;
 constexpr double kMaxCellsPerSide = 128.0;  // at most 128 × 128 columns × kSlabs cells: 2 MB of counts
 constexpr double kSlabLowM = -1.0, kSlabM = 0.1;  // below kSlabLowM: the first slab
 constexpr std::uint32_t kSlabs = 32;                // from kSlabLowM + (kSlabs - 1)·kSlabM up: the last one
+// Rows are transformed and cropped on several threads in runs of at least this many (fewer do not repay a thread).
+constexpr Eigen::Index kRowsPerThread = 16384;
+constexpr int kMaxRowParts = 8;
 
-// The finite rows of `input` in the base frame, the ROI points among them kept in `scratch` in input order.
-// Written without a branch on the ROI test (a point is always stored, then kept or overwritten): in an
-// unordered cloud that branch would be mispredicted half of the time. Returns how many were kept.
-std::size_t roi_points(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out) {
-    auto& scratch = out.scratch;
-    scratch.resize(static_cast<std::size_t>(input.rows()) + 1);
+// The cells of the ROI: square columns, each cut into slabs of height.
+struct CellGrid {
+    explicit CellGrid(const GroundConfig& g)
+        : x_lo(g.roi_x_min_m), y_lo(-g.roi_y_abs_max_m),
+          per_m(1.0 / std::max({kCellEdgeM, (g.roi_x_max_m - x_lo) / (kMaxCellsPerSide - 1.0),
+                                -2.0 * y_lo / (kMaxCellsPerSide - 1.0)})),  // multiplications, not divisions, per point
+          x_last(index(g.roi_x_max_m, x_lo)), y_last(index(-y_lo, y_lo)) {}
+
+    std::uint32_t cells() const { return (x_last + 1) * (y_last + 1) * kSlabs; }
+
+    // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0).
+    std::uint32_t cell(float x, float y, float z) const {
+        const std::uint32_t column = std::min(index(x, x_lo), x_last) * (y_last + 1) + std::min(index(y, y_lo), y_last);
+        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) * (1.0 / kSlabM));
+        return column * kSlabs + std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
+    }
+
+    double x_lo, y_lo, per_m;
+    std::uint32_t x_last, y_last;
+
+private:
+    std::uint32_t index(double v, double lo) const {
+        return static_cast<std::uint32_t>(std::clamp((v - lo) * per_m, 0.0, 1e9));
+    }
+};
+
+// Rows [first, last) of `input` in the base frame, the ROI points among them stored from `at` on in input order,
+// then given their cells. Written without a branch on the ROI test (a point is always stored, then kept or
+// overwritten, so one slot beyond the kept ones is written): in an unordered cloud that branch would be
+// mispredicted half of the time. Returns how many were kept; `finite` counts the finite rows.
+std::size_t roi_points(PointsView input, Eigen::Index first, Eigen::Index last, const RigidTransform& T,
+                       const GroundConfig& g, const CellGrid& grid, RoiCloud::Candidate* at, std::int64_t& finite) {
     std::size_t kept = 0;
-    std::int64_t finite = 0;
-    for (Eigen::Index i = 0; i < input.rows(); ++i) {
+    finite = 0;
+    for (Eigen::Index i = first; i < last; ++i) {
         const double p[3] = {input(i, 0), input(i, 1), input(i, 2)};
         const double sum = p[0] + p[1] + p[2];  // finite iff all three are: a float sum cannot overflow a double
         const bool is_finite = sum - sum == 0.0;
         double b[3];
         transform_point(T, p, b);
         finite += is_finite;
-        scratch[kept] = {static_cast<float>(b[0]), static_cast<float>(b[1]), static_cast<float>(b[2]), 0,
-                         static_cast<std::int32_t>(i)};
+        const float x = static_cast<float>(b[0]), y = static_cast<float>(b[1]), z = static_cast<float>(b[2]);
+        at[kept] = {x, y, z, 0, static_cast<std::int32_t>(i)};
         kept += is_finite & (b[0] >= g.roi_x_min_m) & (b[0] <= g.roi_x_max_m) & (std::abs(b[1]) <= g.roi_y_abs_max_m);
     }
-    out.finite = finite;
+    for (std::size_t k = 0; k < kept; ++k) at[k].cell = grid.cell(at[k].x, at[k].y, at[k].z);
     return kept;
 }
 
 }  // namespace
 
-void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out) {
-    const std::size_t kept = roi_points(input, T, g, out);
-    // A stable counting sort of the kept points by cell: column, then slab.
-    const double x_lo = g.roi_x_min_m, y_lo = -g.roi_y_abs_max_m;
-    const double edge = std::max({kCellEdgeM, (g.roi_x_max_m - x_lo) / (kMaxCellsPerSide - 1.0),
-                                  -2.0 * y_lo / (kMaxCellsPerSide - 1.0)});
-    const double per_m = 1.0 / edge;  // multiplications, not divisions, per point: a cell is only an order
-    const auto cell = [per_m](double v, double lo) { return static_cast<std::uint32_t>((v - lo) * per_m); };
-    const std::uint32_t x_last = cell(g.roi_x_max_m, x_lo), y_last = cell(-y_lo, y_lo);
-    const std::uint32_t cells = (x_last + 1) * (y_last + 1) * kSlabs;
-    const auto slab = [](float z) {
-        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) * (1.0 / kSlabM));
-        return std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
-    };
+void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out, int threads) {
+    const CellGrid grid(g);
+    // The rows in `parts` runs, each stored from its own offset (one slot of room each), then closed up in order.
+    const int parts = input.rows() >= kRowsPerThread * 2 ? std::clamp(threads, 1, kMaxRowParts) : 1;
     auto& scratch = out.scratch;
-    auto& start = out.cell_start;
-    start.assign(cells + 1, 0);
-    for (std::size_t k = 0; k < kept; ++k) {
-        RoiCloud::Candidate& c = scratch[k];
-        // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0)
-        const std::uint32_t column =
-            std::min(cell(c.x, x_lo), x_last) * (y_last + 1) + std::min(cell(c.y, y_lo), y_last);
-        c.cell = column * kSlabs + slab(c.z);
-        ++start[c.cell + 1];
+    scratch.resize(static_cast<std::size_t>(input.rows()) + static_cast<std::size_t>(parts));
+    std::size_t kept[kMaxRowParts] = {};
+    std::int64_t finite[kMaxRowParts] = {};
+    const auto row_of = [&](int part) { return input.rows() * part / parts; };
+    const auto slot_of = [&](int part) { return static_cast<std::size_t>(row_of(part)) + static_cast<std::size_t>(part); };
+    parallel_for(parts, parts, [&](int part, int) {
+        kept[part] = roi_points(input, row_of(part), row_of(part + 1), T, g, grid, scratch.data() + slot_of(part),
+                                finite[part]);
+    });
+    std::size_t total = kept[0];
+    out.finite = finite[0];
+    for (int part = 1; part < parts; ++part) {
+        std::copy_n(scratch.begin() + static_cast<std::ptrdiff_t>(slot_of(part)), kept[part],
+                    scratch.begin() + static_cast<std::ptrdiff_t>(total));
+        total += kept[part];
+        out.finite += finite[part];
     }
-    for (std::uint32_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    // A stable counting sort of the kept points by cell: column, then slab.
+    auto& start = out.cell_start;
+    start.assign(grid.cells() + 1, 0);
+    for (std::size_t k = 0; k < total; ++k) ++start[scratch[k].cell + 1];
+    for (std::uint32_t c = 0; c < grid.cells(); ++c) start[c + 1] += start[c];
     auto& pts = out.cloud->points;
-    pts.resize(kept);
-    out.input_index.resize(kept);
-    out.input_order.resize(kept);
-    for (std::size_t k = 0; k < kept; ++k) {
+    pts.resize(total);
+    out.input_index.resize(total);
+    out.input_order.resize(total);
+    for (std::size_t k = 0; k < total; ++k) {
         const RoiCloud::Candidate& c = scratch[k];
         const std::uint32_t at = start[c.cell]++;
         pts[at] = pcl::PointXYZ(c.x, c.y, c.z);

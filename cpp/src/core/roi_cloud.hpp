@@ -42,8 +42,8 @@ struct RoiCloud {
 };
 
 /// Transform, drop non-finite rows (counted), crop to the ROI and order the points by cell; reuses `out`'s
-/// buffers.
-void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out);
+/// buffers. The rows are transformed on up to `threads` threads (the same answer for any number).
+void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out, int threads = 1);
 
 /// Each ROI point's height variance from its input row's range variance (none: cleared): an error along the line
 /// of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction; and its input

@@ -140,10 +140,10 @@ std::optional<Plane> fit_plane(PointsView points, const std::vector<std::uint8_t
 GroundScratch::GroundScratch() = default;
 GroundScratch::~GroundScratch() = default;
 
-void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scratch, GroundFit& fit) {
+void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scratch, GroundFit& fit, int threads) {
     if (cfg.method == GroundMethod::Zones) {
         if (!scratch.zones) scratch.zones = std::make_unique<ZoneScratch>(cfg);
-        zone_ground(roi.view(), cfg, *scratch.zones, fit);
+        zone_ground(roi.view(), cfg, *scratch.zones, fit, threads);
     } else if (cfg.method == GroundMethod::Pca) {
         pca_ground(roi.view(), cfg, fit);
     } else {

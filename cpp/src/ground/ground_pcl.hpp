@@ -20,7 +20,7 @@ struct GroundScratch {
     std::unique_ptr<ZoneScratch> zones;  // made on first use
 };
 
-/// fit_ground into `out`, reusing its mask and the scratch.
-void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scratch, GroundFit& out);
+/// fit_ground into `out`, reusing its mask and the scratch; the zones on up to `threads` threads.
+void fit_ground(const RoiCloud& roi, const GroundConfig& cfg, GroundScratch& scratch, GroundFit& out, int threads = 1);
 
 }  // namespace roadpreview

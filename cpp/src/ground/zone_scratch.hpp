@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -74,6 +75,7 @@ public:
     explicit ZoneModel(const GroundConfig& cfg) : sectors_(cfg.zone_sectors), rings_(ring_table(cfg.zone_ring_edges_m)) {
         first_.push_back(0);
         for (const int s : sectors_) {
+            groups_ = std::gcd(groups_, s);
             first_.push_back(first_.back() + s);
             std::vector<double> bounds;  // pseudo-angles of the sector boundaries 1 … s−1
             for (int k = 1; k < s; ++k) {
@@ -85,6 +87,9 @@ public:
     }
 
     int rings() const { return static_cast<int>(sectors_.size()); }
+    /// Groups of azimuth that every ring's sector boundaries cut alike (the greatest common divisor of the sector
+    /// counts): a patch's inner reference lies in its own group, so the groups can be fitted independently.
+    int azimuth_groups() const { return std::max(groups_, 1); }
     int sectors(int ring) const { return sectors_[static_cast<std::size_t>(ring)]; }
     std::int32_t first(int ring) const { return first_[static_cast<std::size_t>(ring)]; }
     std::int32_t patches() const { return first_.back(); }
@@ -108,9 +113,27 @@ private:
     }
 
     std::vector<int> sectors_;
+    int groups_ = 0;
     Thresholds rings_;
     std::vector<std::int32_t> first_;
     std::vector<Thresholds> bounds_;
+};
+
+// The buffers of one patch's fit (one set per thread fitting patches).
+struct PatchScratch {
+    std::vector<Eigen::Vector3d> pts;  // the patch's points (the root's near points)
+    std::vector<std::uint8_t> ground;  // of the patch's points
+    std::vector<double> heights, low;  // above the reference
+    std::vector<double> anchor;        // the heights a patch without a plane of its own hands on by
+
+    // Room for a patch of n points, so that whichever thread meets the largest patch allocates nothing for it.
+    void reserve(std::size_t n) {
+        pts.reserve(n);
+        ground.reserve(n);
+        heights.reserve(n);
+        low.reserve(n);
+        anchor.reserve(n);
+    }
 };
 
 struct ZoneScratch {
@@ -120,15 +143,14 @@ struct ZoneScratch {
     std::vector<std::int32_t> patch;         // of each point
     std::vector<std::int32_t> order, start;  // points by patch: patch k holds order[start[k] … start[k+1])
     std::vector<std::int32_t> next;
-    std::vector<Eigen::Vector3d> pts;        // the patch's points (the root's near points)
-    std::vector<std::uint8_t> ground;        // of the patch's points
-    std::vector<double> heights, low;        // above the reference
-    std::vector<double> anchor;              // the heights a patch without a plane of its own hands on by
     std::vector<int> slab_counts, slab_bins; // the root's height histogram, and each root point's bin
     std::vector<Plane> handed;               // each patch's plane for the next ring
+    std::vector<std::uint8_t> too_steep, accepted;  // of each patch: its fit failed the uprightness test / passed
+    std::vector<PatchScratch> fitting;       // one per thread
 };
 
-/// zone_ground into `out`, reusing its mask and the scratch's buffers.
-void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& scratch, GroundFit& out);
+/// zone_ground into `out`, reusing its mask and the scratch's buffers; the azimuth groups fitted by up to `threads`
+/// threads (the same answer for any number).
+void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& scratch, GroundFit& out, int threads = 1);
 
 }  // namespace roadpreview

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/median.hpp"
+#include "core/parallel.hpp"
 #include "ground/plane_fit.hpp"
 #include "ground/zone_scratch.hpp"
 
@@ -93,14 +94,15 @@ void densest_slab(const std::vector<Eigen::Vector3d>& pts, double thickness_m, s
 // stands on) started from their densest slab; nullopt (the level the extrinsics give stands in) when that fails
 // or is too steep.
 std::optional<Plane> root_reference(PointsView points, const GroundConfig& cfg, ZoneScratch& z) {
-    z.pts.clear();
+    PatchScratch& near = z.fitting.front();
+    near.pts.clear();
     const double r_sq = cfg.zone_root_m * cfg.zone_root_m;
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         const Eigen::Vector3d p = row(points, i);
-        if (p.x() * p.x() + p.y() * p.y() < r_sq) z.pts.push_back(p);
+        if (p.x() * p.x() + p.y() * p.y() < r_sq) near.pts.push_back(p);
     }
-    densest_slab(z.pts, cfg.pca_threshold_m, z.slab_counts, z.slab_bins, z.ground);
-    const auto fit = iterate_fit(z.pts, z.ground, cfg);
+    densest_slab(near.pts, cfg.pca_threshold_m, z.slab_counts, z.slab_bins, near.ground);
+    const auto fit = iterate_fit(near.pts, near.ground, cfg);
     return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? std::optional<Plane>(fit->plane) : std::nullopt;
 }
 
@@ -115,7 +117,7 @@ struct PatchResult {
 // plane handed on unchanged across rings of one arc each (a sparse sensor's) drifts over a crest: on the bundled
 // OS-1-32 capture a 1.6 % plane fitted 10 m ahead stood 26 cm above the road 20 m ahead, and the foot of an object
 // there was ground (docs/method.md §1).
-Plane handed_on(const Plane& reference, const PatchResult& result, const GroundConfig& cfg, ZoneScratch& z) {
+Plane handed_on(const Plane& reference, const PatchResult& result, const GroundConfig& cfg, PatchScratch& z) {
     constexpr std::size_t kMinAnchorPoints = 3;
     if (result.plane) return *result.plane;
     if (result.too_steep) return reference;
@@ -133,7 +135,7 @@ Plane handed_on(const Plane& reference, const PatchResult& result, const GroundC
 // reference), the paper's fit from them, then the breadth, uprightness, elevation and flatness tests. A patch with
 // too few points or seeds for a fit, or whose fit fails a test, keeps the reference: its points at most
 // `threshold` above it are ground. Points more than max_depth_m below the reference are neither.
-PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScratch& z) {
+PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, PatchScratch& z) {
     const auto& pts = z.pts;
     z.heights.resize(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i)
@@ -171,6 +173,35 @@ PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, ZoneScrat
     return inherit(!upright);  // the inner ground goes on: the foot of a wall or a car is no obstacle
 }
 
+// The patches of one azimuth group, ring by ring outward: each patch's reference is the plane handed on by the inner
+// patch holding its central azimuth (the root's for the innermost ring), which lies in the same group. Writes the
+// group's patches' planes and flags in `z` and their ground points in `mask`.
+void fit_group(PointsView points, const GroundConfig& cfg, const Plane& root, int group, ZoneScratch& z,
+               PatchScratch& scratch, std::vector<std::uint8_t>& mask) {
+    const ZoneModel& zones = z.zones;
+    const int groups = zones.azimuth_groups();
+    for (int ring = 0; ring < zones.rings(); ++ring) {
+        const int per_group = zones.sectors(ring) / groups;
+        for (int sector = group * per_group; sector < (group + 1) * per_group; ++sector) {
+            const std::int32_t patch = zones.first(ring) + sector;
+            Plane reference = root;
+            if (ring > 0) {  // the inner patch holding this patch's central azimuth
+                const auto inner = (2 * static_cast<std::int64_t>(sector) + 1) * zones.sectors(ring - 1) / (2 * zones.sectors(ring));
+                reference = z.handed[static_cast<std::size_t>(zones.first(ring - 1) + inner)];
+            }
+            const auto from = z.start[static_cast<std::size_t>(patch)], to = z.start[static_cast<std::size_t>(patch) + 1];
+            scratch.pts.clear();
+            for (std::int32_t k = from; k < to; ++k) scratch.pts.push_back(row(points, z.order[static_cast<std::size_t>(k)]));
+            const PatchResult result = fit_patch(reference, cfg, scratch);
+            z.handed[static_cast<std::size_t>(patch)] = handed_on(reference, result, cfg, scratch);
+            z.too_steep[static_cast<std::size_t>(patch)] = result.too_steep;
+            z.accepted[static_cast<std::size_t>(patch)] = result.plane.has_value();
+            for (std::size_t k = 0; k < scratch.ground.size(); ++k)
+                if (scratch.ground[k]) mask[static_cast<std::size_t>(z.order[static_cast<std::size_t>(from) + k])] = 1;
+        }
+    }
+}
+
 void label_patches(PointsView points, const ZoneModel& zones, std::vector<std::int32_t>& patch) {
     patch.resize(static_cast<std::size_t>(points.rows()));
     for (Eigen::Index i = 0; i < points.rows(); ++i) patch[static_cast<std::size_t>(i)] = zones.patch(points(i, 0), points(i, 1));
@@ -191,7 +222,7 @@ GroundFit zone_ground(PointsView points, const GroundConfig& cfg) {
     return fit;
 }
 
-void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, GroundFit& fit) {
+void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, GroundFit& fit, int threads) {
     const ZoneModel& zones = z.zones;
     label_patches(points, zones, z.patch);
     group_by_patch(zones.patches(), z);
@@ -200,35 +231,31 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     fit.count = 0;
     fit.status = GroundStatus::Found;
 
+    z.fitting.resize(static_cast<std::size_t>(std::max(threads, 1)));
+    std::int32_t largest = 0;
+    for (std::int32_t patch = 0; patch < zones.patches(); ++patch)
+        largest = std::max(largest, z.start[static_cast<std::size_t>(patch) + 1] - z.start[static_cast<std::size_t>(patch)]);
+    for (PatchScratch& f : z.fitting) f.reserve(static_cast<std::size_t>(largest));
     const std::optional<Plane> fitted_root = root_reference(points, cfg, z);
     const Plane root = fitted_root.value_or(kLevel);
-    // Each patch hands on to the next ring its own plane when accepted, else the reference it was given, moved to
-    // its ground (handed_on).
     z.handed.assign(static_cast<std::size_t>(zones.patches()), root);
+    z.too_steep.assign(static_cast<std::size_t>(zones.patches()), 0);
+    z.accepted.assign(static_cast<std::size_t>(zones.patches()), 0);
+    parallel_for(zones.azimuth_groups(), threads, [&](int group, int thread) {
+        fit_group(points, cfg, root, group, z, z.fitting[static_cast<std::size_t>(thread)], fit.mask);
+    });
+    // The frame's plane from every ground point, patch by patch (the order of the points does not depend on the threads).
     Moments all;
-    bool any_too_steep = false, any_accepted = fitted_root.has_value();  // a fitted root is ground of its own
-    for (int ring = 0; ring < zones.rings(); ++ring) {
-        for (int sector = 0; sector < zones.sectors(ring); ++sector) {
-            const std::int32_t patch = zones.first(ring) + sector;
-            Plane reference = root;
-            if (ring > 0) {  // the inner patch holding this patch's central azimuth
-                const auto inner = (2 * static_cast<std::int64_t>(sector) + 1) * zones.sectors(ring - 1) / (2 * zones.sectors(ring));
-                reference = z.handed[static_cast<std::size_t>(zones.first(ring - 1) + inner)];
-            }
-            const auto from = z.start[static_cast<std::size_t>(patch)], to = z.start[static_cast<std::size_t>(patch) + 1];
-            z.pts.clear();
-            for (std::int32_t k = from; k < to; ++k) z.pts.push_back(row(points, z.order[static_cast<std::size_t>(k)]));
-            const PatchResult result = fit_patch(reference, cfg, z);
-            z.handed[static_cast<std::size_t>(patch)] = handed_on(reference, result, cfg, z);
-            any_too_steep = any_too_steep || result.too_steep;
-            any_accepted = any_accepted || result.plane.has_value();
-            for (std::size_t k = 0; k < z.ground.size(); ++k) {
-                if (!z.ground[k]) continue;
-                fit.mask[static_cast<std::size_t>(z.order[static_cast<std::size_t>(from) + k])] = 1;
-                all.add(z.pts[k]);
-            }
+    for (std::int32_t patch = 0; patch < zones.patches(); ++patch)
+        for (auto k = z.start[static_cast<std::size_t>(patch)]; k < z.start[static_cast<std::size_t>(patch) + 1]; ++k) {
+            const auto i = z.order[static_cast<std::size_t>(k)];
+            if (fit.mask[static_cast<std::size_t>(i)]) all.add(row(points, i));
         }
-    }
+    const auto any = [](const std::vector<std::uint8_t>& flags) {
+        return std::any_of(flags.begin(), flags.end(), [](std::uint8_t f) { return f != 0; });
+    };
+    const bool any_too_steep = any(z.too_steep);
+    const bool any_accepted = fitted_root.has_value() || any(z.accepted);  // a fitted root is ground of its own
     const auto frame_plane = any_accepted ? plane_fit(all) : std::nullopt;  // ground from the level alone is none
     if (frame_plane) {
         fit.plane = frame_plane->plane;

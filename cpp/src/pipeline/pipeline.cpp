@@ -9,6 +9,7 @@
 #include "roadpreview/core/frames.hpp"
 #include "ground/ground_pcl.hpp"
 #include "obstacles/obstacles_pcl.hpp"
+#include "core/parallel.hpp"
 #include "core/roi_cloud.hpp"
 #include "core/stopwatch.hpp"
 #include "profile/profile_scratch.hpp"
@@ -108,8 +109,9 @@ struct Estimator::Impl {
                      Result& r);
     void find_ground(PointsView points, const PointErrors& errors, Result& r);
     void find_obstacles_in(Result& r);
-    void build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances,
-                              const std::vector<std::int32_t>* error_groups);
+    void collect_corridors(const Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                           const std::vector<std::int32_t>* error_groups);
+    void build_wheel_profiles(Result& r);
     void rate(Result& r);
 };
 
@@ -162,9 +164,9 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
 }
 
 void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
-    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi);  // behind reversing
+    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, cfg.threads);  // behind reversing
     roi_point_errors(errors, sensor_to_base, roi);
-    fit_ground(roi, cfg.ground, ground_scratch, ground);
+    fit_ground(roi, cfg.ground, ground_scratch, ground, cfg.threads);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
     r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
@@ -181,19 +183,22 @@ void Estimator::Impl::find_obstacles_in(Result& r) {
     r.obstacles->assign(clustering.clusters.begin(), clustering.clusters.end());
 }
 
-void Estimator::Impl::build_wheel_profiles(Result& r, const Levelling& L, const std::vector<float>* height_variances,
-                                           const std::vector<std::int32_t>* error_groups) {
+// The first half of the profile stage without a map: each wheel's corridor points at their heights, levelled by the
+// local ground model (method.md §3) or, without it, by the one plane.
+void Estimator::Impl::collect_corridors(const Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                                        const std::vector<std::int32_t>* error_groups) {
+    const bool local = cfg.profile.level && cfg.profile.level_local;
+    if (local) fit_local_ground(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path, profile_scratch);
+    collect_profile_hits(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, local, height_variances,
+                         error_groups, profile_scratch);
+}
+
+// The second half: the profiles from the map, or from the corridor points, outside the bins obstacles block.
+void Estimator::Impl::build_wheel_profiles(Result& r) {
     const bool crossed = cfg.obstacles.enabled && r.plane;  // without a plane (profiles from the map): none
     const BlockedBins* blocked = crossed ? &crossings.blocked : nullptr;
-    if (fusion) {
-        fusion->profiles(r.path, blocked, *r.fusion, r.left, r.right);
-    } else {
-        // Levelling by the local ground model (method.md §3); without it, by the one plane.
-        const bool local = cfg.profile.level && cfg.profile.level_local && r.plane;
-        if (local) fit_local_ground(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path, profile_scratch);
-        build_profiles(roi.view(), ground.mask, L, r.path, cfg.tire_width, cfg.profile, blocked, local,
-                       height_variances, error_groups, profile_scratch, r.left, r.right);
-    }
+    if (fusion) fusion->profiles(r.path, blocked, *r.fusion, r.left, r.right);
+    else bin_profile_hits(cfg.profile, blocked, profile_scratch, r.left, r.right);
     if (!cfg.obstacles.enabled) return;
     for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {
         if (!p->obstacles) p->obstacles.emplace();
@@ -249,16 +254,26 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     const std::vector<std::int32_t>* error_groups = roi.error_group.empty() ? nullptr : &roi.error_group;
     r.timing_ms.ground = ms_since(mark);
 
-    r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
-    if (cfg.obstacles.enabled) find_obstacles_in(r);
-    else r.obstacles.reset();
-    r.timing_ms.obstacles = ms_since(mark);
-
     const Levelling L = levelling_for(cfg.profile.level && r.plane ? &*r.plane : nullptr);
-    // Stopped: the same view again and again is not new evidence, so the map holds.
-    if (fusion && r.plane && r.path.status != PathStatus::Stopped)
-        fusion->fuse(roi.view(), ground.mask, L, height_variances, error_groups);
-    r.timing_ms.fusion += ms_since(mark);
+    // The obstacles, and the ground's way into the profiles (the map, or each wheel's corridor points): neither
+    // needs the other, so they run side by side when the frame may use two threads. Stopped: the same view again
+    // and again is not new evidence, so the map holds.
+    const bool moving = r.path.status != PathStatus::Stopped;
+    double ground_side_ms = 0.0;
+    run_both(cfg.threads > 1, [&] {
+        auto started = Clock::now();
+        r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
+        if (cfg.obstacles.enabled) find_obstacles_in(r);
+        else r.obstacles.reset();
+        r.timing_ms.obstacles = ms_since(started);
+    }, [&] {
+        auto started = Clock::now();
+        if (fusion && r.plane && moving) fusion->fuse(roi.view(), ground.mask, L, height_variances, error_groups);
+        if (!fusion && r.plane && moving) collect_corridors(r, L, height_variances, error_groups);
+        ground_side_ms = ms_since(started);
+    });
+    (fusion ? r.timing_ms.fusion : r.timing_ms.profile) += ground_side_ms;
+    mark = Clock::now();
     r.status = blocking_status(r, ground, fusion && fusion->frames() > 0);
     if (r.status != FrameStatus::Ok) {
         for (Profile* p : {&r.left, &r.right}) mark_empty(*p, cfg, r.status);
@@ -266,8 +281,8 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     } else {
         if (cfg.obstacles.enabled && r.plane) cross_paths(roi, clustering, r, L, cfg, crossings);
         r.timing_ms.obstacles += ms_since(mark);
-        build_wheel_profiles(r, L, height_variances, error_groups);
-        r.timing_ms.profile = ms_since(mark);
+        build_wheel_profiles(r);
+        r.timing_ms.profile += ms_since(mark);
         rate(r);
         r.timing_ms.roughness = ms_since(mark);
     }

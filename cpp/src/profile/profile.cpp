@@ -242,25 +242,22 @@ std::size_t bin_count(const ProfileConfig& cfg) {
 
 namespace {
 
-// The profile stage with each ground point's height from `height(i, z_levelled)`, asked only of the points in a
-// wheel's corridor.
+// The hits of each wheel's corridor (s.hits) with each ground point's height from `height(i, z_levelled)`, asked only
+// of the points in a corridor; none for a stopped vehicle.
 template <class Height>
-void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
-                         const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
-                         const BlockedBins* blocked, const std::vector<float>* height_variances,
-                         const std::vector<std::int32_t>* error_groups, Height&& height, ProfileScratch& s,
-                         Profile& left, Profile& right) {
+void collect_hits_with(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                       const WheelPaths& paths, double tire_width, const ProfileConfig& cfg,
+                       const std::vector<float>* height_variances, const std::vector<std::int32_t>* error_groups,
+                       Height&& height, ProfileScratch& s) {
     if (height_variances && height_variances->size() != mask.size())
         throw std::invalid_argument("height_variances and mask differ in length");
     if (error_groups && error_groups->size() != mask.size())
         throw std::invalid_argument("error_groups and mask differ in length");
-    if (paths.status == PathStatus::Stopped) {
-        clear_bins(left);
-        clear_bins(right);
-        return;
-    }
-    const std::size_t bins = bin_count(cfg);
     for (auto& h : s.hits) h.clear();
+    s.grouped = error_groups != nullptr;
+    s.stopped = paths.status == PathStatus::Stopped;
+    if (s.stopped) return;
+    const std::size_t bins = bin_count(cfg);
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
         if (!mask[static_cast<std::size_t>(i)]) continue;
         const auto [xl, yl, z_levelled] = L.apply(points(i, 0), points(i, 1), points(i, 2));
@@ -276,24 +273,41 @@ void build_profiles_with(PointsView points, const std::vector<std::uint8_t>& mas
             s.hits[static_cast<int>(w)].push_back({static_cast<std::int32_t>(bin), group, *zl, variance});
         }
     }
-    const bool grouped = error_groups != nullptr;
-    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, grouped, s, left);
-    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, grouped, s,
-                right);
 }
 
 }  // namespace
+
+void collect_profile_hits(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                          const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, bool level_local,
+                          const std::vector<float>* height_variances, const std::vector<std::int32_t>* error_groups,
+                          ProfileScratch& s) {
+    if (level_local)
+        collect_hits_with(points, mask, L, paths, tire_width, cfg, height_variances, error_groups,
+                          [&](Eigen::Index i, double) { return local_height(points, i, s); }, s);
+    else
+        collect_hits_with(points, mask, L, paths, tire_width, cfg, height_variances, error_groups,
+                          [](Eigen::Index, double z_levelled) { return z_levelled; }, s);
+}
+
+void bin_profile_hits(const ProfileConfig& cfg, const BlockedBins* blocked, ProfileScratch& s, Profile& left,
+                      Profile& right) {
+    if (s.stopped) {
+        clear_bins(left);
+        clear_bins(right);
+        return;
+    }
+    const std::size_t bins = bin_count(cfg);
+    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, s.grouped, s, left);
+    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, s.grouped, s,
+                right);
+}
 
 void build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                     const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, const BlockedBins* blocked,
                     bool level_local, const std::vector<float>* height_variances,
                     const std::vector<std::int32_t>* error_groups, ProfileScratch& s, Profile& left, Profile& right) {
-    if (level_local)
-        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups,
-                            [&](Eigen::Index i, double) { return local_height(points, i, s); }, s, left, right);
-    else
-        build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups,
-                            [](Eigen::Index, double z_levelled) { return z_levelled; }, s, left, right);
+    collect_profile_hits(points, mask, L, paths, tire_width, cfg, level_local, height_variances, error_groups, s);
+    bin_profile_hits(cfg, blocked, s, left, right);
 }
 
 WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
@@ -307,8 +321,8 @@ WheelProfiles build_profiles(PointsView points, const std::vector<std::uint8_t>&
     const auto height = [&](Eigen::Index i, double z_levelled) {
         return local_z ? (*local_z)[static_cast<std::size_t>(i)] : z_levelled;
     };
-    build_profiles_with(points, mask, L, paths, tire_width, cfg, blocked, height_variances, error_groups, height, s,
-                        out.left, out.right);
+    collect_hits_with(points, mask, L, paths, tire_width, cfg, height_variances, error_groups, height, s);
+    bin_profile_hits(cfg, blocked, s, out.left, out.right);
     return out;
 }
 

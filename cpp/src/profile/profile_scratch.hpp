@@ -22,6 +22,8 @@ struct Hit {
 
 struct ProfileScratch {
     std::vector<Hit> hits[2];  // left, right
+    bool grouped = false;      // the hits carry error groups
+    bool stopped = false;      // the vehicle stood still: no hits, and the profiles get no bins
     std::vector<double> variance_sum, sorted;
     std::vector<std::int32_t> sorted_group;
     std::vector<std::size_t> start, next;
@@ -47,6 +49,17 @@ void fit_local_ground(PointsView points, const std::vector<std::uint8_t>& mask, 
 
 /// Ground point i's height above the local ground model last fitted into `s`: local_ground_heights' value for it.
 double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s);
+
+/// The first half of build_profiles (what does not depend on the obstacles): each wheel's corridor points into
+/// `s.hits`, with `level_local` at their heights above the local ground model last fitted into `s`.
+void collect_profile_hits(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
+                          const WheelPaths& paths, double tire_width, const ProfileConfig& cfg, bool level_local,
+                          const std::vector<float>* height_variances, const std::vector<std::int32_t>* error_groups,
+                          ProfileScratch& s);
+
+/// The second half: the hits collected in `s` binned into `left` and `right`, outside the `blocked` bins.
+void bin_profile_hits(const ProfileConfig& cfg, const BlockedBins* blocked, ProfileScratch& s, Profile& left,
+                      Profile& right);
 
 /// build_profiles into `left` and `right`; with `level_local`, heights above the local ground model last fitted into
 /// `s` (local_height, asked only of the points in a wheel's corridor) instead of their levelled z.
