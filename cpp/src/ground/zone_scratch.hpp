@@ -145,8 +145,8 @@ struct ZoneScratch {
     std::vector<std::int32_t> next;
     std::vector<int> slab_counts, slab_bins; // the root's height histogram, and each root point's bin
     std::vector<Plane> handed;               // each patch's plane for the next ring
-    std::vector<std::uint8_t> too_steep, accepted;  // of each patch: its fit failed the uprightness test / passed
-    std::vector<PatchScratch> fitting;       // one per thread
+    std::vector<std::uint8_t> too_steep, accepted;  // of each patch: its fit was too steep / it holds a plane of its own
+    std::vector<PatchScratch> fitting;       // one per thread (the first also fits the root)
 };
 
 /// zone_ground into `out`, reusing its mask and the scratch's buffers; the azimuth groups fitted by up to `threads`

@@ -141,8 +141,8 @@ struct Config {
     std::optional<Extrinsics> extrinsics;  ///< neither set: points are already in the base frame
     double track_width = 1.6;              ///< m, between the wheel centre lines
     double tire_width = 0.3;               ///< m, width of the corridor read per wheel
-    /// Threads one frame's stages may use (the zone ground's azimuth groups; the obstacles beside the profiles);
-    /// the answer is the same for any number. 1: the calling thread only.
+    /// Threads one frame's stages may use (the crop's runs of rows, the zone ground's azimuth groups, the obstacles
+    /// beside the profiles); the answer is the same for any number. 1: the calling thread only.
     int threads = 1;
     GroundConfig ground;
     PathConfig path;
