@@ -137,14 +137,15 @@ def memory_table(args, tmp: Path) -> str:
     # warm-up: a 3-frame batch imports every module a task and a summary use, so the samples show growth only
     batch.run_batch([make_recording(tmp / "long" / "warm", 3)], tmp / "long-warm", client=client, quiet=True, **RUN)
     samples, done = [], threading.Event()
+    every_s = 0.05 if args.quick else 0.5  # the quick drive takes about a second: sampled often enough to see it
 
     def sample():
         proc = psutil.Process(pid)
         while not done.is_set():
             samples.append((time.perf_counter(), proc.memory_info().rss / 2**20))
-            if len(samples) % 60 == 0:  # every 30 s, to stderr: the trace of a long run
+            if len(samples) % round(30 / every_s) == 0:  # every 30 s, to stderr: the trace of a long run
                 print(f"  {samples[-1][0] - t0:.0f} s: worker RSS {samples[-1][1]:.0f} MB", file=sys.stderr, flush=True)
-            done.wait(0.5)
+            done.wait(every_s)
 
     try:
         idle = psutil.Process(pid).memory_info().rss / 2**20
@@ -171,6 +172,9 @@ def memory_table(args, tmp: Path) -> str:
     (part,) = (tmp / "long-out" / "frames").glob("recording=*/part-*.parquet")
     drive_end = t0 + part.stat().st_mtime - epoch0
     driving = [r for t, r in samples if t0 + 0.1 * wall <= t <= drive_end]
+    if not driving:
+        raise SystemExit(f"the drive's frames were processed in {drive_end - t0:.2f} s, between two memory samples "
+                         f"(every {every_s} s): give more --long-frames")
     drive_spread = 100.0 * (max(driving) - min(driving)) / min(driving)
     head = ["| frames | wall s | frames/s (wall) | worker CPU s | frames/s per CPU s | RSS MB warmed up | at 10 % | "
             "at 50 % | at 100 % | spread after 10 % | met |", "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -181,7 +185,7 @@ def memory_table(args, tmp: Path) -> str:
     high = max((s for s in samples if s[0] >= t0 + 0.1 * wall), key=lambda s: s[1])
     above = sum(r > 1.05 * statistics.median(steady) for r in steady)
     extremes = (f"Lowest sample after 10 %: {low[1]:.0f} MB at {low[0] - t0:.0f} s; highest {high[1]:.0f} MB at "
-                f"{high[0] - t0:.0f} s; {above} of {len(steady)} samples (every 0.5 s) more than 5 % above their "
+                f"{high[0] - t0:.0f} s; {above} of {len(steady)} samples (every {every_s} s) more than 5 % above their "
                 f"median {statistics.median(steady):.0f} MB.")
     phases = (f"The drive's frames were processed until {drive_end - t0:.0f} s ({len(driving)} samples after 10 %): "
               f"spread {drive_spread:.1f} % ({min(driving):.0f}–{max(driving):.0f} MB); the summary step after it "
