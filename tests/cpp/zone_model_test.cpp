@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <roadpreview/ground/zones.hpp>
+#include <roadpreview/io/readers.hpp>
 
 #include "ground/zone_scratch.hpp"
 #include "scenes.hpp"
@@ -74,4 +75,25 @@ TEST(ZoneModel, AzimuthGroupsHoldEachPatchsInnerReference) {
             EXPECT_EQ(sector / (zones.sectors(ring) / groups), inner / (zones.sectors(ring - 1) / groups))
                 << "ring " << ring << ", sector " << sector;
         }
+}
+
+// More threads than the machine has cores (the pipeline asks for at most as many): the groups still go to distinct
+// per-thread buffers, and the mask and plane are those of one thread.
+TEST(ZoneModel, GroundOnFourThreadsIsThatOfOne) {
+    const rp::Frame frame = rp::read_frame(std::string(ROADPREVIEW_TEST_DATA) + "/semantickitti/000000.bin");
+    scenes::Cloud pts = frame.points.leftCols(3);
+    pts.col(2).array() += 1.73f;  // the base frame: the ground at z = 0
+    const rp::PointsView view = rp::points_view(pts.data(), pts.rows(), 3);
+    const rp::GroundConfig cfg;
+    rp::ZoneScratch one_scratch(cfg), four_scratch(cfg);
+    rp::GroundFit one, four;
+    for (int repeat = 0; repeat < 3; ++repeat) {
+        rp::zone_ground(view, cfg, one_scratch, one, 1);
+        rp::zone_ground(view, cfg, four_scratch, four, 4);
+        ASSERT_TRUE(one.plane && four.plane);
+        EXPECT_EQ(*one.plane, *four.plane);
+        EXPECT_EQ(one.mask, four.mask);
+        EXPECT_EQ(one.count, four.count);
+        EXPECT_GT(one.count, 10000);
+    }
 }

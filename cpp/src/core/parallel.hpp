@@ -4,16 +4,21 @@
 // many (what a worker throws is rethrown on the caller).
 #pragma once
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <mutex>
 
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
 namespace roadpreview {
+
+/// The threads a frame may use when `asked` for: at most as many as the process may run at once (its CPU affinity).
+inline int usable_threads(int asked) { return std::clamp(asked, 1, std::max(1, tbb::info::default_concurrency())); }
 
 /// The arena of `threads` threads (the caller's included), made on its first use.
 inline tbb::task_arena& arena_of(int threads) {

@@ -126,7 +126,7 @@ struct PatchScratch {
     std::vector<double> heights, low;  // above the reference
     std::vector<double> anchor;        // the heights a patch without a plane of its own hands on by
 
-    // Room for a patch of n points, so that whichever thread meets the largest patch allocates nothing for it.
+    // Room for a patch of n points.
     void reserve(std::size_t n) {
         pts.reserve(n);
         ground.reserve(n);

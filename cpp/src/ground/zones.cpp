@@ -232,17 +232,19 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     fit.status = GroundStatus::Found;
 
     z.fitting.resize(static_cast<std::size_t>(std::max(threads, 1)));
-    std::int32_t largest = 0;
+    std::size_t largest = 0;
     for (std::int32_t patch = 0; patch < zones.patches(); ++patch)
-        largest = std::max(largest, z.start[static_cast<std::size_t>(patch) + 1] - z.start[static_cast<std::size_t>(patch)]);
-    for (PatchScratch& f : z.fitting) f.reserve(static_cast<std::size_t>(largest));
+        largest = std::max(largest, static_cast<std::size_t>(z.start[static_cast<std::size_t>(patch) + 1] -
+                                                             z.start[static_cast<std::size_t>(patch)]));
     const std::optional<Plane> fitted_root = root_reference(points, cfg, z);
     const Plane root = fitted_root.value_or(kLevel);
     z.handed.assign(static_cast<std::size_t>(zones.patches()), root);
     z.too_steep.assign(static_cast<std::size_t>(zones.patches()), 0);
     z.accepted.assign(static_cast<std::size_t>(zones.patches()), 0);
     parallel_for(zones.azimuth_groups(), threads, [&](int group, int thread) {
-        fit_group(points, cfg, root, group, z, z.fitting[static_cast<std::size_t>(thread)], fit.mask);
+        PatchScratch& scratch = z.fitting[static_cast<std::size_t>(thread)];
+        scratch.reserve(largest);  // whichever thread meets the largest patch: once warm, no allocation
+        fit_group(points, cfg, root, group, z, scratch, fit.mask);
     });
     // The frame's plane from every ground point, patch by patch (the order of the points does not depend on the threads).
     Moments all;

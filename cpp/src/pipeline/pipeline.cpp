@@ -88,6 +88,7 @@ void cross_paths(const RoiCloud& roi, const Clustering& clustering, const Result
 
 struct Estimator::Impl {
     Config cfg;
+    int threads = 1;  // cfg.threads, at most the cores the process may use
     RigidTransform sensor_to_base;
     GroundConfig roi_ahead, roi_behind;  // the region of interest driving forward and reversing
     RoiCloud roi;  // reused across frames
@@ -118,6 +119,7 @@ struct Estimator::Impl {
 Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     validate(cfg);
     impl_->cfg = cfg;
+    impl_->threads = usable_threads(cfg.threads);
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
     impl_->roi_ahead = roi_facing(cfg.ground, 1.0);
     impl_->roi_behind = roi_facing(cfg.ground, -1.0);
@@ -164,9 +166,9 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
 }
 
 void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
-    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, cfg.threads);  // behind reversing
+    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, threads);  // behind reversing
     roi_point_errors(errors, sensor_to_base, roi);
-    fit_ground(roi, cfg.ground, ground_scratch, ground, cfg.threads);
+    fit_ground(roi, cfg.ground, ground_scratch, ground, threads);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
     r.ground_mask.assign(static_cast<std::size_t>(points.rows()), 0);
@@ -260,7 +262,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
     // and again is not new evidence, so the map holds.
     const bool moving = r.path.status != PathStatus::Stopped;
     double ground_side_ms = 0.0;
-    run_both(cfg.threads > 1, [&] {
+    run_both(threads > 1, [&] {
         auto started = Clock::now();
         r.cluster_labels.assign(static_cast<std::size_t>(points.rows()), -1);
         if (cfg.obstacles.enabled) find_obstacles_in(r);

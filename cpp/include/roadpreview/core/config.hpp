@@ -142,7 +142,8 @@ struct Config {
     double track_width = 1.6;              ///< m, between the wheel centre lines
     double tire_width = 0.3;               ///< m, width of the corridor read per wheel
     /// Threads one frame's stages may use (the crop's runs of rows, the zone ground's azimuth groups, the obstacles
-    /// beside the profiles); the answer is the same for any number. 1: the calling thread only.
+    /// beside the profiles), at most as many as the process may run at once; the answer is the same for any number.
+    /// 1: the calling thread only.
     int threads = 1;
     GroundConfig ground;
     PathConfig path;
