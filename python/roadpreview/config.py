@@ -175,7 +175,7 @@ class Config:
     extrinsics: Optional[Extrinsics] = None
     track_width: float = 1.6
     tire_width: float = 0.3
-    threads: int = 1  #: threads one frame's stages may use; the answer is the same for any number
+    threads: int = 1  #: threads one frame may use (at most the cores the process may run on); same answer for any
     ground: GroundConfig = field(default_factory=GroundConfig)
     path: PathConfig = field(default_factory=PathConfig)
     profile: ProfileConfig = field(default_factory=ProfileConfig)
