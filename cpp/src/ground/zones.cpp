@@ -241,10 +241,11 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     z.handed.assign(static_cast<std::size_t>(zones.patches()), root);
     z.too_steep.assign(static_cast<std::size_t>(zones.patches()), 0);
     z.accepted.assign(static_cast<std::size_t>(zones.patches()), 0);
+    // Whichever thread meets the largest patch has room for it, even one that took no group before: once the
+    // largest patch has been seen, no allocation.
+    for (PatchScratch& scratch : z.fitting) scratch.reserve(largest);
     parallel_for(zones.azimuth_groups(), threads, [&](int group, int thread) {
-        PatchScratch& scratch = z.fitting[static_cast<std::size_t>(thread)];
-        scratch.reserve(largest);  // whichever thread meets the largest patch: once warm, no allocation
-        fit_group(points, cfg, root, group, z, scratch, fit.mask);
+        fit_group(points, cfg, root, group, z, z.fitting[static_cast<std::size_t>(thread)], fit.mask);
     });
     // The frame's plane from every ground point, patch by patch (the order of the points does not depend on the threads).
     Moments all;
