@@ -521,7 +521,8 @@ def print_counts(results: list[dict]) -> None:
 def print_default(results: list[dict], args) -> None:
     print(f"## Timing: default pipeline (ground {rp.Config().ground.method} + obstacles + roughness), sensor "
           "order vs shuffled (Result.timing_ms, ms)\n")
-    print(f"Median (min–max) of {args.repeat} runs after {CPP_WARMUP} warm-up, {'single-threaded' if args.threads == 1 else f'{args.threads} threads'}; motion "
+    threads = "single-threaded" if args.threads == 1 else f"{args.threads} threads"
+    print(f"Median (min–max) of {args.repeat} runs after {CPP_WARMUP} warm-up, {threads}; motion "
           f"{SPEED_MPS} m/s, {YAW_RATE_RPS} rad/s; shuffled = one random permutation of the rows (seed "
           f"{SHUFFLE_SEED}); \"same\" = the shuffled frame gave the ordered frame's ground mask, cluster labels, "
           "plane and profiles.\n")
@@ -573,7 +574,8 @@ def parse_args(argv=None):
     parser.add_argument("--quick", action="store_true", help="3 C++ runs and 1 reference run (smoke test)")
     parser.add_argument("--ouster-meta", type=Path, default=OUSTER_META,
                         help="Ouster metadata JSON with beam_altitude_angles")
-    parser.add_argument("--threads", type=int, default=1, help="threads a frame may use in the default pipeline's table")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="threads a frame may use in the default pipeline's table")
     parser.add_argument("--default-only", action="store_true",
                         help="only the default pipeline's table, ordered vs shuffled")
     args = parser.parse_args(argv)

@@ -105,7 +105,8 @@ def run_live(rate: str, loops: int, roi_columns: bool, threads: int, output: Pat
     # With --roi-columns a frame ends at the region's last column: the rotation's later columns still take time.
     window = re.search(r"columns \d+–(\d+) decoded, \d+ of the (\d+)", err)
     before_end_ms = (int(window[2]) - 1 - int(window[1])) / int(window[2]) * ROTATION_MS if window else 0.0
-    return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "frames": int(summary[1]), "expected": 3 * loops,
+    return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "frames": int(summary[1]),
+            "expected": 3 * loops,
             "pipeline_ms": float(summary[2]), "received": int(live[1]), "dropped": int(live[2]),
             "affected": int(live[3]), "p50": float(live[5]), "p99": float(live[6]), "max": float(live[7]),
             "before_end_ms": before_end_ms, "load": (load_before, os.getloadavg()[0])}
@@ -135,7 +136,8 @@ def main() -> None:
     for r in rows:
         met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
         frame = "region's columns" if r["roi_columns"] else "whole rotation"
-        print(f"| {r['rate']}× | {r['threads']} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} | {r['p99']:.2f} "
+        print(f"| {r['rate']}× | {r['threads']} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} "
+              f"| {r['p99']:.2f} "
               f"| {r['max']:.2f} | {r['p50'] - r['before_end_ms']:.2f} | {r['pipeline_ms']:.2f} "
               f"| {r['pipeline_p99_ms']:.2f} | {r['received']} "
               f"| {r['dropped']} | {r['affected']} | {r['load'][0]:.1f} / {r['load'][1]:.1f} "

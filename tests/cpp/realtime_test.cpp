@@ -140,9 +140,10 @@ TEST(Realtime, ThreadsDoNotChangeTheResult) {
                 for (auto [p, q] : {std::pair{&r.left, &one.left}, std::pair{&r.right, &one.right}}) {
                     EXPECT_EQ(p->count, q->count);
                     EXPECT_EQ(p->blocked, q->blocked);
+                    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
                     for (std::size_t b = 0; b < q->z.size(); ++b) {
-                        EXPECT_TRUE(p->z[b] == q->z[b] || (std::isnan(p->z[b]) && std::isnan(q->z[b]))) << "bin " << b;
-                        EXPECT_TRUE(p->spread[b] == q->spread[b] || (std::isnan(p->spread[b]) && std::isnan(q->spread[b])));
+                        EXPECT_TRUE(same(p->z[b], q->z[b])) << "bin " << b;
+                        EXPECT_TRUE(same(p->spread[b], q->spread[b])) << "bin " << b;
                     }
                     EXPECT_EQ(p->roughness.iso_class, q->roughness.iso_class);
                     EXPECT_EQ(p->roughness.gd_n0, q->roughness.gd_n0);

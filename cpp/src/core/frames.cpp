@@ -130,7 +130,9 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
     std::size_t kept[kMaxRowParts] = {};
     std::int64_t finite[kMaxRowParts] = {};
     const auto row_of = [&](int part) { return input.rows() * part / parts; };
-    const auto slot_of = [&](int part) { return static_cast<std::size_t>(row_of(part)) + static_cast<std::size_t>(part); };
+    const auto slot_of = [&](int part) {
+        return static_cast<std::size_t>(row_of(part)) + static_cast<std::size_t>(part);
+    };
     parallel_for(parts, parts, [&](int part, int) {
         kept[part] = roi_points(input, row_of(part), row_of(part + 1), T, g, grid, scratch.data() + slot_of(part),
                                 finite[part]);

@@ -247,7 +247,7 @@ void zone_ground(PointsView points, const GroundConfig& cfg, ZoneScratch& z, Gro
     parallel_for(zones.azimuth_groups(), threads, [&](int group, int thread) {
         fit_group(points, cfg, root, group, z, z.fitting[static_cast<std::size_t>(thread)], fit.mask);
     });
-    // The frame's plane from every ground point, patch by patch (the order of the points does not depend on the threads).
+    // The frame's plane from every ground point, patch by patch: an order of the sums that no number of threads changes.
     Moments all;
     for (std::int32_t patch = 0; patch < zones.patches(); ++patch)
         for (auto k = z.start[static_cast<std::size_t>(patch)]; k < z.start[static_cast<std::size_t>(patch) + 1]; ++k) {

@@ -166,7 +166,7 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
 }
 
 void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
-    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, threads);  // behind reversing
+    crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, threads);  // or reversing
     roi_point_errors(errors, sensor_to_base, roi);
     fit_ground(roi, cfg.ground, ground_scratch, ground, threads);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};

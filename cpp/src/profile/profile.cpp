@@ -297,8 +297,9 @@ void bin_profile_hits(const ProfileConfig& cfg, const BlockedBins* blocked, Prof
         return;
     }
     const std::size_t bins = bin_count(cfg);
-    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, s.grouped, s, left);
-    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, s.grouped, s,
+    const bool grouped = s.grouped;
+    bin_profile(s.hits[static_cast<int>(Wheel::Left)], bins, cfg, blocked ? &blocked->left : nullptr, grouped, s, left);
+    bin_profile(s.hits[static_cast<int>(Wheel::Right)], bins, cfg, blocked ? &blocked->right : nullptr, grouped, s,
                 right);
 }
 
