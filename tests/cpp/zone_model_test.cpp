@@ -71,7 +71,10 @@ TEST(ZoneModel, AzimuthGroupsHoldEachPatchsInnerReference) {
     const int groups = zones.azimuth_groups();
     for (int ring = 1; ring < zones.rings(); ++ring)
         for (int sector = 0; sector < zones.sectors(ring); ++sector) {
-            const auto inner = (2 * sector + 1) * zones.sectors(ring - 1) / (2 * zones.sectors(ring));
+            const int inner = zones.inner_sector(ring, sector);
+            // the inner sector's span holds this sector's central azimuth, and lies in the same group
+            EXPECT_LE(inner * zones.sectors(ring) * 2, (2 * sector + 1) * zones.sectors(ring - 1));
+            EXPECT_GT((inner + 1) * zones.sectors(ring) * 2, (2 * sector + 1) * zones.sectors(ring - 1));
             EXPECT_EQ(sector / (zones.sectors(ring) / groups), inner / (zones.sectors(ring - 1) / groups))
                 << "ring " << ring << ", sector " << sector;
         }

@@ -91,6 +91,10 @@ public:
     /// counts): a patch's inner reference lies in its own group, so the groups can be fitted independently.
     int azimuth_groups() const { return std::max(groups_, 1); }
     int sectors(int ring) const { return sectors_[static_cast<std::size_t>(ring)]; }
+    /// The sector of ring − 1 (ring > 0) holding the central azimuth of `sector` in `ring`: its inner reference.
+    int inner_sector(int ring, int sector) const {
+        return static_cast<int>((2 * static_cast<std::int64_t>(sector) + 1) * sectors(ring - 1) / (2 * sectors(ring)));
+    }
     std::int32_t first(int ring) const { return first_[static_cast<std::size_t>(ring)]; }
     std::int32_t patches() const { return first_.back(); }
 

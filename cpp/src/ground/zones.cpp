@@ -184,11 +184,9 @@ void fit_group(PointsView points, const GroundConfig& cfg, const Plane& root, in
         const int per_group = zones.sectors(ring) / groups;
         for (int sector = group * per_group; sector < (group + 1) * per_group; ++sector) {
             const std::int32_t patch = zones.first(ring) + sector;
-            Plane reference = root;
-            if (ring > 0) {  // the inner patch holding this patch's central azimuth
-                const auto inner = (2 * static_cast<std::int64_t>(sector) + 1) * zones.sectors(ring - 1) / (2 * zones.sectors(ring));
-                reference = z.handed[static_cast<std::size_t>(zones.first(ring - 1) + inner)];
-            }
+            const Plane reference =
+                ring > 0 ? z.handed[static_cast<std::size_t>(zones.first(ring - 1) + zones.inner_sector(ring, sector))]
+                         : root;
             const auto from = z.start[static_cast<std::size_t>(patch)], to = z.start[static_cast<std::size_t>(patch) + 1];
             scratch.pts.clear();
             for (std::int32_t k = from; k < to; ++k) scratch.pts.push_back(row(points, z.order[static_cast<std::size_t>(k)]));

@@ -275,7 +275,7 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     range_variances = check_per_point(range_variances, points, "range_variances")
     error_groups = check_per_point(error_groups, points, "error_groups")
     variances = None if range_variances is None else \
-        height_variances(base_xyz, range_variances.astype(float)[finite], cfg)
+        height_variances(base_xyz, range_variances[finite], cfg)
     groups = None if error_groups is None else error_groups[finite]
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
