@@ -72,6 +72,24 @@ TEST(DatagramQueue, RefusesWhatDoesNotFitAndTakesItOnceRoomIsFreed) {
     EXPECT_FALSE(q.push(datagram(6, 1)));
 }
 
+// A reader that keeps up empties the queue after each datagram: the next ones start again at the ring's start (the
+// same few kilobytes, hot in the cache), and the whole ring is theirs.
+TEST(DatagramQueue, AnEmptiedQueueStartsAgainAtTheRingsStart) {
+    rp::DatagramQueue q(1000);
+    rp::UdpDatagram out;
+    ASSERT_TRUE(q.push(datagram(1, 400)));
+    ASSERT_TRUE(q.pop(out));
+    for (std::int64_t r : {2, 3}) ASSERT_TRUE(q.push(datagram(r, 400)));
+    ASSERT_TRUE(q.push(datagram(4, 200)));  // had 2 gone on where 1 ended, 3 would have wrapped and left no room
+    EXPECT_FALSE(q.push(datagram(5, 1)));
+    for (std::int64_t r : {2, 3}) {
+        ASSERT_TRUE(q.pop(out));
+        expect_same(out, datagram(r, 400));
+    }
+    ASSERT_TRUE(q.pop(out));
+    expect_same(out, datagram(4, 200));
+}
+
 TEST(DatagramQueue, EmptyPayloadsKeepTheirPlace) {
     rp::DatagramQueue q(3);
     for (std::int64_t r : {1, 2, 3}) ASSERT_TRUE(q.push(datagram(r, 0)));

@@ -12,17 +12,19 @@ namespace {
 constexpr std::size_t kFirstEntries = 1024;
 }  // namespace
 
-DatagramQueue::DatagramQueue(std::size_t bytes) : ring_(new std::uint8_t[bytes]), capacity_(bytes) {
+// The ring is zeroed here, so that all its memory is in use from the start: no page is first touched (a page
+// fault, the kernel clearing it) while datagrams arrive, and a backlog later does not raise the process's memory.
+DatagramQueue::DatagramQueue(std::size_t bytes) : ring_(new std::uint8_t[bytes]()), capacity_(bytes) {
     if (bytes == 0) throw std::invalid_argument("a datagram queue needs room for at least one byte");
     entries_.resize(kFirstEntries);
 }
 
 // The payloads lie in [head_, tail_) when tail_ > head_, else in [head_, the last one's end) and [0, tail_) (the
 // ring wrapped: a payload never straddles its end). Every payload takes at least one byte, so head_ == tail_ with
-// entries queued means full. An empty queue goes on writing where the last payload ended: the writes go round the
-// whole ring, so its memory is all in use after the first lap, not first when the pipeline falls behind.
+// entries queued means full. An empty queue starts again at the ring's start: a reader that keeps up passes each
+// datagram through the same few kilobytes, which stay in the cache.
 std::size_t DatagramQueue::place(std::size_t size) const {
-    if (count_ == 0) return capacity_ - tail_ >= size ? tail_ : (size <= capacity_ ? 0 : capacity_);
+    if (count_ == 0) return size <= capacity_ ? 0 : capacity_;
     if (tail_ > head_) {
         if (capacity_ - tail_ >= size) return tail_;
         return size <= head_ ? 0 : capacity_;  // wrap to the start, before the oldest payload
