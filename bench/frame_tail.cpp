@@ -3,13 +3,14 @@
 // next to the time of all its packets (the whole decode, spread over the rotation as the packets arrive).
 //
 // Every bundled Ouster recording's lidar packets are read into memory, then fed --loops times to a new decoder,
-// single-threaded. Frames that no packet completes (a recording that ends before the rotation does) are not
+// single-threaded. With --roi-columns the decoder keeps only the columns that can see the default region of interest
+// ahead (the sensor 1.97 m up, as on the OS1-128 recording), as `roadpreview run --roi-columns` does. Frames that no packet completes (a recording that ends before the rotation does) are not
 // counted. A decoder's first frame is shown apart: its output lands in fresh pages (570–630 page faults for a
 // 128-beam frame, measured), where a stream's later frames reuse the memory the frames before them freed (none).
 // Prints a Markdown table on stdout: per recording, the completing packet's median / p90 ms of first and of later
 // frames, and all packets' ms per frame counted (packets of frames not completed included).
 //
-// Built with the C++ tests: build/ctest/tests/frame_tail_bench [--loops N] [OUSTER_DIR]
+// Built with the C++ tests: build/ctest/tests/frame_tail_bench [--loops N] [--roi-columns] [OUSTER_DIR]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -56,7 +57,7 @@ double percentile(std::vector<double> v, double q) {
     return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
 
-void measure(const Recording& r, int loops) {
+void measure(const Recording& r, int loops, bool roi_columns) {
     const rp::OusterMetadata meta = rp::read_ouster_metadata(r.meta.string());
     std::vector<rp::UdpDatagram> packets;
     rp::PcapReader reader(r.pcap.string());
@@ -67,6 +68,11 @@ void measure(const Recording& r, int loops) {
     long long points = 0;
     for (int loop = 0; loop < loops; ++loop) {
         rp::OusterDecoder decoder(meta);  // a fresh one: the recording's frame ids again would be late packets
+        if (roi_columns) {
+            rp::Config cfg;
+            cfg.sensor_height = 1.97;
+            decoder.keep_columns_reaching({rp::sensor_roi(cfg, 1.0)});
+        }
         bool first_frame = true;
         for (const rp::UdpDatagram& p : packets) {
             const auto start = std::chrono::steady_clock::now();
@@ -93,10 +99,13 @@ void measure(const Recording& r, int loops) {
 
 int main(int argc, char** argv) {
     int loops = 30;
+    bool roi_columns = false;
     fs::path dir = fs::path(ROADPREVIEW_TEST_DATA) / "ouster";
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--loops") && i + 1 < argc)
             loops = std::max(1, std::atoi(argv[++i]));
+        else if (!std::strcmp(argv[i], "--roi-columns"))
+            roi_columns = true;
         else
             dir = argv[i];
     }
@@ -104,7 +113,7 @@ int main(int argc, char** argv) {
                 "| later frames | later frames: median / p90 ms | all packets ms per frame |\n"
                 "|---|---|---|---|---|---|---|\n");
     try {
-        for (const Recording& r : recordings(dir)) measure(r, loops);
+        for (const Recording& r : recordings(dir)) measure(r, loops, roi_columns);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "frame_tail_bench: %s\n", e.what());
         return 1;

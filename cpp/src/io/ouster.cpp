@@ -522,18 +522,22 @@ Frame OusterDecoder::build_frame() {
     f.beams.resize(static_cast<std::size_t>(n));
     // The pixels in destaggered order (staggered column v = v_d − shift[u] mod W), copied without a branch: every
     // pixel is written, a returned one as the next point, the others into a sink (the pattern of returns is
-    // irregular, a branch on it mispredicted).
+    // irregular, a branch on it mispredicted). Only the column window's pixels can have returned: in each row they
+    // are one run of destaggered columns, or two when the run passes the row's end.
     float* const points = f.points.data();  // row-major n × 4
     std::int32_t* const beams = f.beams.data();
     float* const times = f.point_times.data();
     float sink_point[4], sink_time;
     std::int32_t sink_beam;
-    const float* xyzr = xyzr_.data();
-    const std::uint8_t* returned = returned_.data();
     const float* column_s = column_s_.data();
+    const int span = meta_.window_columns();
     Eigen::Index k = 0;
-    for (int u = 0; u < H; ++u) {
-        for (int vd = 0, v = W - destaggered(u, 0); vd < W; ++vd, ++v, xyzr += 4, ++returned) {
+    const auto copy_run = [&](int u, int first_vd, int last_vd) {  // [first_vd, last_vd)
+        const std::size_t at = static_cast<std::size_t>(u) * static_cast<std::size_t>(W);
+        const float* xyzr = xyzr_.data() + 4 * (at + static_cast<std::size_t>(first_vd));
+        const std::uint8_t* returned = returned_.data() + at + static_cast<std::size_t>(first_vd);
+        for (int vd = first_vd, v = (first_vd - destaggered(u, 0) + W) % W; vd < last_vd; ++vd, ++v, xyzr += 4,
+                 ++returned) {
             if (v == W) v = 0;
             const bool keep = *returned;
             std::copy_n(xyzr, 4, keep ? points + 4 * k : sink_point);
@@ -541,6 +545,11 @@ Frame OusterDecoder::build_frame() {
             *(keep ? times + k : &sink_time) = column_s[v];
             k += keep;
         }
+    };
+    for (int u = 0; u < H; ++u) {
+        const int first = destaggered(u, meta_.column_window[0]);
+        if (first + span > W) copy_run(u, 0, first + span - W);
+        copy_run(u, first, std::min(first + span, W));
     }
     open_ = false;
     closed_id_ = frame_id_;
