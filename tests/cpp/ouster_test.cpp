@@ -428,6 +428,37 @@ TEST(OusterRoiColumns, TheWindowSpansTheColumnsWhoseBeamsCrossTheRegion) {
     EXPECT_EQ(ahead.metadata().column_window, (std::array<int, 2>{0, 511}));
 }
 
+// A window across column 0, on beams shifted both ways by the destaggering: in some beams' rows the window's
+// destaggered columns pass the row's end. The frame holds the window's points of the whole rotation, in its order.
+TEST(OusterRoiColumns, AWindowAcrossColumnZeroKeepsTheWholeRotationsOrder) {
+    rp::OusterMetadata meta = tiny_metadata();
+    meta.pixel_shift_by_row = {6, 2, -2, -6};
+    const auto frame_of = [](rp::OusterDecoder& d, int first_column) {  // a rotation in the order the sensor sends it
+        std::optional<rp::Frame> f;
+        for (int k = 0; k < 512; ++k) {  // column v's range (1000 + v) mm tells it in the output
+            const auto v = static_cast<std::uint16_t>((first_column + k) % 512);
+            const auto p = tiny_packet(1, v, 1000u + v);
+            if (auto got = d.add_packet(p.data(), p.size(), 0.0)) f = std::move(got);
+        }
+        return f ? f : d.finish();
+    };
+    rp::OusterDecoder whole(meta);
+    meta.column_window = {500, 40};
+    rp::OusterDecoder window(meta);
+    const auto all = frame_of(whole, 0), part = frame_of(window, 500);
+    ASSERT_TRUE(all && part);
+    std::vector<std::array<float, 4>> want, got;
+    for (Eigen::Index i = 0; i < all->points.rows(); ++i) {
+        const long column = std::lround(1000.0 * all->points.row(i).head<3>().cast<double>().norm()) - 1000;
+        if (column >= 500 || column <= 40)
+            want.push_back({all->points(i, 0), all->points(i, 1), all->points(i, 2), all->points(i, 3)});
+    }
+    for (Eigen::Index i = 0; i < part->points.rows(); ++i)
+        got.push_back({part->points(i, 0), part->points(i, 1), part->points(i, 2), part->points(i, 3)});
+    EXPECT_EQ(want.size(), 4u * 53u);
+    EXPECT_EQ(got, want);
+}
+
 TEST(OusterRoiColumns, LateAndMissingColumnsAreCountedInsideTheWindowOnly) {
     rp::OusterDecoder d(tiny_metadata());
     d.keep_columns_reaching({default_roi(1.0, -1.0)});  // columns 134–375
