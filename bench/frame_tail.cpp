@@ -3,10 +3,11 @@
 // next to the time of all its packets (the whole decode, spread over the rotation as the packets arrive).
 //
 // Every bundled Ouster recording's lidar packets are read into memory, then fed --loops times to a new decoder,
-// single-threaded. With --roi-columns the decoder keeps only the columns that can see the default region of interest
-// ahead (the sensor 1.97 m up, as on the OS1-128 recording), as `roadpreview run --roi-columns` does. Frames that no packet completes (a recording that ends before the rotation does) are not
-// counted. A decoder's first frame is shown apart: its output lands in fresh pages (570–630 page faults for a
-// 128-beam frame, measured), where a stream's later frames reuse the memory the frames before them freed (none).
+// single-threaded. With --roi-columns the decoder keeps only the columns that can see the default region of
+// interest ahead (the sensor 1.97 m up, as on the OS1-128 recording), as `roadpreview run --roi-columns` does.
+// Frames that no packet completes (a recording that ends before the rotation does) are not counted. A decoder's
+// first frame is shown apart: its output lands in fresh pages (570–630 page faults for a 128-beam frame,
+// measured), where a stream's later frames reuse the memory the frames before them freed (none).
 // Prints a Markdown table on stdout: per recording, the completing packet's median / p90 ms of first and of later
 // frames, and all packets' ms per frame counted (packets of frames not completed included).
 //
