@@ -35,7 +35,7 @@ private:
     };
     std::size_t place(std::size_t size) const;  // where a payload of `size` bytes goes, or capacity_ when full
 
-    std::unique_ptr<std::uint8_t[]> ring_;  // uninitialised: its pages count in memory once payloads reach them
+    std::unique_ptr<std::uint8_t[]> ring_;  // zeroed when made: every page in memory before the first datagram
     std::size_t capacity_;
     std::size_t head_ = 0;  // the oldest payload's start
     std::size_t tail_ = 0;  // one past the newest payload's end

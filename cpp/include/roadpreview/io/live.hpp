@@ -33,8 +33,8 @@ struct LiveOptions {
     /// ended (the frame being assembled is returned, then the end).
     double timeout_s = 5.0;
     double duration_s = 0.0;  ///< > 0: the stream ends after this long (s, from opening)
-    /// the receive queue's size, a ring allocated once (in memory in full once the writes have gone round it):
-    /// datagrams that do not fit are dropped and counted
+    /// the receive queue's size, a ring allocated and zeroed once when the input opens (in memory in full from
+    /// the start): datagrams that do not fit are dropped and counted
     std::size_t queue_bytes = std::size_t{64} << 20;
     int receive_buffer_bytes = 16 << 20;               ///< the sockets' kernel receive buffer (SO_RCVBUF)
 };
