@@ -32,6 +32,9 @@ namespace {
 
 constexpr int kVelodyneDataPort = 2368;
 constexpr std::size_t kMaxDatagramBytes = 65536;
+// Datagrams read from one socket before they are queued: the receive thread holds (and keeps payload buffers for)
+// at most a few batches, however large a backlog the kernel holds after the thread was kept from running.
+constexpr std::size_t kMaxBatch = 64;
 
 double wall_now_s() {
     return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -106,9 +109,10 @@ public:
     }
 
 private:
-    // The receive thread: waits on every socket at once, drains what arrived, checks for the end every 50 ms.
+    // The receive thread: waits on every socket at once, reads what arrived, checks for the end every 50 ms.
     // Datagrams of several sockets (lidar, IMU) are queued in the order the kernel received them: each socket is
-    // read until empty, so everything received before the earliest of those moments is known and can go, sorted.
+    // read until empty or for a batch, so everything it received up to then (when emptied) or up to its last
+    // datagram read is known; what all sockets have known up to the earliest of those times can go, sorted.
     void receive() {
         std::vector<pollfd> fds;
         for (const UdpSocket& s : sockets_) fds.push_back({s.fd(), POLLIN, 0});
@@ -119,17 +123,19 @@ private:
             if (ready <= 0 && pending.empty()) continue;
             double known_until_s = std::numeric_limits<double>::infinity();
             for (std::size_t k = 0; k < fds.size(); ++k) {
-                drain(fds[k].fd, ports_[k], pending);
-                if (fds.size() > 1) known_until_s = std::min(known_until_s, wall_now_s());
+                const double known_s = read_batch(fds[k].fd, ports_[k], pending);
+                if (fds.size() > 1) known_until_s = std::min(known_until_s, known_s);
             }
             push_until(pending, known_until_s);
         }
     }
 
-    // Reads what the socket holds, with the kernel's receive time of each datagram (SO_TIMESTAMPNS).
-    void drain(int fd, int port, std::vector<UdpDatagram>& batch) {
+    // Reads up to kMaxBatch datagrams the socket holds, with the kernel's receive time of each (SO_TIMESTAMPNS).
+    // Returns the time up to which the socket's datagrams have all been read: now when it was emptied, else the
+    // receive time of the last one read (a socket gives its datagrams in the order they arrived).
+    double read_batch(int fd, int port, std::vector<UdpDatagram>& batch) {
         alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
-        for (;;) {
+        for (std::size_t count = 0; count < kMaxBatch; ++count) {
             buffer_.resize(kMaxDatagramBytes);
             iovec io{buffer_.data(), buffer_.size()};
             msghdr m{};
@@ -141,7 +147,7 @@ private:
             if (n < 0) {
                 if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
                     fail(std::string("receive: ") + std::strerror(errno));
-                return;
+                return wall_now_s();
             }
             UdpDatagram d = spare();
             const double wall_s = wall_now_s(), steady_s = steady_now_s();
@@ -157,6 +163,7 @@ private:
             d.payload.assign(buffer_.data(), buffer_.data() + n);
             batch.push_back(std::move(d));
         }
+        return batch.back().timestamp;
     }
 
     // A datagram whose payload buffer was used before (the receive thread allocates nothing once warmed up).
@@ -202,7 +209,7 @@ private:
     std::thread thread_;
     std::atomic<bool> stop_{false};
     std::vector<std::uint8_t> buffer_;  // the receive thread's
-    // The receive thread's: datagrams queued, their buffers kept for reuse (at most a drained socket buffer's worth)
+    // The receive thread's: datagrams queued, their buffers kept for reuse (at most a few batches' worth)
     std::vector<UdpDatagram> spare_;
 
     mutable std::mutex mutex_;  // guards what follows
