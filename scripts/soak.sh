@@ -29,14 +29,15 @@ REPLAY=$!
 trap 'kill $RUN $REPLAY 2>/dev/null || true' EXIT
 
 printf '| minute | RSS MB | frames written |\n|---|---|---|\n'
-elapsed=0
+start=$SECONDS
 while kill -0 "$RUN" 2>/dev/null; do
     sleep "$SAMPLE_S"
-    elapsed=$((elapsed + SAMPLE_S))
     rss_kb=$(awk '/VmRSS/ {print $2}' "/proc/$RUN/status" 2>/dev/null || echo "")
     [ -n "$rss_kb" ] || break
-    printf '| %s | %.1f | %s |\n' "$(python3 -c "print(round($elapsed / 60, 2))")" "$(python3 -c "print($rss_kb / 1024)")" \
-        "$(wc -l <"$WORK/out.jsonl")"
+    # The last line's frame number (the output grows by gigabytes: counting its lines would delay the samples).
+    last=$(tail -c 300000 "$WORK/out.jsonl" | grep -o '^{"frame":[0-9]*' | tail -1 | cut -d: -f2 || true)
+    printf '| %s | %.1f | %s |\n' "$(python3 -c "print(round($((SECONDS - start)) / 60, 2))")" \
+        "$(python3 -c "print($rss_kb / 1024)")" "$(( ${last:--1} + 1 ))"
 done
 wait "$RUN" || { echo "the live run failed:" >&2; tail -5 "$WORK/run.log" >&2; exit 1; }
 kill "$REPLAY" 2>/dev/null || true
