@@ -56,6 +56,7 @@ struct RunOptions {
     std::vector<double> segment_lengths_m;  // --segments
     std::string segments_file;              // --segments-csv
     std::string profile_dir;                // --export-profile
+    double read_ahead_m = 0.0;              // --read-ahead-m: each line's readout (0: none)
     std::vector<std::string> stereo;  // LEFT RIGHT: image files or directories of them
     std::string calib;
     std::string disparity;
@@ -364,6 +365,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
+    if (o.read_ahead_m > 0.0) rp::ProfileReadout(cfg, o.read_ahead_m);  // a distance beyond the profiles: said now
     auto source = open_source(o, app, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
@@ -376,6 +378,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     }
     std::ostream& out = o.output.empty() ? std::cout : file;
     std::optional<rp::RouteBuilder> route;
+    std::optional<rp::ProfileReadout> readout;
     RunSummary summary;
     LiveStats live_stats;
     while (std::optional<rp::DriveStep> step = runner.next()) {
@@ -384,6 +387,7 @@ int run(const RunOptions& o, const CLI::App& app) {
         if (summary.ms.empty()) {
             if (!o.quiet) report_source(runner.info());
             if (wants_route(o)) route.emplace(runner.config());
+            if (o.read_ahead_m > 0.0) readout.emplace(runner.config(), o.read_ahead_m);
             if (route && !in.at.timestamp_s && !in.at.pose && !o.quiet)
                 std::fprintf(stderr,
                              "roadpreview: route: frames without timestamps are taken %g s apart "
@@ -391,7 +395,12 @@ int run(const RunOptions& o, const CLI::App& app) {
                              1.0 / cfg.fusion.frame_rate_hz);
         }
         if (route) route->add(r, in.at.pose);
-        out << rp::result_to_json(r) << '\n';
+        rp::LineOptions line;
+        if (readout) {
+            readout->add(r, in.at.pose);
+            line.readout = &*readout;
+        }
+        out << rp::result_to_json(r, line) << '\n';
         out.flush();  // a live consumer reads each line as it comes
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
         live_stats.add(in.frame);
@@ -673,6 +682,10 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--export-profile", o.profile_dir,
                         "Directory for each wheel's profile stitched along the drive: left/right .csv and .erd "
                         "(ProVAL)");
+    run_cmd->add_option("--read-ahead-m", o.read_ahead_m,
+                        "Add each wheel's readout to every line: the profile read this far ahead, m, and kept in an "
+                        "array along the drive as the vehicle drives on (the moving-average paper's profile)")
+        ->check(positive_finite());
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("--roi-columns", o.roi_columns,

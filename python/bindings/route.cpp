@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // rp.native route: the C++ RouteBuilder (docs/method.md §10) fed with results or with a run's output lines;
 // segments come out shaped as the numpy reference's (rp.reference.Route) so either can fill a segment table.
+// And the ProfileReadout (§10, "Readout"), whose wheels are handed out as copies (the array moves on).
 #include "common.hpp"
 
 namespace {
@@ -78,4 +79,34 @@ void bind_route(py::module_& m) {
         }, py::arg("length_m"),
            "One dict per segment: length_m, start_m, end_m, start/end (x, y, yaw) or None, and per left/right/"
            "vehicle: roughness, iri, backed_fraction");
+
+    py::class_<rp::ReadoutProfile>(m, "ReadoutProfile", "One wheel's readout, from the wheel on")
+        .def_property_readonly("s", [](py::object self) {
+            return view_of(self.cast<const rp::ReadoutProfile&>().s, self);
+        }, "m, arc length along the wheel's current path to each bin centre")
+        .def_property_readonly("z", [](py::object self) {
+            return view_of(self.cast<const rp::ReadoutProfile&>().z, self);
+        }, "m, the height read; NaN where none was")
+        .def_property_readonly("count", [](py::object self) {
+            return view_of(self.cast<const rp::ReadoutProfile&>().count, self);
+        }, "points behind each bin when it was read (0: interpolated)");
+
+    py::class_<rp::ProfileReadout>(m, "ProfileReadout", "Each wheel's profile read a fixed distance ahead, kept along "
+                                                        "the drive")
+        .def(py::init([](const std::string& config_json, double ahead_m) {
+            return rp::ProfileReadout(config_from(config_json), ahead_m);
+        }), py::arg("config_json"), py::arg("ahead_m"))
+        .def("add", [](rp::ProfileReadout& readout, const rp::Result& r, std::optional<std::array<double, 3>> pose) {
+            readout.add(r, pose_from(pose));
+        }, py::arg("result"), py::arg("pose") = py::none(), "Adds a frame's result, in drive order; pose: (x, y, yaw)")
+        .def("add_line", [](rp::ProfileReadout& readout, const std::string& line,
+                            std::optional<std::array<double, 3>> pose, const std::string& where) {
+            readout.add(rp::route_input_from_json(line, where), pose_from(pose));
+        }, py::arg("line"), py::arg("pose") = py::none(), py::arg("where") = "output line",
+           "Adds a frame from its output line (JSON text, as written by the CLI or stored by batch)")
+        .def_property_readonly("ahead_m", &rp::ProfileReadout::ahead_m)
+        .def_property_readonly("frames", &rp::ProfileReadout::frames)
+        .def_property_readonly("distance_m", &rp::ProfileReadout::distance_m, "driven by the last frame added")
+        .def_property_readonly("left", [](const rp::ProfileReadout& r) { return r.left(); }, "a copy")
+        .def_property_readonly("right", [](const rp::ProfileReadout& r) { return r.right(); }, "a copy");
 }

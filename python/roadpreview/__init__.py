@@ -24,6 +24,7 @@ if native_available():
     from ._core import BeamCalibration, CalibrationError
     from .calibration import calibrate_beams
     from .drive_runner import Drive, run
+    from .readout import ProfileReadout
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
 else:  # a source checkout without the compiled extension: only the reference works
     __version__ = "0+source"
@@ -39,5 +40,5 @@ __all__ = [
     "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
     "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
     "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive", "roadside",
-    "drive", "io_bags", "odometry", "batch", "geo",
+    "drive", "io_bags", "odometry", "batch", "geo", "ProfileReadout",
 ]

@@ -3,6 +3,7 @@
 // errors as a Status with the throwing variant's message. Its own executable: it replaces the global allocator.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -152,6 +153,22 @@ TEST(Realtime, ThreadsDoNotChangeTheResult) {
             }
         }
     }
+}
+
+TEST(Realtime, TheReadoutAllocatesNothingOnceWarm) {  // a controller's array, fed every frame's result
+    const std::vector<rp::Frame> frames = kitti_frames();
+    const rp::Config cfg = kitti_config(rp::FusionMethod::Kalman);
+    rp::Estimator est(cfg);
+    rp::ProfileReadout readout(cfg, 6.0);
+    rp::Result out;
+    for (int k = 0; k < 20; ++k) {
+        est.process(frames[static_cast<std::size_t>(k) % frames.size()], 5.0, 0.02, motion_at(k), out);
+        const long n = allocations_in([&] { readout.add(out); });
+        if (k >= 5) EXPECT_EQ(n, 0) << "frame " << k;
+    }
+    const std::vector<double>& z = readout.left().z;
+    EXPECT_EQ(z.size(), 60u);
+    EXPECT_GT(std::count_if(z.begin(), z.end(), [](double v) { return std::isfinite(v); }), 50);
 }
 
 TEST(Realtime, SimulatedFrameAllocatesNothingOnceWarmWithEmaFusion) {

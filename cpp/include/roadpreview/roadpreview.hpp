@@ -24,5 +24,6 @@
 #include "roadpreview/roughness/roughness.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 #include "roadpreview/roughness/support.hpp"
+#include "roadpreview/route/readout.hpp"
 #include "roadpreview/route/route.hpp"
 #include "roadpreview/version.hpp"

@@ -9,6 +9,7 @@
 #include "roadpreview/ground/mounting.hpp"
 #include "pipeline/output_json.hpp"
 #include "roadpreview/pipeline/pipeline.hpp"
+#include "roadpreview/route/readout.hpp"
 
 namespace roadpreview {
 namespace detail {
@@ -272,6 +273,29 @@ void write_profiles_and_roughness(JsonWriter& w, const Profile& left, const Prof
 
 }  // namespace detail
 
+namespace {
+
+void write_readout_wheel(JsonWriter& w, const ReadoutProfile& p) {
+    w.StartObject();
+    w.Key("s"), detail::write_numbers(w, p.s);
+    w.Key("z"), detail::write_numbers(w, p.z);
+    w.Key("count"), w.StartArray();
+    for (const std::int32_t c : p.count) w.Int(c);
+    w.EndArray();
+    w.EndObject();
+}
+
+void write_readout(JsonWriter& w, const ProfileReadout& readout) {
+    w.StartObject();
+    w.Key("ahead_m"), detail::write_number(w, readout.ahead_m());
+    w.Key("distance_m"), detail::write_number(w, readout.distance_m());
+    w.Key("left"), write_readout_wheel(w, readout.left());
+    w.Key("right"), write_readout_wheel(w, readout.right());
+    w.EndObject();
+}
+
+}  // namespace
+
 std::string result_to_json(const Result& r) { return result_to_json(r, LineOptions{}); }
 
 std::string result_to_json(const Result& r, const LineOptions& options) {
@@ -313,6 +337,7 @@ std::string result_to_json(const Result& r, const LineOptions& options) {
     else
         w.String(to_string(r.status));
     w.Key("fusion"), write_fusion(w, r.fusion, r.timing_ms.fusion, options.timing);
+    if (options.readout) w.Key("readout"), write_readout(w, *options.readout);
     if (options.timing) w.Key("timing_ms"), write_timing(w, r.timing_ms);
     w.EndObject();
     return std::string(text.GetString(), text.GetSize());

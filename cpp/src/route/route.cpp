@@ -16,12 +16,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kMinSharedBins = 10;  // a frame is levelled onto the drive only over ≥ 1 m of shared road
 
-// Drive distance per metre of a wheel's arc length: |y_icr| / r_w on an arc, 1 on a straight path.
-double drive_per_wheel_metre(const WheelPaths& p, Wheel w) {
-    if (p.status != PathStatus::Arc || p.radius(w) <= 0.0) return 1.0;
-    return std::abs(p.icr_y) / p.radius(w);
-}
-
 template <typename T>
 void grow(std::vector<T>& v, std::size_t size, T fill) {
     if (v.size() < size) v.resize(size, fill);
@@ -94,26 +88,11 @@ Pose2 interpolate(const Pose2& a, const Pose2& b, double t) {
 
 }  // namespace
 
-RouteBuilder::RouteBuilder(const Config& cfg) : cfg_(cfg) { validate(cfg); }
+RouteBuilder::RouteBuilder(const Config& cfg) : cfg_(cfg), drive_(cfg.fusion.frame_rate_hz) { validate(cfg); }
 
 void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
-    const std::string frame =
-        "route: frame " + std::to_string(frames_) + (r.source.empty() ? "" : " (" + r.source + ")");
-    if (frames_ > 0 && pose.has_value() != last_pose_.has_value())
-        throw std::invalid_argument(frame + ": poses must be given for every frame or for none");
-    if (frames_ > 0 && pose) {
-        distance_m_ += std::hypot(pose->x_m - last_pose_->x_m, pose->y_m - last_pose_->y_m);
-    } else if (frames_ > 0) {
-        double dt_s = 1.0 / cfg_.fusion.frame_rate_hz;
-        if (r.timestamp && last_timestamp_) dt_s = *r.timestamp - *last_timestamp_;
-        if (dt_s < 0.0)
-            throw std::invalid_argument(frame + " is " + std::to_string(-dt_s) + " s before the previous frame");
-        distance_m_ += std::abs(r.speed_mps) * dt_s;
-    }
-    ++frames_;
-    last_timestamp_ = r.timestamp;
-    last_pose_ = pose;
-    if (pose) track_.emplace_back(distance_m_, *pose);
+    drive_.advance(r, pose, "route");
+    if (pose) track_.emplace_back(drive_.metres(), *pose);
     if (r.status != FrameStatus::Ok) return;  // no profiles: the frame only moves the drive on
     stitch(r.left, drive_per_wheel_metre(r.path, Wheel::Left), left_);
     stitch(r.right, drive_per_wheel_metre(r.path, Wheel::Right), right_);
@@ -128,7 +107,7 @@ void RouteBuilder::stitch(const Profile& p, double scale, WheelSums& w) {
     std::vector<double> differences;
     for (std::size_t k = 0; k < p.z.size(); ++k) {
         if (p.count[k] <= 0 || !std::isfinite(p.z[k])) continue;
-        const double d = distance_m_ + p.s[k] * scale;
+        const double d = drive_.metres() + p.s[k] * scale;
         if (d < 0.0) continue;
         const auto j = static_cast<std::size_t>(std::floor(d / ds));
         bins.emplace_back(j, k);
@@ -148,8 +127,8 @@ void RouteBuilder::stitch(const Profile& p, double scale, WheelSums& w) {
         w.weighted_z[j] += c * z;
         w.weighted_square[j] += c * (spread * spread + z * z);
         w.count[j] += p.count[k];
-        if (w.last_frame[j] != frames_) w.frames[j] += 1;
-        w.last_frame[j] = frames_;
+        if (w.last_frame[j] != drive_.frames()) w.frames[j] += 1;
+        w.last_frame[j] = drive_.frames();
     }
 }
 

@@ -14,6 +14,7 @@ from .mounting import check_mounting, estimate_mounting, mounting_from_plane
 from .path import plan_path
 from .pipeline import Result, process
 from .profile import Profile, fill_gaps, level_points, wheel_profile
+from .readout import Readout
 from .route import Route, Stitched
 from . import stereo
 from .roughness import (
@@ -38,6 +39,7 @@ __all__ = [
     "PathObstacles",
     "FusedMap",
     "Profile",
+    "Readout",
     "Result",
     "Route",
     "Roughness",

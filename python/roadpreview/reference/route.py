@@ -56,22 +56,20 @@ def _values(items) -> np.ndarray:
     return np.array([np.nan if v is None else v for v in items], dtype=np.float64)
 
 
-class Route:
-    """Feed output lines in drive order with :meth:`add`; read :meth:`stitched` and :meth:`segments`."""
+class DriveDistance:
+    """The drive distance of §10, frame by frame: ``advance`` each line (and pose) in drive order."""
 
-    def __init__(self, cfg: Config | None = None):
-        self.cfg = cfg or Config()
+    def __init__(self, cfg: Config, who: str):
+        self.cfg, self.who = cfg, who
         self.distance = 0.0
         self.frames = 0
-        self._sums = {"left": _Sums(), "right": _Sums()}
         self._last_time = None
         self._last_pose = None
-        self._track = []  # (distance, (x, y, yaw)) per frame, with poses
 
-    def add(self, line: dict, pose=None) -> None:
+    def advance(self, line: dict, pose=None) -> None:
         if self.frames:
             if (pose is None) != (self._last_pose is None):
-                raise ValueError(f"route: frame {self.frames}: poses must be given for every frame or for none")
+                raise ValueError(f"{self.who}: frame {self.frames}: poses must be given for every frame or for none")
             if pose is not None:
                 self.distance += math.hypot(pose[0] - self._last_pose[0], pose[1] - self._last_pose[1])
             else:
@@ -79,10 +77,31 @@ class Route:
                 if line.get("timestamp") is not None and self._last_time is not None:
                     dt = line["timestamp"] - self._last_time
                 if dt < 0:
-                    raise ValueError(f"route: frame {self.frames} is {-dt} s before the previous frame")
+                    raise ValueError(f"{self.who}: frame {self.frames} is {-dt} s before the previous frame")
                 self.distance += abs(line["motion"]["speed"]) * dt
         self.frames += 1
         self._last_time, self._last_pose = line.get("timestamp"), pose
+
+
+class Route:
+    """Feed output lines in drive order with :meth:`add`; read :meth:`stitched` and :meth:`segments`."""
+
+    def __init__(self, cfg: Config | None = None):
+        self.cfg = cfg or Config()
+        self._drive = DriveDistance(self.cfg, "route")
+        self._sums = {"left": _Sums(), "right": _Sums()}
+        self._track = []  # (distance, (x, y, yaw)) per frame, with poses
+
+    @property
+    def distance(self) -> float:
+        return self._drive.distance
+
+    @property
+    def frames(self) -> int:
+        return self._drive.frames
+
+    def add(self, line: dict, pose=None) -> None:
+        self._drive.advance(line, pose)
         if pose is not None:
             self._track.append((self.distance, tuple(pose)))
         if line.get("reason"):

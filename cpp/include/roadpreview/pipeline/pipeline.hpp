@@ -154,10 +154,13 @@ private:
 /// One output line (JSON object, no newline) as documented in docs/output.md.
 std::string result_to_json(const Result& r);
 
-/// What an output line may leave out or restate.
+class ProfileReadout;  // roadpreview/route/readout.hpp
+
+/// What an output line may leave out, restate or add.
 struct LineOptions {
     std::optional<std::int64_t> frame;  ///< the frame's number instead of the estimator's count (a recording's index)
     bool timing = true;                 ///< false: no `timing_ms` and no `fusion.time_ms` (lines that must repeat)
+    const ProfileReadout* readout = nullptr;  ///< adds `readout`: its state after this frame was added
 };
 
 /// The output line with `options` applied.

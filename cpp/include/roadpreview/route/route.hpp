@@ -15,6 +15,7 @@
 #include "roadpreview/pipeline/pipeline.hpp"
 #include "roadpreview/roughness/iri.hpp"
 #include "roadpreview/roughness/roughness.hpp"
+#include "roadpreview/route/drive_distance.hpp"
 
 namespace roadpreview {
 
@@ -51,8 +52,8 @@ public:
     /// when the time goes back or poses are given for some frames only.
     void add(const Result& r, const std::optional<Pose2>& pose = std::nullopt);
 
-    std::size_t frames() const { return frames_; }
-    double distance_m() const { return distance_m_; }  ///< driven by the last frame added
+    std::size_t frames() const { return drive_.frames(); }
+    double distance_m() const { return drive_.metres(); }  ///< driven by the last frame added
     /// The stitched profile with interior gaps up to profile.max_gap_m filled (filled bins keep count 0).
     StitchedProfile left() const;
     StitchedProfile right() const;
@@ -70,11 +71,8 @@ private:
     std::optional<Pose2> pose_at(double distance_m) const;
 
     Config cfg_;
+    DriveDistance drive_;
     WheelSums left_, right_;
-    std::size_t frames_ = 0;
-    double distance_m_ = 0.0;
-    std::optional<double> last_timestamp_;
-    std::optional<Pose2> last_pose_;
     std::vector<std::pair<double, Pose2>> track_;  // (distance, pose) of each frame, with poses only
 };
 

@@ -1,0 +1,118 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The readout (docs/method.md §10, "Readout"): each wheel's profile read a fixed distance ahead and kept along the
+drive (C++ ProfileReadout, `roadpreview run --read-ahead-m`) — checked against the numpy reference fed the same
+results and the same run's output lines, and by properties of a drive over a known road."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+import roadpreview as rp
+from roadpreview import sim
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
+from paths import run_cli as run
+from test_cli import one_line_error
+
+DS = 0.1
+
+
+def line(index, time_s, speed, road, distance, reason=None):
+    """An output line whose two profiles (30 m, straight) are the heights road(x) at drive distance x."""
+    s = (np.arange(300) + 0.5) * DS
+    profile = {"s": s.tolist(), "z": [road(distance + v) for v in s], "count": [2] * 300, "spread": [0.0] * 300}
+    return {"frame": index, "timestamp": time_s, "motion": {"speed": speed}, "path": None, "reason": reason,
+            "profiles": {"left": profile, "right": profile}}
+
+
+def test_the_native_readout_is_the_references_on_a_simulated_curved_drive_through_the_kalman_map():
+    lidar = sim.os1_128(height_m=1.8, range_noise_m=0.01)
+    frames = sim.drive(sim.Scene(sim.Road.iso8608("C", seed=2)), lidar, speed_mps=10, yaw_rate_rps=0.1, frames=9,
+                       seed=1)
+    cfg = rp.Config(extrinsics=lidar.extrinsics(), fusion={"method": "kalman"})
+    est, native, reference = rp.Estimator(cfg), rp.ProfileReadout(6.0, cfg), rp.reference.Readout(6.0, cfg)
+    for f in frames:
+        res = est.process(f.points, 10.0, 0.1, timestamp=f.time_s)
+        native.add(res)
+        reference.add(res.to_dict())
+    assert native.frames == 9 and native.distance_m == pytest.approx(reference.distance) == pytest.approx(8.0)
+    for wheel in ("left", "right"):
+        mine, theirs = getattr(native, wheel), reference.wheel(wheel)
+        np.testing.assert_allclose(mine.s, theirs["s"], atol=1e-9)
+        np.testing.assert_array_equal(mine.z, theirs["z"])
+        np.testing.assert_array_equal(mine.count, theirs["count"])
+        assert np.isfinite(mine.z).all()  # 8 m driven: all 6 m were read, 6–14 m down the drive
+        assert mine.s.max() < 6.0
+
+
+@given(steps=st.lists(st.floats(0.02, 2.5), min_size=1, max_size=25), ahead=st.floats(1.0, 20.0),
+       gap=st.integers(0, 30))
+def test_each_bin_holds_the_reading_of_the_last_frame_that_had_it_the_distance_ahead(steps, ahead, gap):
+    """A drive whose frames are any distance apart (frame `gap` without profiles) and whose heights say which frame
+    read them (1000 × the frame + a slope along the drive): each bin of the readout was read by the last frame
+    with profiles that had it `ahead` or more ahead, at its own place, and a bin no such frame had is unread; the
+    native readout fed the lines is the reference's."""
+    lines, distances = [], []
+    for i, step in enumerate([0.0, *steps]):
+        distances.append((distances[-1] if distances else 0.0) + step)
+        road = lambda x, i=i: 1000.0 * i + 0.01 * x  # noqa: E731
+        lines.append(line(i, 0.1 * i, step / 0.1, road, distances[-1], reason="no ground" if i == gap else None))
+    native, reference = rp.ProfileReadout(ahead), rp.reference.Readout(ahead)
+    for ln in lines:
+        native.add_line(json.dumps(ln))
+        reference.add(ln)
+    got = reference.wheel("left")
+    np.testing.assert_allclose(native.left.s, got["s"], atol=1e-9)
+    np.testing.assert_array_equal(native.left.z, got["z"])
+    assert native.distance_m == pytest.approx(reference.distance) == pytest.approx(distances[-1])
+    place = distances[-1] + got["s"]
+    reader = np.round(got["z"] / 1000.0)
+    for x, z, i in zip(place, got["z"], reader):
+        had_it = [k for k in range(len(lines)) if k != gap and x - distances[k] >= ahead - 1e-6]
+        if not np.isfinite(z):
+            assert not had_it  # unread: only what no frame with profiles had `ahead` or more ahead
+            continue
+        assert i == max(had_it)
+        assert z - 1000.0 * i == pytest.approx(0.01 * x, abs=1e-9)
+
+
+@pytest.fixture(scope="module")
+def kitti_lines(tmp_path_factory):
+    out = tmp_path_factory.mktemp("readout") / "run.jsonl"
+    run("run", *KITTI_FRAMES[:3], "--speed", 8.6, "--frame-rate", 10, "--sensor-height", KITTI_SENSOR_HEIGHT,
+        "--fusion", "kalman", "--read-ahead-m", 5, "-q", "-o", out)
+    return [json.loads(text) for text in out.read_text().splitlines()]
+
+
+def test_the_cli_adds_each_lines_readout_as_the_reference_reads_the_same_lines(kitti_lines):
+    reference = rp.reference.Readout(5.0)
+    for ln in kitti_lines:
+        reference.add(ln)
+        readout = ln["readout"]
+        assert readout["ahead_m"] == 5.0 and readout["distance_m"] == pytest.approx(reference.distance)
+        for wheel in ("left", "right"):
+            theirs = reference.wheel(wheel)
+            np.testing.assert_allclose(readout[wheel]["s"], theirs["s"], atol=1e-12)
+            z = np.array([np.nan if v is None else v for v in readout[wheel]["z"]])
+            np.testing.assert_array_equal(z, theirs["z"])
+            assert readout[wheel]["count"] == theirs["count"].tolist()
+    last = kitti_lines[-1]["readout"]["left"]  # 1.72 m driven: 5–6.72 m of the drive read, a real street's heights
+    z = np.array([np.nan if v is None else v for v in last["z"]])
+    read = np.array(last["s"]) >= 5.0 - 1.72 + 0.05
+    assert np.isfinite(z[read]).all() and not np.isfinite(z[~read]).any() and np.nanmax(np.abs(z)) < 0.1
+
+
+@pytest.mark.parametrize("ahead", ["0", "-2", "nan", "40", "60"])
+def test_a_distance_ahead_that_is_not_within_the_profiles_is_an_error(ahead):
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--read-ahead-m",
+               ahead, "-q", check=False)
+    if float(ahead) > 0:
+        one_line_error(proc, "readout: the distance ahead", "profile.preview_length_m")
+    else:  # refused by the flag's own check
+        assert proc.returncode != 0 and proc.stderr.startswith("--read-ahead-m: expected a number > 0"), proc.stderr
+    with pytest.raises(ValueError, match="distance ahead"):
+        rp.reference.Readout(float(ahead))
+    with pytest.raises(ValueError, match="distance ahead"):
+        rp.ProfileReadout(float(ahead))
