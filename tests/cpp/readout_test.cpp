@@ -137,3 +137,21 @@ TEST(Readout, BadDistancesAndFramesAreErrorsNamingThem) {
     }
     EXPECT_THROW(readout.add(frame(4), rp::Pose2{0.0, 0.0, 0.0}), std::invalid_argument);  // poses for some only
 }
+
+TEST(Readout, ProfilesItCannotPlaceAreErrorsNamingTheFrame) {  // lines read back from files may hold anything
+    rp::ProfileReadout readout(rp::Config{}, 6.0);
+    rp::Result far = frame(0);
+    far.source = "run.jsonl:1";
+    for (double& s : far.left.s) s += 1e300;
+    try {
+        readout.add(far);
+        FAIL();
+    } catch (const std::invalid_argument& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("readout: frame 0 (run.jsonl:1): a profile's first bin lies at", 0),
+                  0u) << e.what();
+    }
+    rp::Result no_scale = frame(1, rp::PathStatus::Arc);
+    no_scale.path.icr_y = std::numeric_limits<double>::quiet_NaN();
+    no_scale.path.left_radius = no_scale.path.right_radius = 10.0;
+    EXPECT_THROW(readout.add(no_scale), std::invalid_argument);
+}

@@ -18,7 +18,8 @@ std::string metres(double v) { return std::to_string(v) + " m"; }
 }  // namespace
 
 ProfileReadout::ProfileReadout(const Config& cfg, double ahead_m)
-    : ahead_m_(ahead_m), ds_(cfg.profile.ds_m), drive_(cfg.fusion.frame_rate_hz) {
+    : ahead_m_(ahead_m), ds_(cfg.profile.ds_m), length_m_(cfg.profile.preview_length_m),
+      drive_(cfg.fusion.frame_rate_hz) {
     validate(cfg);
     if (!(ahead_m > 0.0) || !std::isfinite(ahead_m))
         throw std::invalid_argument("readout: the distance ahead must be a positive number of metres, got " +
@@ -35,12 +36,26 @@ void ProfileReadout::add(const Result& r, const std::optional<Pose2>& pose) {
         shift(w);
         if (r.status == FrameStatus::Ok) {  // else no profiles: the frame only moves the drive on
             w.drive_per_metre = drive_per_wheel_metre(r.path, side);
+            check(r, p, w.drive_per_metre);
             read(p, w);
         }
         state(w);
     };
     wheel(r.left, Wheel::Left, left_);
     wheel(r.right, Wheel::Right, right_);
+}
+
+// A profile the readout can place (a line read back from a file may hold anything): its first bin within the
+// profiles' length, and a finite, positive drive distance per metre of the wheel's path.
+void ProfileReadout::check(const Result& r, const Profile& p, double drive_per_metre) const {
+    const auto fail = [&](const std::string& what) {
+        throw std::invalid_argument("readout: frame " + std::to_string(drive_.frames() - 1) +
+                                    (r.source.empty() ? "" : " (" + r.source + ")") + ": " + what);
+    };
+    if (!p.s.empty() && !(std::abs(p.s.front()) <= length_m_))
+        fail("a profile's first bin lies at " + metres(p.s.front()) + ", not within profile.preview_length_m");
+    if (!(drive_per_metre > 0.0) || !std::isfinite(drive_per_metre))
+        fail("the path's centre of rotation and wheel radii give no distance along the drive");
 }
 
 // Drops the bins the wheel has passed: the array starts at the wheel's bin.
@@ -58,7 +73,7 @@ void ProfileReadout::shift(WheelArray& w) const {
 void ProfileReadout::read(const Profile& p, WheelArray& w) const {
     if (p.s.empty()) return;
     const double d = drive_.metres();
-    const double last_s = p.s.back() + 1e-9;
+    const double last_s = p.s.front() + static_cast<double>(p.s.size() - 1) * ds_ + 1e-9;  // bins are ds apart
     for (auto j = static_cast<std::int64_t>(std::ceil((d + ahead_m_) / ds_ - 0.5));; ++j) {
         const double ahead = (static_cast<double>(j) + 0.5) * ds_ - d;
         if (ahead / w.drive_per_metre > last_s) break;

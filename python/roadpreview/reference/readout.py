@@ -48,8 +48,12 @@ class Readout:
             self._scale[wheel] = _arc_scale(line, wheel)
             s, z = _values(line["profiles"][wheel]["s"]), _values(line["profiles"][wheel]["z"])
             count = line["profiles"][wheel]["count"]
+            if not abs(s[0]) <= self.cfg.profile.preview_length_m or not 0 < self._scale[wheel] < math.inf:
+                raise ValueError(f"readout: frame {self.frames - 1}: a profile it cannot place (first bin at {s[0]} m, "
+                                 f"{self._scale[wheel]} m of drive per metre of the wheel's path)")
+            last = s[0] + (len(s) - 1) * ds  # the bins are ds apart
             j = math.ceil((self.distance + self.ahead_m) / ds - 0.5)
-            while ((j + 0.5) * ds - self.distance) / self._scale[wheel] <= s[-1] + 1e-9:
+            while ((j + 0.5) * ds - self.distance) / self._scale[wheel] <= last + 1e-9:
                 ahead = (j + 0.5) * ds - self.distance
                 value = _interpolate(s, z, count, ahead / self._scale[wheel], ds) if ahead >= self.ahead_m else None
                 if value is not None:

@@ -31,11 +31,11 @@ public:
     ProfileReadout(const Config& cfg, double ahead_m);
 
     /// Adds the next frame (drive order): the drive moves on as for the route, the bins behind the wheels drop
-    /// out, and a frame with profiles is read from ahead_m on. Throws std::invalid_argument as RouteBuilder::add.
+    /// out, and a frame with profiles is read from ahead_m on. Throws std::invalid_argument as RouteBuilder::add,
+    /// and for profiles it cannot place (their first bin beyond profile.preview_length_m, a path without a scale).
     void add(const Result& r, const std::optional<Pose2>& pose = std::nullopt);
 
     double ahead_m() const { return ahead_m_; }
-    double ds() const { return ds_; }
     std::size_t frames() const { return drive_.frames(); }
     double distance_m() const { return drive_.metres(); }  ///< driven by the last frame added
     const ReadoutProfile& left() const { return left_.out; }
@@ -52,12 +52,13 @@ private:
         double drive_per_metre = 1.0;  // the wheel's q of the last frame (docs/method.md §10)
         ReadoutProfile out;
     };
+    void check(const Result& r, const Profile& p, double drive_per_metre) const;
     void shift(WheelArray& w) const;
     void read(const Profile& p, WheelArray& w) const;
     std::optional<Bin> profile_at(const Profile& p, double s) const;
     void state(WheelArray& w) const;
 
-    double ahead_m_, ds_;
+    double ahead_m_, ds_, length_m_;
     DriveDistance drive_;
     WheelArray left_, right_;
 };
