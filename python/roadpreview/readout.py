@@ -12,9 +12,9 @@ from .config import Config
 
 class ProfileReadout(core().ProfileReadout):
     """``ProfileReadout(6.0, config)``; ``add(result, pose=None)`` each frame's result in drive order (pose: x, y,
-    yaw when the drive has poses), then ``left`` / ``right`` (``s``, ``z``, ``count``: the bins from the wheel on,
-    each as read ``ahead_m`` ahead), ``distance_m``, ``frames``. ``roadpreview run --read-ahead-m`` writes the same
-    into each line's ``readout``."""
+    yaw when the drive has poses), then ``left`` / ``right`` (``s``, ``z``, ``count``: the bins from the wheel to
+    ``ahead_m``, each as read ``ahead_m`` or more ahead), ``distance_m``, ``frames``. ``roadpreview run
+    --read-ahead-m`` writes the same into each line's ``readout``."""
 
     def __init__(self, ahead_m: float, config: Optional[Config] = None):
         super().__init__((config or Config()).to_json(), float(ahead_m))
