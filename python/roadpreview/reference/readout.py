@@ -33,10 +33,6 @@ class Readout:
     def distance(self) -> float:
         return self._drive.distance
 
-    @property
-    def frames(self) -> int:
-        return self._drive.frames
-
     def add(self, line: dict, pose=None) -> None:
         self._drive.advance(line, pose)
         ds = self.cfg.profile.ds_m
@@ -49,7 +45,8 @@ class Readout:
             s, z = _values(line["profiles"][wheel]["s"]), _values(line["profiles"][wheel]["z"])
             count = line["profiles"][wheel]["count"]
             if not abs(s[0]) <= self.cfg.profile.preview_length_m or not 0 < self._scale[wheel] < math.inf:
-                raise ValueError(f"readout: frame {self.frames - 1}: a profile it cannot place (first bin at {s[0]} m, "
+                raise ValueError(f"readout: frame {self._drive.frames - 1}: a profile it cannot place "
+                                 f"(first bin at {s[0]} m, "
                                  f"{self._scale[wheel]} m of drive per metre of the wheel's path)")
             last = s[0] + (len(s) - 1) * ds  # the bins are ds apart
             j = math.ceil((self.distance + self.ahead_m) / ds - 0.5)

@@ -96,10 +96,6 @@ class Route:
     def distance(self) -> float:
         return self._drive.distance
 
-    @property
-    def frames(self) -> int:
-        return self._drive.frames
-
     def add(self, line: dict, pose=None) -> None:
         self._drive.advance(line, pose)
         if pose is not None:
