@@ -125,6 +125,13 @@ TEST(Readout, BadDistancesAndFramesAreErrorsNamingThem) {
             EXPECT_NE(std::string(e.what()).find("readout: the distance ahead"), std::string::npos) << e.what();
         }
     }
+    try {  // numbers as they were given, not as %f: 301 digits, or 6 decimals of noise
+        rp::ProfileReadout readout(rp::Config{}, 1e300);
+        FAIL();
+    } catch (const std::invalid_argument& e) {
+        EXPECT_EQ(std::string(e.what()), "readout: the distance ahead (1e+300 m) must lie within the profiles "
+                                         "(profile.preview_length_m 40 m)");
+    }
     rp::ProfileReadout readout(rp::Config{}, 6.0);
     readout.add(frame(3));
     rp::Result back = frame(2);

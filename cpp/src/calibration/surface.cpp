@@ -12,6 +12,7 @@
 #include "roadpreview/core/frames.hpp"
 
 #include "core/median.hpp"
+#include "core/text.hpp"
 
 #include "beam_geometry.hpp"
 
@@ -150,7 +151,7 @@ BeamCalibration SurfaceCalibrator::solve() const {
     if (static_cast<int>(determined.size()) < options_.min_beams)
         throw CalibrationError("too few beams on the ground: " + std::to_string(determined.size()) +
                                " beam(s) seen in " + std::to_string(options_.min_frames) + " frames' road within " +
-                               std::to_string(options_.max_sigma_deg) + " deg, calibration needs at least " +
+                               number_text(options_.max_sigma_deg) + " deg, calibration needs at least " +
                                std::to_string(options_.min_beams));
     // Relative, as BeamCalibrator's: less the least-squares fit a + b·mean/reach + c·reach/mean over the beams
     // determined (a pitch, a height and a sag of the road, which the ground cannot tell from offsets).

@@ -26,14 +26,6 @@ inline std::vector<std::string> split(const std::string& line) {
     return cells;
 }
 
-/// A number for a message, to `digits` significant digits (0.1 stays "0.1").
-inline std::string number_text(double v, int digits) {
-    std::ostringstream out;
-    out.precision(digits);
-    out << v;
-    return out.str();
-}
-
 /// Blank lines and '#' comments.
 inline bool skipped(const std::string& line) {
     const auto first = line.find_first_not_of(" \t\r");

@@ -9,11 +9,12 @@
 
 #include "roadpreview/core/frames.hpp"
 #include "core/csv.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
 
-std::string csv_number(double v) { return csv::number_text(v, 15); }
+std::string csv_number(double v) { return number_text(v, 15); }
 
 }  // namespace
 

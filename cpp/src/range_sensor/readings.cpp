@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "core/csv.hpp"
+#include "core/text.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
@@ -44,8 +45,6 @@ bool parse_double(std::string_view s, double& v) {
     const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
     return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
-
-std::string number_text(double v) { return csv::number_text(v, 12); }
 
 }  // namespace
 
@@ -127,8 +126,8 @@ bool RangeReadingReader::next(Reading& out) {
         fail("expected " + std::to_string(columns_) + " columns like the header, got \"" + std::string(b, e) + "\"");
     out.line = line_;
     if (!parse_double(cells[t_col_], out.t_s) || !std::isfinite(out.t_s)) fail("t is not a finite number");
-    if (out.t_s < last_t_) fail("time goes backwards (t = " + number_text(out.t_s) + " s after "
-        + number_text(last_t_) + " s)");
+    if (out.t_s < last_t_) fail("time goes backwards (t = " + number_text(out.t_s, 12) + " s after "
+        + number_text(last_t_, 12) + " s)");
     last_t_ = out.t_s;
     const std::string_view id = cells[sensor_col_];
     if (out.sensor < 0 || out.sensor >= static_cast<std::int32_t>(layout_.size()) ||
@@ -142,11 +141,11 @@ bool RangeReadingReader::next(Reading& out) {
     if (!parse_double(cells[value_col_], out.value) || !std::isfinite(out.value))
         fail(std::string(what) + " is not a finite number: \"" + std::string(cells[value_col_]) + "\"");
     if (counts_ && (out.value < s.min_count || out.value > s.max_count))
-        fail("count " + number_text(out.value) + " outside the layout's range [" + number_text(s.min_count) + ", " +
-             number_text(s.max_count) + "] of sensor '" + s.id + "'");
+        fail("count " + number_text(out.value, 12) + " outside the layout's range [" +
+             number_text(s.min_count, 12) + ", " + number_text(s.max_count, 12) + "] of sensor '" + s.id + "'");
     if (!counts_ && (out.value < 0 || out.value > s.max_distance_m))
-        fail("distance " + number_text(out.value) + " m outside the layout's range [0, "
-            + number_text(s.max_distance_m) +
+        fail("distance " + number_text(out.value, 12) + " m outside the layout's range [0, "
+            + number_text(s.max_distance_m, 12) +
              "] m of sensor '" + s.id + "'");
     out.temperature_c = std::numeric_limits<double>::quiet_NaN();
     if (temperature_col_ >= 0 && !cells[temperature_col_].empty() &&
@@ -219,7 +218,7 @@ RangeSample SamplePlacer::place(const RangeReadingReader::Reading& r, const std:
         // A wheel at lateral offset y rolls (v − ω·y) per second: its track is D − y·Θ.
         out.s_m = motion_.distance_m(r.t_s) - s.y_m * motion_.heading_rad(r.t_s);
     } catch (const std::runtime_error& e) {
-        throw std::runtime_error(where() + ": reading at t = " + number_text(r.t_s) + " s: " + e.what());
+        throw std::runtime_error(where() + ": reading at t = " + number_text(r.t_s, 12) + " s: " + e.what());
     }
     const double pitch = s.pitch_deg * kDegToRad;
     const OffsetCalibration& o = offset_[k];

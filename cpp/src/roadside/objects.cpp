@@ -9,6 +9,8 @@
 #include <tuple>
 #include <utility>
 
+#include "core/text.hpp"
+
 namespace roadpreview::roadside {
 namespace {
 
@@ -161,9 +163,9 @@ GridLabels label_points(const std::vector<Point2>& points, double cell_m, int di
     const double cols = std::floor((x_max + margin - g.x0_m) / cell_m) + 1;
     const double rows = std::floor((y_max + margin - g.y0_m) / cell_m) + 1;
     if (!(rows * cols <= static_cast<double>(kMaxGridCells)))
-        throw std::invalid_argument("foreground spans " + std::to_string(x_max - x_min) + " × " +
-                                    std::to_string(y_max - y_min) + " m: too large a grid at cell " +
-                                    std::to_string(cell_m) + " m");
+        throw std::invalid_argument("foreground spans " + number_text(x_max - x_min) + " × " +
+                                    number_text(y_max - y_min) + " m: too large a grid at cell " +
+                                    number_text(cell_m) + " m");
     std::vector<Cell> cell(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         cell[i] = {static_cast<int>((points[i].y_m - g.y0_m) / cell_m), static_cast<int>((points[i].x_m - g.x0_m) / cell_m)};

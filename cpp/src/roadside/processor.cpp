@@ -8,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/text.hpp"
+
 namespace roadpreview::roadside {
 namespace {
 
@@ -38,10 +40,10 @@ void check_layout(const LaserScan& scan, const ScannerSite& site) {
     if (site.beams && static_cast<int>(scan.ranges_m.size()) != *site.beams)
         bad(std::to_string(scan.ranges_m.size()) + " beams, the site says " + std::to_string(*site.beams));
     if (site.step_deg && std::abs(scan.step_rad / kDeg - *site.step_deg) > 1e-3)
-        bad("step " + std::to_string(scan.step_rad / kDeg) + "°, the site says " + std::to_string(*site.step_deg) + "°");
+        bad("step " + number_text(scan.step_rad / kDeg, 8) + "°, the site says " + number_text(*site.step_deg, 8) + "°");
     if (site.start_angle_deg && std::abs(scan.start_angle_rad / kDeg - *site.start_angle_deg) > 1e-2)
-        bad("first beam at " + std::to_string(scan.start_angle_rad / kDeg) + "°, the site says " +
-            std::to_string(*site.start_angle_deg) + "°");
+        bad("first beam at " + number_text(scan.start_angle_rad / kDeg, 8) + "°, the site says " +
+            number_text(*site.start_angle_deg, 8) + "°");
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/text.hpp"
+
 namespace roadpreview::roadside {
 namespace {
 
@@ -49,7 +51,7 @@ double scan_period(const std::vector<LaserScan>& scans) {
     const double period = dt[dt.size() / 2];
     if (!(period > 0.0) || !std::isfinite(period))
         throw std::invalid_argument(scans.front().source + ": the scans for a world background do not advance in time "
-                                    "(median interval " + std::to_string(period) + " s)");
+                                    "(median interval " + number_text(period) + " s)");
     return period;
 }
 
@@ -76,9 +78,9 @@ WorldBackground::WorldBackground(const std::vector<LaserScan>& scans, const std:
     x0_m_ = x_lo - reach, y0_m_ = y_lo - reach;
     const double w = std::ceil((x_hi - x_lo + 2.0 * reach) / s_.cell_m), h = std::ceil((y_hi - y_lo + 2.0 * reach) / s_.cell_m);
     if (w * h > static_cast<double>(kMaxGridCells))
-        throw std::invalid_argument(scans.front().source + ": the scans' poses span " + std::to_string(x_hi - x_lo) +
-                                    " × " + std::to_string(y_hi - y_lo) + " m, too large for a world grid of " +
-                                    std::to_string(s_.cell_m) + " m cells (poses in metres?)");
+        throw std::invalid_argument(scans.front().source + ": the scans' poses span " + number_text(x_hi - x_lo) +
+                                    " × " + number_text(y_hi - y_lo) + " m, too large for a world grid of " +
+                                    number_text(s_.cell_m) + " m cells (poses in metres?)");
     width_ = static_cast<int>(w), height_ = static_cast<int>(h);
     free_.assign(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_), 0);
     hits_near_.assign(free_.size(), 0);

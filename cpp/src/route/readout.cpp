@@ -8,12 +8,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/text.hpp"
+
 namespace roadpreview {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string metres(double v) { return std::to_string(v) + " m"; }
+std::string metres(double v) { return number_text(v) + " m"; }
 
 }  // namespace
 
@@ -23,7 +25,7 @@ ProfileReadout::ProfileReadout(const Config& cfg, double ahead_m)
     validate(cfg);
     if (!(ahead_m > 0.0) || !std::isfinite(ahead_m))
         throw std::invalid_argument("readout: the distance ahead must be a positive number of metres, got " +
-                                    std::to_string(ahead_m));
+                                    number_text(ahead_m));
     if (ahead_m >= cfg.profile.preview_length_m)
         throw std::invalid_argument("readout: the distance ahead (" + metres(ahead_m) +
                                     ") must lie within the profiles (profile.preview_length_m " +

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/median.hpp"
+#include "core/text.hpp"
 #include "roadpreview/profile/profile.hpp"
 
 namespace roadpreview {
@@ -165,7 +166,7 @@ std::optional<Pose2> RouteBuilder::pose_at(double distance_m) const {
 std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
     if (!(length_m > 0.0) || !std::isfinite(length_m))
         throw std::invalid_argument("route: segment length must be a positive number of metres, got " +
-                                    std::to_string(length_m));
+                                    number_text(length_m));
     const StitchedProfile l = left(), r = right();
     const double ds = cfg_.profile.ds_m;
     const std::size_t bins = std::max(l.z.size(), r.z.size());
