@@ -175,7 +175,8 @@ def sick_seeds():
     return {"cola_b": b"\x00" + cola_b, "cola_a": b"\x00" + cola_a, "stream": b"\x01xx" + cola_b + cola_a + cola_b,
             "site": b"\x02" + site, "scan_csv": b"\x03t,scanner,angle_deg,range_m\n0,0,-90,5\n0,0,-89.5,\n",
             "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n",
-            "carmen": b"\x05" + carmen_log()}
+            "carmen": b"\x05" + carmen_log(),
+            "detections_jsonl": b"\x06" + b'{"t": 0.1, "x": 100, "y": 200, "w": 40, "h": 80, "class": "car", "score": 0.9}\n'}
 
 
 def png(width, height, colour_type, bit_depth, rows, extra=b""):
@@ -203,6 +204,19 @@ def png_seeds():
                        + struct.pack(">I", zlib.crc32(b"PLTE" + palette))),
         "grey1": png(w, h, 0, 1, [bytes((0b10110010 ^ v,)) * (w // 8) for v in range(h)]),
     }
+
+
+def route_line_seeds():
+    """Short output lines as the route and the readout read them back: profiles, an arc, a declined frame."""
+    def line(frame, speed, path=None, reason=None, bins=12):
+        profile = {"s": [round(0.1 * k + 0.05, 2) for k in range(bins)], "z": [0.01 * (k % 3) for k in range(bins)],
+                   "count": [k % 4 for k in range(bins)], "spread": [0.002] * bins}
+        return json.dumps({"frame": frame, "source": "a.bin", "timestamp": 0.1 * frame, "motion": {"speed": speed},
+                           "path": path, "reason": reason, "profiles": {"left": profile, "right": profile}})
+    arc = {"icr_y": 50.0, "left_radius": 49.2, "right_radius": 50.8}
+    return {"straight": "\n".join(line(f, 10.0) for f in range(3)).encode(),
+            "arc_and_declined": "\n".join([line(0, 5.0, arc), line(1, 5.0, reason="vehicle stopped"),
+                                           line(2, -5.0, arc)]).encode()}
 
 
 def main():
@@ -233,6 +247,7 @@ def main():
                 "poses": b"\x01" + b"".join((data_dir / "ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")
                                             .read_bytes().splitlines(keepends=True)[:3])},
         "sick_telegram": sick_seeds(),
+        "route_lines": route_line_seeds(),
         "range_sensor": {
             "layout": b"\x00sensors:\n  - {id: a, kind: ultrasonic, wheel: left, x_m: 0.5, y_m: 0.8, height_m: 0.3, "
                       b"pitch_deg: 0, beam_half_angle_deg: 12, min_count: 100, max_count: 4000}\n"

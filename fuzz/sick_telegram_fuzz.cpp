@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // libFuzzer target for the roadside inputs. First byte: 0 one SICK telegram (CoLa-A or CoLa-B), 1 a byte stream
 // cut into telegrams by the framer and each decoded, 2 a site file (YAML), 3 a scan CSV, 4 a detections CSV,
-// 5 a CARMEN log.
+// 5 a CARMEN log, 6 a detections JSONL.
 #include <cstdint>
 
 #include <roadpreview/roadside/processor.hpp>
@@ -36,7 +36,7 @@ void decode_stream(const std::uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size < 1) return 0;
-    const std::uint8_t kind = data[0] % 6;
+    const std::uint8_t kind = data[0] % 7;
     ++data, --size;
     roadpreview_fuzz::expect_clean_errors([&] {
         switch (kind) {
@@ -45,7 +45,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             case 2: rs::parse_site(std::string(reinterpret_cast<const char*>(data), size), "fuzz"); break;
             case 3: rs::read_scan_csv(roadpreview_fuzz::scratch_file(data, size, ".csv")); break;
             case 4: rs::read_detections(roadpreview_fuzz::scratch_file(data, size, ".csv")); break;
-            default: rs::read_carmen_log(roadpreview_fuzz::scratch_file(data, size, ".log"), 37.5); break;
+            case 5: rs::read_carmen_log(roadpreview_fuzz::scratch_file(data, size, ".log"), 37.5); break;
+            default: rs::read_detections(roadpreview_fuzz::scratch_file(data, size, ".jsonl")); break;
         }
     });
     return 0;

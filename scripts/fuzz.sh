@@ -9,7 +9,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SECONDS_PER_TARGET="${1:-120}"
 shift || true
 ALL_TARGETS=(packet_decoders pcap ouster_metadata velodyne_calibration pcd ply kitti_bin config csv range_sensor
-             beams stereo_calibration stereo_images sick_telegram)
+             beams stereo_calibration stereo_images sick_telegram route_lines)
 TARGETS=("${@:-${ALL_TARGETS[@]}}")
 cd "$ROOT"
 

@@ -49,6 +49,8 @@ TEST(Motion, BadCsvNamesTheFileAndLine) {
     EXPECT_NE(error_of(write("n.csv", "t,speed,yaw_rate\n0,1,0\n1,x,0\n")).find("n.csv:3"), std::string::npos);
     EXPECT_NE(error_of(write("o.csv", "t,speed,yaw_rate\n0,1,0\n0,1,0\n")).find("increase"), std::string::npos);
     EXPECT_NE(error_of(write("s.csv", "t,speed,yaw_rate\n0,1,0\n")).find("two rows"), std::string::npos);
+    EXPECT_NE(error_of(write("k.csv", "t,speed,yaw_rate\n0,1,0\n1,3600,0\n")).find("k.csv:3: speed must be within"),
+              std::string::npos);  // km/h for m/s: refused where it is read, not by the estimator frames later
     EXPECT_NE(error_of(testing::TempDir() + "absent.csv").find("cannot open"), std::string::npos);
 }
 
@@ -69,6 +71,8 @@ TEST(Motion, SamplesInMemoryAreCheckedLikeAFileAndLookedUpTheSameWay) {
     EXPECT_NE(error({0.0, 1.0}, {1.0}, {0.0, 0.0}).find("odo: the motion table's columns differ"), std::string::npos);
     EXPECT_NE(error({0.0}, {1.0}, {0.0}).find("odo: the motion table needs at least two rows"), std::string::npos);
     EXPECT_NE(error({0.0, NAN}, {1.0, 1.0}, {0.0, 0.0}).find("non-finite"), std::string::npos);
+    EXPECT_NE(error({0.0, 1.0}, {1.0, -2000.0}, {0.0, 0.0}).find("odo: the motion table's row 1: speed must be within"),
+              std::string::npos);
     EXPECT_NE(error({1.0, 1.0}, {1.0, 1.0}, {0.0, 0.0}).find("odo: the motion table's times must increase (row 1"),
               std::string::npos);
     try {

@@ -3,6 +3,7 @@
 // (docs/method.md §10, "Readout").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -145,20 +146,55 @@ TEST(Readout, BadDistancesAndFramesAreErrorsNamingThem) {
     EXPECT_THROW(readout.add(frame(4), rp::Pose2{0.0, 0.0, 0.0}), std::invalid_argument);  // poses for some only
 }
 
-TEST(Readout, ProfilesItCannotPlaceAreErrorsNamingTheFrame) {  // lines read back from files may hold anything
+TEST(Readout, ProfilesItCannotPlaceAreErrorsNamingTheFrameThatLeaveTheReadoutAsItWas) {  // lines from files
     rp::ProfileReadout readout(rp::Config{}, 6.0);
-    rp::Result far = frame(0);
-    far.source = "run.jsonl:1";
+    readout.add(frame(0));
+    const auto expect_error = [&](const rp::Result& r, const std::string& start) {
+        try {
+            readout.add(r);
+            FAIL() << start;
+        } catch (const std::invalid_argument& e) {
+            EXPECT_EQ(std::string(e.what()).rfind(start, 0), 0u) << e.what();
+        }
+        EXPECT_EQ(readout.frames(), 1u);
+        EXPECT_NEAR(readout.distance_m(), 0.0, 1e-12);
+    };
+    rp::Result far = frame(1);
+    far.source = "run.jsonl:2";
     for (double& s : far.left.s) s += 1e300;
-    try {
-        readout.add(far);
-        FAIL();
-    } catch (const std::invalid_argument& e) {
-        EXPECT_EQ(std::string(e.what()).rfind("readout: frame 0 (run.jsonl:1): a profile's first bin lies at", 0),
-                  0u) << e.what();
-    }
+    expect_error(far, "readout: frame 1 (run.jsonl:2): a profile bin lies at 1e+300 m, beyond the profiles' reach");
     rp::Result no_scale = frame(1, rp::PathStatus::Arc);
     no_scale.path.icr_y = std::numeric_limits<double>::quiet_NaN();
     no_scale.path.left_radius = no_scale.path.right_radius = 10.0;
-    EXPECT_THROW(readout.add(no_scale), std::invalid_argument);
+    expect_error(no_scale, "readout: frame 1: the path's centre of rotation and wheel radii give no distance");
+    // A speed or a time stamp no drive has: the drive distance would lose its decimetres (and bins be allocated).
+    rp::Result fast = frame(1);
+    fast.speed_mps = 1e300;
+    expect_error(fast, "readout: frame 1 moves the drive on by 1e+299 m (|speed| × its time since the previous frame)");
+    rp::Result late = frame(1);
+    late.timestamp = 1e300;
+    expect_error(late, "readout: frame 1 moves the drive on by 1e+301 m");
+    rp::Result not_a_number = frame(1);
+    not_a_number.speed_mps = std::numeric_limits<double>::quiet_NaN();
+    expect_error(not_a_number, "readout: frame 1 moves the drive on by nan m");
+    readout.add(frame(1));  // the readout goes on
+    EXPECT_EQ(readout.frames(), 2u);
+}
+
+TEST(Readout, AWheelTurningAboutAPointBesideItReadsNothing) {
+    // The inner wheel 1 mm from the centre of rotation: 800 m of drive per metre of its path, its 30 m of profile
+    // would span 24 km of drive. It reads nothing (the outer wheel reads as ever), in a bounded time.
+    rp::ProfileReadout readout(rp::Config{}, 6.0);
+    for (int f = 0; f < 10; ++f) {
+        rp::Result r = frame(f, rp::PathStatus::Arc);
+        r.path.icr_y = 0.801;
+        r.path.left_radius = 0.001;
+        r.path.right_radius = 1.601;
+        readout.add(r);
+    }
+    const auto finite = [](const std::vector<double>& z) {
+        return std::count_if(z.begin(), z.end(), [](double v) { return std::isfinite(v); });
+    };
+    EXPECT_EQ(finite(readout.left().z), 0);
+    EXPECT_GT(finite(readout.right().z), 50);
 }

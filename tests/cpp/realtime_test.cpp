@@ -164,7 +164,9 @@ TEST(Realtime, TheReadoutAllocatesNothingOnceWarm) {  // a controller's array, f
     for (int k = 0; k < 20; ++k) {
         est.process(frames[static_cast<std::size_t>(k) % frames.size()], 5.0, 0.02, motion_at(k), out);
         const long n = allocations_in([&] { readout.add(out); });
-        if (k >= 5) EXPECT_EQ(n, 0) << "frame " << k;
+        if (k >= 5) {
+            EXPECT_EQ(n, 0) << "frame " << k;
+        }
     }
     const std::vector<double>& z = readout.left().z;
     EXPECT_EQ(z.size(), 60u);
@@ -315,4 +317,27 @@ TEST(Realtime, TryProcessRefusesBadMotionWithoutAllocating) {
     });
     EXPECT_EQ(n, 0);
     EXPECT_STREQ(status.message(), "speed must be finite, got nan");
+}
+
+// A speed, time or pose no drive has would place the fused map beyond what its cell indices hold (once the pose
+// reached 10^299 m: an integer conversion out of range, undefined behaviour): refused, process() and try_process().
+TEST(Realtime, MotionNoDriveHasIsRefused) {
+    rp::Estimator est(kitti_config(rp::FusionMethod::Kalman));
+    const scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 2000);
+    const rp::PointsView view = rp::points_view(road.data(), road.rows(), 3);
+    rp::Result out;
+    const auto refused = [&](double speed, const rp::FrameMotion& motion, const char* start) {
+        const rp::Status status = est.try_process(view, speed, 0.0, "a.bin", motion, out);
+        EXPECT_EQ(status.code(), rp::StatusCode::InvalidArgument);
+        EXPECT_EQ(std::string(status.message()).rfind(start, 0), 0u) << status.message();
+        EXPECT_THROW(est.process(view, speed, 0.0, "a.bin", motion, out), std::invalid_argument);
+    };
+    refused(1e300, {}, "speed must be within ±1000 m/s (no ground vehicle drives faster: a unit mixed up?), got 1e+300");
+    refused(-1001.0, {}, "speed must be within ±1000 m/s");
+    refused(5.0, {std::numeric_limits<double>::quiet_NaN(), std::nullopt}, "timestamp must be finite, got nan");
+    refused(5.0, {std::nullopt, rp::Pose2{1e300, 0.0, 0.0}}, "pose (1e+300 m, 0 m, 0 rad) must be finite and within");
+    refused(5.0, {std::nullopt, rp::Pose2{0.0, 0.0, std::numeric_limits<double>::infinity()}}, "pose (0 m, 0 m, inf");
+    est.process(view, 999.0, 0.0, "a.bin", {0.0, rp::Pose2{-1e8, 1e8, 0.0}}, out);  // the bounds themselves pass
+    ASSERT_TRUE(out.fusion.has_value());
+    EXPECT_EQ(out.fusion->pose.x_m, -1e8);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -93,6 +94,43 @@ TEST(Route, TimeGoingBackAndBadLengthsAreErrors) {
     EXPECT_THROW(route.segments(std::nan("")), std::invalid_argument);
 }
 
+TEST(Route, ProfilesItCannotPlaceAreErrorsThatLeaveTheRouteAsItWas) {  // lines read back from files
+    rp::RouteBuilder route{rp::Config{}};
+    route.add(frame(0, 0.0, 0.0));
+    const std::size_t bins = route.left().z.size();
+    const auto expect_error = [&](const rp::Result& r, const std::string& start) {
+        try {
+            route.add(r);
+            FAIL() << start;
+        } catch (const std::invalid_argument& e) {
+            EXPECT_EQ(std::string(e.what()).rfind(start, 0), 0u) << e.what();
+        }
+        EXPECT_EQ(route.frames(), 1u);
+        EXPECT_EQ(route.left().z.size(), bins);
+    };
+    rp::Result far = frame(1, 1.0, 0.0);
+    far.right.s.back() = 1e9;  // would have been drive bin 10⁹⁰: gigabytes
+    expect_error(far, "route: frame 1: a profile bin lies at 1e+09 m, beyond the profiles' reach (40 m)");
+    rp::Result fast = frame(1, 1.0, 0.0);
+    fast.speed_mps = 1e12;
+    expect_error(fast, "route: frame 1 moves the drive on by 1e+11 m");
+    rp::Result scale = frame(1, 1.0, 0.0);
+    scale.path.status = rp::PathStatus::Arc;
+    scale.path.icr_y = std::numeric_limits<double>::infinity();
+    scale.path.left_radius = scale.path.right_radius = 10.0;
+    expect_error(scale, "route: frame 1: the path's centre of rotation and wheel radii give no distance");
+    // A wheel turning about a point 1 mm from it adds nothing; the other wheel is stitched.
+    rp::Result tight = frame(1, 1.0, 0.0);
+    tight.path.status = rp::PathStatus::Arc;
+    tight.path.icr_y = 0.801;
+    tight.path.left_radius = 0.001;
+    tight.path.right_radius = 1.601;
+    route.add(tight);
+    EXPECT_EQ(route.frames(), 2u);
+    EXPECT_EQ(route.left().frames[20], 1);  // drive 2.0–2.1 m: frame 0 only
+    EXPECT_EQ(route.right().frames[20], 2);
+}
+
 TEST(Route, ErdHeaderAndSamples) {
     rp::RouteBuilder route{rp::Config{}};
     route.add(frame(0, 0.0, 0.0));
@@ -153,6 +191,8 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
                   std::string::npos) << e.what();
     }
     EXPECT_THROW(rp::route_input_from_json("not json", "x"), std::invalid_argument);
+    // A number beyond a double is nlohmann's out_of_range, not its parse_error: once it escaped as neither of ours.
+    EXPECT_THROW(rp::route_input_from_json(R"({"motion": {"speed": 1e400}})", "x"), std::invalid_argument);
     EXPECT_THROW(rp::route_input_from_json(R"({"motion": {"speed": 5}, "reason": "gremlins"})", "x"),
                  std::invalid_argument);
 }

@@ -60,8 +60,19 @@ def test_bad_motion_and_poses_are_refused_naming_the_file(tmp_path):
     poses.write_text("1 0 0 0 0 1 0 0 0 0 1\n")
     with pytest.raises(RuntimeError, match="p.txt:1: a pose needs 12 finite numbers"):
         drive.read_kitti_poses(poses)
+    # What no drive has, refused where it is read rather than by the estimator frames later: a speed in km/h for
+    # m/s, a pose in millimetres (the fused map's cell indices would not hold it).
+    bad.write_text("t,speed,yaw_rate\n0,5,0\n0.1,5000,0\n")
+    with pytest.raises(RuntimeError, match="m.csv:3: speed must be within ±1000 m/s"):
+        drive.MotionTable.read_csv(bad)
+    poses.write_text("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 2e8 0 1 0 0 0 0 1 0\n")
+    with pytest.raises(RuntimeError, match=r"p.txt:2: pose \(2e\+08 m, 0 m, 0 rad\) must be finite and within"):
+        drive.read_kitti_poses(poses)
     with pytest.raises(ValueError, match="give the vehicle's motion"):
         next(drive.run(OS1_128_PCAP))
+    with pytest.raises(ValueError, match=r"000000.bin: pose \(1e\+300 m, 0 m, 0 rad\) must be finite"):  # in memory
+        next(drive.run(KITTI_FRAMES[:1], rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, fusion={"method": "kalman"}),
+                       motion=(5.0, 0.0), poses=[(1e300, 0.0, 0.0)]))
     with pytest.raises(RuntimeError, match="no pose for frame 1"):
         list(drive.run(OS1_128_PCAP, rp.Config(sensor_height=1.97), motion=(2.5, 0.0),
                        poses=[(0.0, 0.0, 0.0)]))

@@ -74,6 +74,7 @@ def test_a_given_mounting_far_from_the_ground_warns_once():
     ({}, "give the vehicle's motion"),
     ({"speed": 2.0, "poses": "poses.txt"}, "fusion"),
     ({"speed": float("nan")}, "speed must be finite"),
+    ({"speed": 5000.0}, "speed must be within ±1000 m/s"),  # km/h for m/s, or a field mixed up
     ({"speed": 2.0, "frames": (2, 1)}, "frame range"),
 ])
 def test_missing_or_contradicting_options_are_value_errors(kwargs, message, tmp_path):

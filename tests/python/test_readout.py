@@ -104,6 +104,58 @@ def test_the_cli_adds_each_lines_readout_as_the_reference_reads_the_same_lines(k
     assert np.isfinite(z[read]).all() and not np.isfinite(z[~read]).any() and np.nanmax(np.abs(z)) < 0.1
 
 
+def route_pair():
+    cfg = rp.Config()
+    native = rp._native.core().RouteBuilder(cfg.to_json())
+    return native, rp.reference.Route(cfg), lambda: (native.stitched("left").frames, native.stitched("right").frames)
+
+
+def readout_pair():
+    native = rp.ProfileReadout(6.0)
+    return native, rp.reference.Readout(6.0), lambda: (native.left.z, native.right.z)
+
+
+@pytest.mark.parametrize("pair", [route_pair, readout_pair])
+def test_lines_that_cannot_be_placed_are_errors_or_skipped_alike_and_leave_the_state_as_it_was(pair):
+    """§10, "Placing a wheel's profile": lines read back from files may hold anything. A step of the drive beyond
+    1 km, a bin beyond the profiles' reach and a path without a scale are errors (once, a speed of 1e300 hung the
+    readout and a far bin made the route allocate gigabytes); a wheel turning about a point beside it adds nothing."""
+    native, reference, state = pair()
+    road = lambda x: 0.01 * math.sin(x)
+    native.add_line(json.dumps(line(0, 0.0, 10.0, road, 0.0)))
+    reference.add(line(0, 0.0, 10.0, road, 0.0))
+    before = [np.array(v, copy=True) for v in state()]
+    far = line(1, 0.1, 10.0, road, 1.0)
+    far["profiles"]["right"] = dict(far["profiles"]["right"], s=far["profiles"]["right"]["s"][:-1] + [1e9])
+    no_scale = dict(line(1, 0.1, 10.0, road, 1.0), path={"icr_y": 5.0, "left_radius": 1e-320, "right_radius": 1.0})
+    bad = {"a speed no drive has": (dict(line(1, 0.1, 1e300, road, 1.0)), "moves the drive on by"),
+           "no speed": (dict(line(1, 0.1, None, road, 1.0)), "moves the drive on by nan m"),
+           "a time stamp no drive has": (dict(line(1, 1e300, 10.0, road, 1.0)), "moves the drive on by"),
+           "a bin 1000 km ahead": (far, "a profile bin lies"),
+           "a wheel without a scale": (no_scale, "give no distance along the drive")}
+    for what, (bad_line, message) in bad.items():
+        with pytest.raises(ValueError, match=f"frame 1.*{message}"):
+            native.add_line(json.dumps(bad_line))
+        with pytest.raises(ValueError, match=f"frame 1.*{message}"):
+            reference.add(bad_line)
+        assert native.frames == reference._drive.frames == 1, what
+        for now, then in zip(state(), before):
+            np.testing.assert_array_equal(now, then, err_msg=what)
+    tight = dict(line(1, 0.1, 10.0, road, 1.0), path={"icr_y": 0.801, "left_radius": 0.001, "right_radius": 1.601})
+    native.add_line(json.dumps(tight))
+    reference.add(tight)
+    assert native.distance_m == pytest.approx(reference.distance) == pytest.approx(1.0)
+    left, right = state()
+    if pair is route_pair:  # the left wheel (q = 801) added nothing, the right one (q = 0.5) its 15 m of drive
+        np.testing.assert_array_equal(left, before[0])
+        assert right[20] == 2 and right[170] == 1
+        for wheel in ("left", "right"):
+            np.testing.assert_array_equal(native.stitched(wheel).frames, reference.stitched(wheel).frames)
+    else:
+        for wheel, now in (("left", left), ("right", right)):
+            np.testing.assert_array_equal(now, reference.wheel(wheel)["z"])
+
+
 @pytest.mark.parametrize("ahead", ["0", "-2", "nan", "40", "60"])
 def test_a_distance_ahead_that_is_not_within_the_profiles_is_an_error(ahead):
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--read-ahead-m",

@@ -62,6 +62,10 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     assert proc.returncode == 1 and "unknown scan format" in proc.stderr
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", check=False)
     assert proc.returncode == 2  # usage: SCANS missing
+    huge = tmp_path / "det.jsonl"  # a number beyond a double: nlohmann's out_of_range once escaped without the file
+    huge.write_text('{"t": 1e400, "x": 1, "y": 2, "w": 3, "h": 4, "class": "car"}\n')
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", huge, check=False)
+    assert proc.returncode == 1 and "det.jsonl:1: not JSON" in proc.stderr, proc.stderr
 
 
 @pytest.mark.skipif(not (SICK / "20210302_lms111.pcapng.json").exists(), reason="shared data absent")

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/text.hpp"
 #include "roadpreview/ground/mounting.hpp"
 #include "roadpreview/io/live.hpp"
 #include "roadpreview/io/readers.hpp"
@@ -50,6 +51,9 @@ DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveO
         throw std::invalid_argument("give a poses file or poses, not both");
     if (options_.speed_mps && !std::isfinite(*options_.speed_mps))
         throw std::invalid_argument("the speed must be finite");
+    if (options_.speed_mps && std::abs(*options_.speed_mps) > kMaxSpeedMps)
+        throw std::invalid_argument("the speed must be within ±" + number_text(kMaxSpeedMps) + " m/s (no ground vehicle "
+                                    "drives faster: a unit mixed up?), got " + number_text(*options_.speed_mps) + " m/s");
     if (options_.yaw_rate_rps && !std::isfinite(*options_.yaw_rate_rps))
         throw std::invalid_argument("the yaw rate must be finite");
     if (!(options_.frame_rate_hz >= 0.0) || !std::isfinite(options_.frame_rate_hz))
@@ -156,7 +160,12 @@ std::optional<DriveStep> DriveRunner::next() {
     DriveStep step{std::move(*input), {}};
     const DriveFrame& in = step.input;
     Result& r = step.result;
-    r = estimator_->process(in.frame, in.motion.speed_mps, in.motion.yaw_rate_rps, in.at);
+    try {
+        r = estimator_->process(in.frame, in.motion.speed_mps, in.motion.yaw_rate_rps, in.at);
+    } catch (const std::invalid_argument& e) {  // the motion or the frame refused: say which frame
+        const std::string what = e.what();
+        throw std::invalid_argument(what.rfind(in.frame.source, 0) == 0 ? what : in.frame.source + ": " + what);
+    }
     r.frame = processed_++;  // the drive's count, whichever estimator processed it
     r.yaw_rate_source = in.yaw_rate_source;
     // A frame file that does not continue the previous one's sequence starts the map afresh; the output says why.

@@ -105,6 +105,8 @@ std::vector<Pose2> read_kitti_poses(const std::string& path) {
         if (read != 12 || (fields >> rest))
             throw std::runtime_error(path + ":" + std::to_string(number) + ": a pose needs 12 finite numbers (3x4 [R|t])");
         poses.push_back(pose_from_matrix(m));
+        if (const Status s = check_frame_motion({std::nullopt, poses.back()}); !s)
+            throw std::runtime_error(path + ":" + std::to_string(number) + ": " + s.message());
     }
     return poses;
 }
@@ -156,6 +158,18 @@ MapCell* ElevationMap::at(double x_m, double y_m) {
 }
 
 const MapCell* ElevationMap::at(double x_m, double y_m) const { return const_cast<ElevationMap*>(this)->at(x_m, y_m); }
+
+Status check_frame_motion(const FrameMotion& motion) noexcept {
+    if (motion.timestamp_s && !std::isfinite(*motion.timestamp_s))
+        return Status::error(StatusCode::InvalidArgument, "timestamp must be finite, got %g", *motion.timestamp_s);
+    if (!motion.pose) return {};
+    const Pose2& p = *motion.pose;
+    if (!(std::abs(p.x_m) <= kMaxPoseM && std::abs(p.y_m) <= kMaxPoseM && std::isfinite(p.yaw_rad)))
+        return Status::error(StatusCode::InvalidArgument,
+                             "pose (%g m, %g m, %g rad) must be finite and within ±%g m of the odometry frame's origin "
+                             "(poses in metres?)", p.x_m, p.y_m, p.yaw_rad, kMaxPoseM);
+    return {};
+}
 
 // ---------------------------------------------------------------------------------------------------------
 TemporalFusion::TemporalFusion(const Config& cfg)

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "roadpreview/core/frames.hpp"
+#include "roadpreview/paths/path.hpp"
 #include "core/csv.hpp"
 #include "core/text.hpp"
 
@@ -51,6 +52,7 @@ MotionTable MotionTable::read_csv(const std::string& path) {
             if (c >= cells.size() || end == cells[c].c_str() || *end != '\0' || !std::isfinite(v[k]))
                 fail(number, "expected a finite number in every column, got \"" + line + "\"");
         }
+        if (const Status s = check_motion(v[1], v[2]); !s) fail(number, s.message());
         if (!table.t_.empty() && v[0] <= table.t_.back())
             throw std::runtime_error(path + ": the motion table's times must increase (line " +
                                      std::to_string(number) + ": t " + csv_number(v[0]) + " after " +
@@ -76,6 +78,9 @@ MotionTable MotionTable::from_samples(std::vector<double> t, std::vector<double>
     };
     if (!finite(t) || !finite(speed_mps) || !finite(yaw_rate_rps))
         throw std::runtime_error(source + ": the motion table holds a non-finite value");
+    for (std::size_t i = 0; i < t.size(); ++i)
+        if (const Status s = check_motion(speed_mps[i], yaw_rate_rps[i]); !s)
+            throw std::runtime_error(source + ": the motion table's row " + std::to_string(i) + ": " + s.message());
     for (std::size_t i = 1; i < t.size(); ++i)
         if (!(t[i] > t[i - 1]))
             throw std::runtime_error(source + ": the motion table's times must increase (row " + std::to_string(i) +

@@ -19,6 +19,9 @@ const char* to_string(PathStatus s) {
 Status check_motion(double speed_mps, double yaw_rate_rps) noexcept {
     // %f: the text std::to_string gave these messages before.
     if (!std::isfinite(speed_mps)) return Status::error(StatusCode::InvalidArgument, "speed must be finite, got %f", speed_mps);
+    if (std::abs(speed_mps) > kMaxSpeedMps)
+        return Status::error(StatusCode::InvalidArgument, "speed must be within ±%g m/s (no ground vehicle drives "
+                             "faster: a unit mixed up?), got %g m/s", kMaxSpeedMps, speed_mps);
     if (!std::isfinite(yaw_rate_rps))
         return Status::error(StatusCode::InvalidArgument, "yaw_rate must be finite, got %f", yaw_rate_rps);
     return {};

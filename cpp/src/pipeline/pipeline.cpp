@@ -306,11 +306,12 @@ const char* to_string(FrameStatus status) noexcept {
 namespace {
 
 // What process() refuses, as a Status (try_process returns it, process() throws its message).
-Status check_input(PointsView points, double speed_mps, double yaw_rate_rps) noexcept {
+Status check_input(PointsView points, double speed_mps, double yaw_rate_rps, const FrameMotion& motion) noexcept {
     if (points.rows() > std::numeric_limits<std::int32_t>::max())
         return Status::error(StatusCode::InvalidArgument, "too many points in one frame: %lld",
                              static_cast<long long>(points.rows()));
-    return check_motion(speed_mps, yaw_rate_rps);
+    if (Status s = check_motion(speed_mps, yaw_rate_rps); !s) return s;
+    return check_frame_motion(motion);
 }
 
 Status check_frame(const Frame& frame) noexcept {
@@ -393,7 +394,7 @@ void Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rp
 
 void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                         const FrameMotion& motion, const PointErrors& errors, Result& out) {
-    throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps));
+    throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps, motion));
     impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out);
 }
 
@@ -417,7 +418,7 @@ Status Estimator::try_process(const Frame& frame, double speed_mps, double yaw_r
 
 Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                               const FrameMotion& motion, const PointErrors& errors, Result& out) noexcept {
-    Status s = check_input(points, speed_mps, yaw_rate_rps);
+    Status s = check_input(points, speed_mps, yaw_rate_rps, motion);
     if (!s) return s;
     return without_exceptions(
         [&] { impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out); });

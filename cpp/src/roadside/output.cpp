@@ -123,7 +123,7 @@ std::vector<CameraDetection> read_detections(const std::string& path) {
         if (json) {
             try {
                 out.push_back(detection_from_json(nlohmann::json::parse(line), where));
-            } catch (const nlohmann::json::parse_error& e) {
+            } catch (const nlohmann::json::exception& e) {  // parse_error; out_of_range for 1e400
                 throw std::runtime_error(where + ": not JSON (" + e.what() + ")");
             }
             continue;

@@ -20,7 +20,7 @@ std::string metres(double v) { return number_text(v) + " m"; }
 }  // namespace
 
 ProfileReadout::ProfileReadout(const Config& cfg, double ahead_m)
-    : ahead_m_(ahead_m), ds_(cfg.profile.ds_m), length_m_(cfg.profile.preview_length_m),
+    : ahead_m_(ahead_m), ds_(cfg.profile.ds_m), reach_m_(profile_reach_m(cfg)),
       drive_(cfg.fusion.frame_rate_hz) {
     validate(cfg);
     if (!(ahead_m > 0.0) || !std::isfinite(ahead_m))
@@ -33,31 +33,23 @@ ProfileReadout::ProfileReadout(const Config& cfg, double ahead_m)
 }
 
 void ProfileReadout::add(const Result& r, const std::optional<Pose2>& pose) {
+    // Both wheels checked before anything changes: a frame that fails leaves the readout as it was.
+    const double q_left = drive_per_wheel_metre(r.path, Wheel::Left);
+    const double q_right = drive_per_wheel_metre(r.path, Wheel::Right);
+    const bool profiles = r.status == FrameStatus::Ok;  // else the frame only moves the drive on
+    const bool read_left = profiles && drive_.placeable(r, r.left, q_left, reach_m_, "readout");
+    const bool read_right = profiles && drive_.placeable(r, r.right, q_right, reach_m_, "readout");
     drive_.advance(r, pose, "readout");
-    const auto wheel = [&](const Profile& p, Wheel side, WheelArray& w) {
+    const auto wheel = [&](const Profile& p, bool read_it, double drive_per_metre, WheelArray& w) {
         shift(w);
-        if (r.status == FrameStatus::Ok) {  // else no profiles: the frame only moves the drive on
-            w.drive_per_metre = drive_per_wheel_metre(r.path, side);
-            check(r, p, w.drive_per_metre);
+        if (read_it) {
+            w.drive_per_metre = drive_per_metre;
             read(p, w);
         }
         state(w);
     };
-    wheel(r.left, Wheel::Left, left_);
-    wheel(r.right, Wheel::Right, right_);
-}
-
-// A profile the readout can place (a line read back from a file may hold anything): its first bin within the
-// profiles' length, and a finite, positive drive distance per metre of the wheel's path.
-void ProfileReadout::check(const Result& r, const Profile& p, double drive_per_metre) const {
-    const auto fail = [&](const std::string& what) {
-        throw std::invalid_argument("readout: frame " + std::to_string(drive_.frames() - 1) +
-                                    (r.source.empty() ? "" : " (" + r.source + ")") + ": " + what);
-    };
-    if (!p.s.empty() && !(std::abs(p.s.front()) <= length_m_))
-        fail("a profile's first bin lies at " + metres(p.s.front()) + ", not within profile.preview_length_m");
-    if (!(drive_per_metre > 0.0) || !std::isfinite(drive_per_metre))
-        fail("the path's centre of rotation and wheel radii give no distance along the drive");
+    wheel(r.left, read_left, q_left, left_);
+    wheel(r.right, read_right, q_right, right_);
 }
 
 // Drops the bins the wheel has passed: the array starts at the wheel's bin.

@@ -75,7 +75,7 @@ Result route_input_from_json(const std::string& line, const std::string& where) 
     json j;
     try {
         j = json::parse(line);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number beyond a double (1e400)
         fail(where, std::string("not a JSON output line (") + e.what() + ")");
     }
     Result r;

@@ -34,20 +34,19 @@ class Readout:
         return self._drive.distance
 
     def add(self, line: dict, pose=None) -> None:
+        wheels = [] if line.get("reason") else [w for w in ("left", "right") if self._drive.placeable(line, w)]
         self._drive.advance(line, pose)
         ds = self.cfg.profile.ds_m
         for wheel, bins in self._bins.items():
             for j in [j for j in bins if (j + 1) * ds <= self.distance]:  # passed by the wheel
                 del bins[j]
-            if line.get("reason") or not line["profiles"][wheel]["s"]:
+            if wheel not in wheels:
                 continue
             self._scale[wheel] = _arc_scale(line, wheel)
             s, z = _values(line["profiles"][wheel]["s"]), _values(line["profiles"][wheel]["z"])
             count = line["profiles"][wheel]["count"]
-            if not abs(s[0]) <= self.cfg.profile.preview_length_m or not 0 < self._scale[wheel] < math.inf:
-                raise ValueError(f"readout: frame {self._drive.frames - 1}: a profile it cannot place "
-                                 f"(first bin at {s[0]} m, "
-                                 f"{self._scale[wheel]} m of drive per metre of the wheel's path)")
+            if not len(s):
+                continue
             last = s[0] + (len(s) - 1) * ds  # the bins are ds apart
             j = math.ceil((self.distance + self.ahead_m) / ds - 0.5)
             while ((j + 0.5) * ds - self.distance) / self._scale[wheel] <= last + 1e-9:

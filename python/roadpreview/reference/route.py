@@ -17,6 +17,8 @@ from .profile import fill_gaps
 from .roughness import analyze_roughness, vehicle_roughness
 
 MIN_SHARED_BINS = 10  #: a frame is shifted onto the drive's profile only over at least this many shared bins
+MAX_FRAME_STEP_M = 1000.0  #: a frame moves the drive on by at most this
+MAX_DRIVE_PER_WHEEL_METRE = 100.0  #: a wheel with a larger q places nothing
 
 
 @dataclass
@@ -44,10 +46,10 @@ class _Sums:
 
 
 def _arc_scale(line: dict, wheel: str) -> float:
-    """Drive metres per metre of the wheel's arc length: |y_icr| / r_wheel on an arc, else 1."""
+    """Drive metres per metre of the wheel's arc length (q): |y_icr| / r_wheel on an arc, else 1."""
     path = line.get("path") or {}
     radius = path.get(f"{wheel}_radius")
-    if path.get("icr_y") is None or not radius:
+    if path.get("icr_y") is None or radius is None or not radius > 0:
         return 1.0
     return abs(path["icr_y"]) / radius
 
@@ -67,20 +69,40 @@ class DriveDistance:
         self._last_pose = None
 
     def advance(self, line: dict, pose=None) -> None:
+        step = 0.0
         if self.frames:
             if (pose is None) != (self._last_pose is None):
                 raise ValueError(f"{self.who}: frame {self.frames}: poses must be given for every frame or for none")
             if pose is not None:
-                self.distance += math.hypot(pose[0] - self._last_pose[0], pose[1] - self._last_pose[1])
+                step = math.hypot(pose[0] - self._last_pose[0], pose[1] - self._last_pose[1])
             else:
                 dt = 1.0 / self.cfg.fusion.frame_rate_hz
                 if line.get("timestamp") is not None and self._last_time is not None:
                     dt = line["timestamp"] - self._last_time
                 if dt < 0:
                     raise ValueError(f"{self.who}: frame {self.frames} is {-dt} s before the previous frame")
-                self.distance += abs(line["motion"]["speed"]) * dt
+                speed = line["motion"]["speed"]
+                step = abs(math.nan if speed is None else speed) * dt
+        if not step <= MAX_FRAME_STEP_M:
+            raise ValueError(f"{self.who}: frame {self.frames} moves the drive on by {step} m: more than "
+                             f"{MAX_FRAME_STEP_M} m per frame is no drive")
+        self.distance += step
         self.frames += 1
         self._last_time, self._last_pose = line.get("timestamp"), pose
+
+    def placeable(self, line: dict, wheel: str) -> bool:
+        """Whether the next line's profile of ``wheel`` can be placed along the drive (§10): False for q > 100;
+        ValueError for a bin further from the wheel than the profiles reach, or a q that is no positive number."""
+        reach = self.cfg.profile.preview_length_m + self.cfg.fusion.behind_m
+        s = _values(line["profiles"][wheel]["s"])
+        if not np.all(np.abs(s) <= reach):
+            raise ValueError(f"{self.who}: frame {self.frames}: a profile bin lies beyond the profiles' reach "
+                             f"({reach} m)")
+        q = _arc_scale(line, wheel)
+        if not 0 < q < math.inf:
+            raise ValueError(f"{self.who}: frame {self.frames}: the path's centre of rotation and wheel radii give "
+                             f"no distance along the drive")
+        return q <= MAX_DRIVE_PER_WHEEL_METRE
 
 
 class Route:
@@ -97,12 +119,11 @@ class Route:
         return self._drive.distance
 
     def add(self, line: dict, pose=None) -> None:
+        wheels = [] if line.get("reason") else [w for w in ("left", "right") if self._drive.placeable(line, w)]
         self._drive.advance(line, pose)
         if pose is not None:
             self._track.append((self.distance, tuple(pose)))
-        if line.get("reason"):
-            return
-        for wheel in ("left", "right"):
+        for wheel in wheels:
             self._stitch(line["profiles"][wheel], _arc_scale(line, wheel), self._sums[wheel])
 
     def _stitch(self, profile: dict, scale: float, sums: _Sums) -> None:

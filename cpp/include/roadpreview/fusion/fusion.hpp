@@ -12,6 +12,7 @@
 #include "roadpreview/core/config.hpp"
 #include "roadpreview/paths/path.hpp"
 #include "roadpreview/core/points.hpp"
+#include "roadpreview/core/status.hpp"
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/support.hpp"
 
@@ -29,6 +30,13 @@ struct FrameMotion {
     std::optional<double> timestamp_s;  ///< s; frames without one are 1/fusion.frame_rate_hz apart
     std::optional<Pose2> pose;          ///< given pose (e.g. from a KITTI poses file); else integrated
 };
+
+/// A given pose further than this from the odometry frame's origin (100,000 km; poses in millimetres?) is refused:
+/// the fused map's cell indices would no longer hold it.
+constexpr double kMaxPoseM = 1e8;
+
+/// A timestamp that is not finite, a pose not finite or beyond ±kMaxPoseM: StatusCode::InvalidArgument.
+Status check_frame_motion(const FrameMotion& motion) noexcept;
 
 /// Rigid planar motion at constant speed and yaw rate for dt seconds (an arc; a line when ω·dt = 0).
 Pose2 integrate_motion(const Pose2& pose, double speed_mps, double yaw_rate_rps, double dt_s);

@@ -31,10 +31,15 @@ struct WheelPaths {
     double radius(Wheel w) const { return w == Wheel::Left ? left_radius : right_radius; }
 };
 
-/// Non-finite speed or yaw rate: StatusCode::InvalidArgument with the message plan_paths throws.
+/// |speed| above this is no ground vehicle's (3,600 km/h): a unit or a field mixed up, refused before it places a
+/// fused map's pose beyond what its cell indices hold.
+constexpr double kMaxSpeedMps = 1000.0;
+
+/// Non-finite yaw rate, speed not finite or beyond ±kMaxSpeedMps: StatusCode::InvalidArgument with the message
+/// plan_paths throws.
 Status check_motion(double speed_mps, double yaw_rate_rps) noexcept;
 
-/// Throws std::invalid_argument for non-finite speed or yaw rate (check_motion's message).
+/// Throws std::invalid_argument for a speed or yaw rate check_motion refuses (its message).
 WheelPaths plan_paths(double speed_mps, double yaw_rate_rps, double track_width, const PathConfig& cfg);
 
 /// Arc length s ≥ 0 travelled by wheel `w` until it is beside (x, y), if (x, y) lies in that wheel's

@@ -31,8 +31,9 @@ public:
     ProfileReadout(const Config& cfg, double ahead_m);
 
     /// Adds the next frame (drive order): the drive moves on as for the route, the bins behind the wheels drop
-    /// out, and a frame with profiles is read from ahead_m on. Throws std::invalid_argument as RouteBuilder::add,
-    /// and for profiles it cannot place (their first bin beyond profile.preview_length_m, a path without a scale).
+    /// out, and a frame with profiles is read from ahead_m on (a wheel with more than kMaxDrivePerWheelMetre of
+    /// drive per metre of its path reads nothing). Throws std::invalid_argument as RouteBuilder::add, leaving the
+    /// readout as it was.
     void add(const Result& r, const std::optional<Pose2>& pose = std::nullopt);
 
     double ahead_m() const { return ahead_m_; }
@@ -49,16 +50,15 @@ private:
     struct WheelArray {
         std::vector<Bin> bins;  // drive bins first, first + 1, …
         std::int64_t first = 0;
-        double drive_per_metre = 1.0;  // the wheel's q of the last frame (docs/method.md §10)
+        double drive_per_metre = 1.0;  // the wheel's q of the last frame it read (docs/method.md §10)
         ReadoutProfile out;
     };
-    void check(const Result& r, const Profile& p, double drive_per_metre) const;
     void shift(WheelArray& w) const;
     void read(const Profile& p, WheelArray& w) const;
     std::optional<Bin> profile_at(const Profile& p, double s) const;
     void state(WheelArray& w) const;
 
-    double ahead_m_, ds_, length_m_;
+    double ahead_m_, ds_, reach_m_;
     DriveDistance drive_;
     WheelArray left_, right_;
 };

@@ -48,8 +48,10 @@ public:
     explicit RouteBuilder(const Config& cfg);  ///< throws std::invalid_argument on a bad config
 
     /// Adds one frame: its distance along the drive from `pose` (when given) or from |speed| times the time
-    /// since the previous frame (its timestamps, else 1 / fusion.frame_rate_hz). Throws std::invalid_argument
-    /// when the time goes back or poses are given for some frames only.
+    /// since the previous frame (its timestamps, else 1 / fusion.frame_rate_hz); a wheel with more than
+    /// kMaxDrivePerWheelMetre of drive per metre of its path adds nothing. Throws std::invalid_argument, leaving
+    /// the route as it was, as DriveDistance::advance (time going back, poses for some frames only, a step of
+    /// more than kMaxFrameStepM) and for profiles it cannot place (see `placeable`).
     void add(const Result& r, const std::optional<Pose2>& pose = std::nullopt);
 
     std::size_t frames() const { return drive_.frames(); }
