@@ -29,8 +29,10 @@ double parse_rate(const std::string& text) {
         v = std::stod(text, &used);
     } catch (const std::exception&) {
     }
-    if (used != text.size() || !std::isfinite(v) || v <= 0.0)
-        throw std::invalid_argument("--rate " + text + ": expected a factor > 0 (1.0 = recorded speed) or max");
+    if (used != text.size() || !std::isfinite(v) || v < rp::kMinReplayRate)
+        throw std::invalid_argument("--rate " + text + ": expected a factor of at least 0.001 (1.0 = recorded "
+                                    "speed) or max");
+    static_assert(rp::kMinReplayRate == 1e-3, "the message above names it");
     return v;
 }
 

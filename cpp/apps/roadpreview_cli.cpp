@@ -366,6 +366,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
     if (o.read_ahead_m > 0.0) rp::ProfileReadout(cfg, o.read_ahead_m);  // a distance beyond the profiles: said now
+    for (const double length_m : o.segment_lengths_m) rp::RouteBuilder(cfg).check_segment_length(length_m);  // too
     auto source = open_source(o, app, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;

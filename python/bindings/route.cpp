@@ -68,6 +68,8 @@ void bind_route(py::module_& m) {
            "Adds a frame from its output line (JSON text, as written by the CLI or stored by batch)")
         .def_property_readonly("frames", &rp::RouteBuilder::frames)
         .def_property_readonly("distance_m", &rp::RouteBuilder::distance_m, "driven by the last frame added")
+        .def("check_segment_length", &rp::RouteBuilder::check_segment_length, py::arg("length_m"),
+             "ValueError unless length_m is a finite number of at least profile.ds_m")
         .def("stitched", [](const rp::RouteBuilder& route, const std::string& wheel) {
             if (wheel != "left" && wheel != "right") throw py::value_error("wheel must be 'left' or 'right', got " + wheel);
             return wheel == "left" ? route.left() : route.right();

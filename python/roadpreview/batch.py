@@ -324,14 +324,19 @@ class Summary:
                 "vehicle_iri_frames": len(self.iri), "declined": dict(sorted(self.declined.items()))}
 
 
+def route_builder(config: Optional[dict]):
+    """The C++ RouteBuilder of ``roadpreview run --segments`` for a batch's config."""
+    from ._native import core
+    from .config import Config
+
+    return core().RouteBuilder((Config.from_dict(config) if config else Config()).to_json())
+
+
 def stitch(out_dir, rid: str, config: Optional[dict]):
     """(route, summary) of one recording read from its parts: the frames' profiles stitched along the drive
     (the C++ RouteBuilder of ``roadpreview run --segments``), placed by the frames' poses when they have them,
     else by speed × time."""
-    from ._native import core
-    from .config import Config
-
-    route = core().RouteBuilder((Config.from_dict(config) if config else Config()).to_json())
+    route = route_builder(config)
     summary = Summary(rid)
     for row in frame_rows(out_dir, rid, ("frame", "line", "pose_x_m", "pose_y_m", "pose_yaw_rad")):
         pose = None if row["pose_x_m"] is None else (row["pose_x_m"], row["pose_y_m"], row["pose_yaw_rad"])
@@ -448,6 +453,8 @@ def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, 
     and only what is missing runs; without it, OUT_DIR must not hold an earlier batch.
     """
     out = Path(out_dir)
+    for length in segment_lengths_m:  # refused before any recording runs, as `roadpreview run --segments` does
+        route_builder(run_options.get("config")).check_segment_length(length)
     if not resume and (out / "frames").exists():
         raise ValueError(f"{out}: holds an earlier batch; give --resume to complete it or choose another -o")
     source_options = {k: v for k, v in run_options.items()

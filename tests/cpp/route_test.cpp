@@ -92,6 +92,8 @@ TEST(Route, TimeGoingBackAndBadLengthsAreErrors) {
     EXPECT_THROW(route.add(frame(1, 0.0, 0.0)), std::invalid_argument);
     EXPECT_THROW(route.segments(0.0), std::invalid_argument);
     EXPECT_THROW(route.segments(std::nan("")), std::invalid_argument);
+    EXPECT_THROW(route.segments(0.099), std::invalid_argument);  // shorter than a bin: no segment holds one
+    EXPECT_EQ(route.segments(0.1).size(), route.left().z.size());
 }
 
 TEST(Route, ProfilesItCannotPlaceAreErrorsThatLeaveTheRouteAsItWas) {  // lines read back from files

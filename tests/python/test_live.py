@@ -151,7 +151,8 @@ def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (("--to", "127.0.0.1"), "127.0.0.1: no port"),
     (("--to", "127.0.0.1:99999"), "port '99999' is not 1..65535"),
-    (("--rate", "fast"), "--rate fast: expected a factor > 0"),
+    (("--rate", "fast"), "--rate fast: expected a factor of at least 0.001"),
+    (("--rate", "1e-300"), "--rate 1e-300: expected a factor of at least 0.001"),  # once: sent at once (overflow)
 ])
 def test_cli_replay_refuses_bad_options(args, message):
     proc = run_cli("replay", OS1_128_PCAP, *args, check=False)

@@ -142,6 +142,11 @@ def test_route_errors_name_the_problem(tmp_path):
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--segments", "0,10",
                check=False)
     assert proc.returncode != 0 and "--segments" in proc.stderr
+    # Shorter than a bin: once 61 MB of rows for 40 m of road, and on. Refused before the input is read.
+    proc = run("run", tmp_path / "absent.bin", "--speed", 5, "--segments", "10,1e-9", check=False)
+    assert proc.returncode == 1 and "at least one profile bin (profile.ds_m 0.1 m), got 1e-09" in proc.stderr
+    with pytest.raises(ValueError, match="at least one profile bin"):
+        rp.reference.Route().segments(0.05)
     blocked = tmp_path / "file"
     blocked.write_text("")
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--export-profile",

@@ -2,8 +2,10 @@
 // Replay of a capture's UDP payloads with their recorded timing: the way to test and demo live input.
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <optional>
@@ -14,6 +16,7 @@
 
 #include "roadpreview/io/live.hpp"
 #include "roadpreview/io/pcap.hpp"
+#include "core/text.hpp"
 #include "udp.hpp"
 
 namespace roadpreview {
@@ -105,8 +108,10 @@ struct Pass {
 
     void wait_until(double offset_s) const {
         if (options.rate <= 0.0) return;
+        // At most a billion seconds: a capture whose clock jumps by decades must not overflow the clock's ticks.
+        const double wait_s = std::min(offset_s / options.rate, 1e9);
         std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
-                                                  std::chrono::duration<double>(offset_s / options.rate)));
+                                                  std::chrono::duration<double>(wait_s)));
     }
 
     bool sent(const UdpDatagram& d) {
@@ -118,7 +123,9 @@ struct Pass {
 };
 
 void check_options(const std::string& capture, const UdpEndpoint& to, const ReplayOptions& o) {
-    if (!(o.rate >= 0.0)) throw std::invalid_argument(capture + ": the replay rate must be > 0 (or max)");
+    if (!(o.rate == 0.0 || (o.rate >= kMinReplayRate && std::isfinite(o.rate))))
+        throw std::invalid_argument(capture + ": the replay rate must be at least " + number_text(kMinReplayRate) +
+                                    "× the recorded speed (or max), got " + number_text(o.rate));
     if (o.loops < 1) throw std::invalid_argument(capture + ": --loop must be >= 1");
     if (!(o.drop_fraction >= 0.0 && o.reorder_fraction >= 0.0 && o.drop_fraction + o.reorder_fraction <= 1.0))
         throw std::invalid_argument(capture + ": the drop and reorder fractions must be in [0, 1]");

@@ -169,10 +169,15 @@ std::optional<Pose2> RouteBuilder::pose_at(double distance_m) const {
     return track_.back().second;  // the road ahead of the last frame: where the drive was last seen
 }
 
-std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
-    if (!(length_m > 0.0) || !std::isfinite(length_m))
-        throw std::invalid_argument("route: segment length must be a positive number of metres, got " +
+void RouteBuilder::check_segment_length(double length_m) const {
+    if (!(length_m >= cfg_.profile.ds_m) || !std::isfinite(length_m))
+        throw std::invalid_argument("route: segment length must be a number of metres of at least one profile bin "
+                                    "(profile.ds_m " + number_text(cfg_.profile.ds_m) + " m), got " +
                                     number_text(length_m));
+}
+
+std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
+    check_segment_length(length_m);
     const StitchedProfile l = left(), r = right();
     const double ds = cfg_.profile.ds_m;
     const std::size_t bins = std::max(l.z.size(), r.z.size());

@@ -179,9 +179,10 @@ class Route:
     def segments(self, length_m: float) -> list[dict]:
         """One dict per segment [k·L, (k+1)·L) (the last may end short): start_m, end_m, start/end pose and,
         per side, roughness, iri and backed_fraction."""
-        if not (length_m > 0 and math.isfinite(length_m)):
-            raise ValueError(f"route: segment length must be a positive number of metres, got {length_m}")
         ds = self.cfg.profile.ds_m
+        if not (length_m >= ds and math.isfinite(length_m)):  # a segment holds one bin or more
+            raise ValueError(f"route: segment length must be a number of metres of at least one profile bin "
+                             f"(profile.ds_m {ds} m), got {length_m}")
         wheels = {w: self.stitched(w) for w in ("left", "right")}
         bins = max(len(p.z) for p in wheels.values())
         slopes = {w: _slope_by_bin(p.z, ds) for w, p in wheels.items()}

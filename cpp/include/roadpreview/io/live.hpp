@@ -51,8 +51,11 @@ std::unique_ptr<FrameSource> open_live(const std::string& url, const LiveOptions
 /// Seconds on the steady clock, the clock of Frame::arrival_s.
 double steady_now_s();
 
+/// The slowest replay: 1000 times slower than recorded (slower, a capture's offsets overflow the clock's ticks).
+constexpr double kMinReplayRate = 1e-3;
+
 struct ReplayOptions {
-    double rate = 1.0;  ///< times the recorded speed; 0: as fast as possible ("max")
+    double rate = 1.0;  ///< times the recorded speed, at least kMinReplayRate; 0: as fast as possible ("max")
     int loops = 1;      ///< times through the capture
     /// Test hook: fractions of the datagrams dropped and sent late (swapped with the next one), drawn with `seed`.
     double drop_fraction = 0.0;

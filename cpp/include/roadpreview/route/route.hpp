@@ -59,8 +59,11 @@ public:
     /// The stitched profile with interior gaps up to profile.max_gap_m filled (filled bins keep count 0).
     StitchedProfile left() const;
     StitchedProfile right() const;
-    /// Consecutive segments of `length_m` from 0 to the end of the stitched profiles.
+    /// Consecutive segments of `length_m` from 0 to the end of the stitched profiles (check_segment_length).
     std::vector<RouteSegment> segments(double length_m) const;
+    /// Throws std::invalid_argument unless `length_m` is a finite number of at least profile.ds_m: a segment
+    /// holds one bin or more (a 1 nm segment once wrote 61 MB of rows for 40 m of road, and went on).
+    void check_segment_length(double length_m) const;
 
 private:
     struct WheelSums {
