@@ -14,6 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "core/text.hpp"
+
 namespace roadpreview {
 
 using nlohmann::json;
@@ -223,7 +225,7 @@ void validate(const Config& c) {
     if (c.sensor_height)
         require(std::isfinite(*c.sensor_height) && *c.sensor_height > 0.0 && *c.sensor_height <= kMaxSensorHeightM,
                 "sensor_height must be above 0 and at most " + std::to_string(static_cast<int>(kMaxSensorHeightM)) +
-                    " m (the sensor's height above the ground), got " + std::to_string(*c.sensor_height));
+                    " m (the sensor's height above the ground), got " + number_text(*c.sensor_height));
     if (c.extrinsics) {
         const Extrinsics& e = *c.extrinsics;
         for (double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad})

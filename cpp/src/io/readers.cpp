@@ -4,6 +4,7 @@
 #include "io/cloud_files.hpp"
 #include "io/pcap_source.hpp"
 #include "roadpreview/calibration/calibration.hpp"
+#include "core/text.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -313,8 +314,8 @@ public:
 private:
     Frame checked(Frame f) {
         if (f.timestamp && last_time_ && *f.timestamp < *last_time_ && last_file_ != index_)
-            fail_file(paths_[index_], "starts at " + std::to_string(*f.timestamp) + " s, before the end of " +
-                                          paths_[last_file_] + " (" + std::to_string(*last_time_) +
+            fail_file(paths_[index_], "starts at " + number_text(*f.timestamp, 15) + " s, before the end of " +
+                                          paths_[last_file_] + " (" + number_text(*last_time_, 15) +
                                           " s): give split recordings in time order");
         if (f.timestamp) last_time_ = f.timestamp, last_file_ = index_;
         return f;

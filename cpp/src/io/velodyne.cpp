@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bytes.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
@@ -202,7 +203,7 @@ VelodyneDecoder::VelodyneDecoder(VelodyneModel model, VelodyneCalibration calibr
         throw std::invalid_argument(calibration_.source + ": " + std::to_string(calibration_.lasers.size()) +
                                     " lasers, but a " + to_string(model) + " has " + std::to_string(lasers));
     if (!std::isfinite(cut_angle_deg) || cut_angle_deg < 0.0 || cut_angle_deg >= 360.0)
-        throw std::invalid_argument("cut angle must be in [0, 360) degrees, got " + std::to_string(cut_angle_deg));
+        throw std::invalid_argument("cut angle must be in [0, 360) degrees, got " + number_text(cut_angle_deg));
 }
 
 void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, double capture_time,

@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "roadpreview/io/stereo.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
@@ -77,7 +78,7 @@ StereoCalibration read_yaml(const std::string& path) {
     c.baseline_m = yaml_number(root, "baseline", path);
     if (!(c.fx_px > 0.0 && c.fy_px > 0.0)) throw std::runtime_error(path + ": fx and fy must be > 0 px");
     if (!(c.baseline_m > 0.0))
-        throw std::runtime_error(path + ": the baseline must be > 0 m, got " + std::to_string(c.baseline_m));
+        throw std::runtime_error(path + ": the baseline must be > 0 m, got " + number_text(c.baseline_m));
     if (const YAML::Node e = root["extrinsics"]) {
         if (!e.IsMap()) throw std::runtime_error(path + ": 'extrinsics' must be a mapping of x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad");
         c.extrinsics = Extrinsics{yaml_number(e, "x_m", path),      yaml_number(e, "y_m", path),
@@ -104,7 +105,7 @@ StereoCalibration calibration_from_projections(const double (&left)[12], const d
     c.baseline_m = (left[3] - right[3]) / c.fx_px;
     if (!(c.baseline_m > 0.0))
         throw std::invalid_argument(source + ": the baseline (P_left[0,3] - P_right[0,3]) / fx must be > 0 m, got " +
-                                    std::to_string(c.baseline_m) + " (left and right swapped?)");
+                                    number_text(c.baseline_m) + " (left and right swapped?)");
     return c;
 }
 
