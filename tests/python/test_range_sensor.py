@@ -219,6 +219,13 @@ def test_counts_without_a_distance_calibration_are_an_error(bench, tmp_path):
     assert proc.returncode != 0 and "no distance calibration" in proc.stderr
 
 
+def test_a_speed_no_vehicle_has_is_an_error(bench):
+    """Once 1e300 m/s wrote one empty 40 m window per reading, the readings 10^298 m down the road."""
+    readings = bench["runs"][0][0]
+    proc = run_cli("range", "run", readings, "--sensors", bench["dir"] / "sensors.yaml", "--speed", "1e300", check=False)
+    assert proc.returncode == 1 and "speed must be within ±1000 m/s" in proc.stderr and not proc.stdout
+
+
 def test_range_samples_enter_the_fusion_map_and_its_profiles():
     est = rp.Estimator(rp.Config(sensor_height=1.8, fusion={"method": "kalman"}))
     est.process(np.full((10, 3), np.nan, np.float32), 5.0, 0.0, timestamp=0.0)  # starts the clock at the origin

@@ -11,6 +11,7 @@
 
 #include "core/csv.hpp"
 #include "core/text.hpp"
+#include "roadpreview/paths/path.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
@@ -158,8 +159,7 @@ bool RangeReadingReader::next(Reading& out) {
 
 RangeMotion::RangeMotion(double speed_mps, double yaw_rate_rps)
     : speed_(speed_mps), yaw_rate_(yaw_rate_rps), label_("--speed") {
-    if (!std::isfinite(speed_mps) || !std::isfinite(yaw_rate_rps))
-        throw std::invalid_argument("speed and yaw rate must be finite");
+    if (const Status s = check_motion(speed_mps, yaw_rate_rps); !s) throw std::invalid_argument(s.message());
 }
 
 RangeMotion::RangeMotion(MotionTable table) : table_(std::move(table)) {

@@ -112,7 +112,7 @@ std::string range_calibration_to_yaml(const RangeCalibration& cal);
 /// Constant speed and yaw rate, or a motion table; distance and heading integrated from the start time.
 class RangeMotion {
 public:
-    RangeMotion(double speed_mps, double yaw_rate_rps);
+    RangeMotion(double speed_mps, double yaw_rate_rps);  ///< throws std::invalid_argument as check_motion refuses
     explicit RangeMotion(MotionTable table);
     /// Start of the integration: the table's first time, or (constant motion) set by the first reading.
     void start_at(double t_s);
