@@ -93,8 +93,9 @@ std::vector<rs::LaserScan> read_input(const Input& in, const RoadsideOptions& o,
     } else if (ends_with(p, ".log") || ends_with(p, ".log.gz") || ends_with(p, ".clf") || ends_with(p, ".clf.gz")) {
         bool missing = false;
         scans = rs::read_carmen_log(p, o.carmen_rate_hz, 0.0, &missing);
-        if (missing && note) *note = p + ": the log's timestamps are all 0; scans timed at --scan-rate " +
-                                     std::to_string(o.carmen_rate_hz) + " Hz";
+        char rate[32];
+        std::snprintf(rate, sizeof rate, "%g", o.carmen_rate_hz);
+        if (missing && note) *note = p + ": the log's timestamps are all 0; scans timed at --scan-rate " + rate + " Hz";
     } else if (ends_with(p, ".bag") || ends_with(p, ".mcap") || ends_with(p, ".db3")) {
         throw std::runtime_error(p + ": ROS bags are read in Python (rp.roadside.read_rosbag_scans, the rosbags "
                                      "package); write them to the scan CSV for the CLI");

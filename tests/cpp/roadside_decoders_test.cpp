@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -237,6 +238,20 @@ TEST(CarmenLog, FreiburgCampusMatchesTheReadme) {
     EXPECT_NEAR(scans[0].start_angle_rad, -90.0 * kDeg, 1e-12);
     // 25.9 % of readings are ≥ 80 m; the log's maximum is 80.99 m, so those at or beyond are no return.
     EXPECT_NEAR(static_cast<double>(no_return) / readings, 0.259, 0.01);
+}
+
+TEST(CarmenLog, AScanRateNoScannerHasIsAnErrorNamingTheLog) {  // 1e-300 Hz once timed every scan at infinity
+    const auto log = write_file("rate.log", "FLASER 2 1.0 1.0 0 0 0 0 0 0 0 0 host 0\n");
+    for (const double rate : {1e-300, 0.0, 1e6, std::numeric_limits<double>::quiet_NaN()}) {
+        try {
+            rs::read_carmen_log(log, rate);
+            FAIL() << rate;
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find("rate.log: the CARMEN scan rate must be within 0.001–100000 Hz"),
+                      std::string::npos) << e.what();
+        }
+    }
+    EXPECT_EQ(rs::read_carmen_log(log, 37.5).size(), 1u);
 }
 
 TEST(ScanCsv, ReadsScansAndRefusesBadRows) {

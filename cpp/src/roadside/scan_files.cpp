@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/csv.hpp"
+#include "core/text.hpp"
 #include "roadpreview/roadside/scan.hpp"
 
 namespace roadpreview::roadside {
@@ -123,7 +124,10 @@ std::vector<LaserScan> read_scan_csv(const std::string& path) {
 
 std::vector<LaserScan> read_carmen_log(const std::string& path, double rate_hz, double max_range_m,
                                        bool* timestamps_missing) {
-    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) throw std::invalid_argument("CARMEN scan rate must be > 0 Hz");
+    // A 2-D scanner turns 1–100 times a second; outside 0.001–100,000 Hz the times are a unit mixed up, or overflow.
+    if (!(rate_hz >= 1e-3 && rate_hz <= 1e5))
+        throw std::invalid_argument(path + ": the CARMEN scan rate must be within 0.001–100000 Hz, got " +
+                                    number_text(rate_hz) + " Hz");
     TextLines lines(path);
     std::vector<LaserScan> out;
     double resolution_deg = 0.0, log_max_m = 0.0;

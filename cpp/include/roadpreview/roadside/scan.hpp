@@ -37,7 +37,8 @@ std::vector<LaserScan> read_scan_csv(const std::string& path);
 /// `FLASER` scans of a CARMEN log (plain or .gz): 180° front laser, the first beam at −90°, the step
 /// 180°/num_readings when the log has no `laser_front_laser_resolution` PARAM. Ranges ≥ `max_range_m` (the
 /// log's `robot_front_laser_max` when 0) are no return. Each scan carries the pose the log gives. A log whose
-/// timestamps are all 0 gets times index / `rate_hz` and `*timestamps_missing` is set.
+/// timestamps are all 0 gets times index / `rate_hz` (0.001–100,000 Hz, else std::invalid_argument) and
+/// `*timestamps_missing` is set.
 std::vector<LaserScan> read_carmen_log(const std::string& path, double rate_hz, double max_range_m = 0.0,
                                        bool* timestamps_missing = nullptr);
 
