@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include <Eigen/Dense>
@@ -129,6 +130,14 @@ TEST(BeamCalibrator, RejectsBeamIndicesBeyondTheSensor) {
     rp::BeamCalibrator calibrator(level_sensor(), 4);
     std::vector<float> xyz{10.0f, 0.0f, -1.8f};
     EXPECT_THROW(calibrator.add_frame(rp::points_view(xyz.data(), 1, 3), {7}, {1}, rp::Pose2{}), std::invalid_argument);
+}
+
+TEST(BeamCalibrator, RejectsCellsNoIntegerIndexHolds) {  // 1e-300 m cells: 4e301 cells in 40 m of road
+    for (const double cell : {1e-300, 0.001, 50.0, std::numeric_limits<double>::quiet_NaN()}) {
+        rp::CalibrationOptions options;
+        options.cell_m = cell;
+        EXPECT_THROW(rp::BeamCalibrator(level_sensor(), 4, options), std::invalid_argument) << cell;
+    }
 }
 
 TEST(BeamsFile, RoundTripsAndChecksTheSensor) {

@@ -17,6 +17,7 @@
 #include "roadpreview/ground/ground.hpp"
 
 #include "beam_geometry.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
@@ -277,8 +278,11 @@ std::string fixed(double v, int digits) {
 BeamCalibrator::BeamCalibrator(const Config& cfg, int beam_count, CalibrationOptions options)
     : cfg_(cfg), beam_count_(beam_count), options_(options) {
     if (beam_count < 1) throw std::invalid_argument("beam calibration needs a beam count >= 1, got " + std::to_string(beam_count));
-    if (!(options.cell_m > 0) || options.rounds < 1 || options.min_beams < 1 || !(options.max_sigma_deg > 0))
-        throw std::invalid_argument("calibration options: need cell_m > 0, rounds >= 1, min_beams >= 1, max_sigma_deg > 0");
+    // Cells of 1 cm to 10 m: finer, the road's cells outnumber what an integer index holds (1e-300 m once did).
+    if (!(options.cell_m >= 0.01 && options.cell_m <= 10.0) || options.rounds < 1 || options.min_beams < 1 ||
+        !(options.max_sigma_deg > 0))
+        throw std::invalid_argument("calibration options: need 0.01 <= cell_m <= 10 m (got " +
+                                    number_text(options.cell_m) + "), rounds >= 1, min_beams >= 1, max_sigma_deg > 0");
 }
 
 void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t>& beams,

@@ -24,7 +24,7 @@ public:
 
 struct CalibrationOptions {
     /// Road cells in which the beams' heights are compared. Smaller cells bias the steep beams: range noise moves
-    /// a point along its ray, so which cell it falls in depends on its height error (method.md §8).
+    /// a point along its ray, so which cell it falls in depends on its height error (method.md §8). 0.01–10 m.
     double cell_m = 0.2;
     int min_frames = 2;
     double min_travel_m = 0.3;         ///< the vehicle must move at least this far over the drive
