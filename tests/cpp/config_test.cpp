@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include <roadpreview/core/config.hpp>
 
@@ -119,4 +120,23 @@ TEST(Config, TheTiltLimitsOldNameIsStillRead) {
                  std::invalid_argument);
     EXPECT_THROW(rp::config_from_json(R"({"ground": {"max_tilt_deg": 90}})"), std::invalid_argument);
     EXPECT_THROW(rp::config_from_json(R"({"ground": {"zone_sectors": [4, 4]}})"), std::invalid_argument);  // 14 rings
+}
+
+TEST(Config, TheZoneModelsPatchesAreBounded) {  // 1000 rings of 100000 sectors once asked for gigabytes a frame
+    const auto zones = [](int rings) {  // `rings` rings of 100000 sectors each
+        std::string edges = "0", sectors;
+        for (int ring = 1; ring <= rings; ++ring) {
+            edges += "," + std::to_string(ring);
+            sectors += std::string(ring > 1 ? "," : "") + "100000";
+        }
+        return R"({"ground": {"zone_ring_edges_m": [)" + edges + R"(], "zone_sectors": [)" + sectors + "]}}";
+    };
+    rp::config_from_json(zones(10));  // a million patches: the most
+    try {
+        rp::config_from_json(zones(11));
+        FAIL() << "1.1 million patches accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("ground.zone_sectors must sum to at most 1000000 patches"),
+                  std::string::npos) << e.what();
+    }
 }

@@ -181,6 +181,10 @@ void validate_zones(const GroundConfig& g) {
         require(std::isfinite(edges[i + 1]) && edges[i] < edges[i + 1], "ground.zone_ring_edges_m must ascend");
     require(g.zone_sectors.size() + 1 == edges.size(), "ground.zone_sectors needs one count per ring");
     for (const int s : g.zone_sectors) require(s >= 1 && s <= 100000, "ground.zone_sectors must be in [1, 100000]");
+    // Each patch holds a plane and its scratch: 1000 rings of 100000 sectors asked for gigabytes per frame.
+    std::int64_t patches = 0;
+    for (const int s : g.zone_sectors) patches += s;
+    require(patches <= 1000000, "ground.zone_sectors must sum to at most 1000000 patches");
     require(positive(g.zone_root_m), "ground.zone_root_m must be > 0");
     require(g.zone_min_points >= 3, "ground.zone_min_points must be >= 3");
     require(g.zone_seed_points >= 1, "ground.zone_seed_points must be >= 1");
