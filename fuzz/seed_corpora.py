@@ -176,7 +176,8 @@ def sick_seeds():
             "site": b"\x02" + site, "scan_csv": b"\x03t,scanner,angle_deg,range_m\n0,0,-90,5\n0,0,-89.5,\n",
             "detections": b"\x04t,x,y,w,h,class,score\n0.1,100,200,40,80,pedestrian,0.9\n",
             "carmen": b"\x05" + carmen_log(),
-            "detections_jsonl": b"\x06" + b'{"t": 0.1, "x": 100, "y": 200, "w": 40, "h": 80, "class": "car", "score": 0.9}\n'}
+            "detections_jsonl": b"\x06" + b'{"t": 0.1, "x": 100, "y": 200, "w": 40, "h": 80, "class": "car", '
+                                          b'"score": 0.9}\n'}
 
 
 def png(width, height, colour_type, bit_depth, rows, extra=b""):

@@ -332,7 +332,8 @@ TEST(Realtime, MotionNoDriveHasIsRefused) {
         EXPECT_EQ(std::string(status.message()).rfind(start, 0), 0u) << status.message();
         EXPECT_THROW(est.process(view, speed, 0.0, "a.bin", motion, out), std::invalid_argument);
     };
-    refused(1e300, {}, "speed must be within ±1000 m/s (no ground vehicle drives faster: a unit mixed up?), got 1e+300");
+    refused(1e300, {}, "speed must be within ±1000 m/s (no ground vehicle drives faster: a unit mixed up?), got "
+                       "1e+300");
     refused(-1001.0, {}, "speed must be within ±1000 m/s");
     refused(5.0, {std::numeric_limits<double>::quiet_NaN(), std::nullopt}, "timestamp must be finite, got nan");
     refused(5.0, {std::nullopt, rp::Pose2{1e300, 0.0, 0.0}}, "pose (1e+300 m, 0 m, 0 rad) must be finite and within");

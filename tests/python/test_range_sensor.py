@@ -222,7 +222,8 @@ def test_counts_without_a_distance_calibration_are_an_error(bench, tmp_path):
 def test_a_speed_no_vehicle_has_is_an_error(bench):
     """Once 1e300 m/s wrote one empty 40 m window per reading, the readings 10^298 m down the road."""
     readings = bench["runs"][0][0]
-    proc = run_cli("range", "run", readings, "--sensors", bench["dir"] / "sensors.yaml", "--speed", "1e300", check=False)
+    layout = bench["dir"] / "sensors.yaml"
+    proc = run_cli("range", "run", readings, "--sensors", layout, "--speed", "1e300", check=False)
     assert proc.returncode == 1 and "speed must be within ±1000 m/s" in proc.stderr and not proc.stdout
 
 

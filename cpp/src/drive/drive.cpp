@@ -52,8 +52,9 @@ DriveFrames::DriveFrames(std::unique_ptr<FrameSource> source, Config cfg, DriveO
     if (options_.speed_mps && !std::isfinite(*options_.speed_mps))
         throw std::invalid_argument("the speed must be finite");
     if (options_.speed_mps && std::abs(*options_.speed_mps) > kMaxSpeedMps)
-        throw std::invalid_argument("the speed must be within ±" + number_text(kMaxSpeedMps) + " m/s (no ground vehicle "
-                                    "drives faster: a unit mixed up?), got " + number_text(*options_.speed_mps) + " m/s");
+        throw std::invalid_argument("the speed must be within ±" + number_text(kMaxSpeedMps) +
+                                    " m/s (no ground vehicle drives faster: a unit mixed up?), got " +
+                                    number_text(*options_.speed_mps) + " m/s");
     if (options_.yaw_rate_rps && !std::isfinite(*options_.yaw_rate_rps))
         throw std::invalid_argument("the yaw rate must be finite");
     if (!(options_.frame_rate_hz >= 0.0) || !std::isfinite(options_.frame_rate_hz))

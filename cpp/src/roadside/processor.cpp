@@ -40,7 +40,8 @@ void check_layout(const LaserScan& scan, const ScannerSite& site) {
     if (site.beams && static_cast<int>(scan.ranges_m.size()) != *site.beams)
         bad(std::to_string(scan.ranges_m.size()) + " beams, the site says " + std::to_string(*site.beams));
     if (site.step_deg && std::abs(scan.step_rad / kDeg - *site.step_deg) > 1e-3)
-        bad("step " + number_text(scan.step_rad / kDeg, 8) + "°, the site says " + number_text(*site.step_deg, 8) + "°");
+        bad("step " + number_text(scan.step_rad / kDeg, 8) + "°, the site says " + number_text(*site.step_deg, 8) +
+            "°");
     if (site.start_angle_deg && std::abs(scan.start_angle_rad / kDeg - *site.start_angle_deg) > 1e-2)
         bad("first beam at " + number_text(scan.start_angle_rad / kDeg, 8) + "°, the site says " +
             number_text(*site.start_angle_deg, 8) + "°");
