@@ -70,6 +70,8 @@ def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate
         raise ValueError(f"calibrate_beams: method must be 'motion' or 'surface', got {method!r}")
     info = getattr(frames, "info", None)
     arrays = [_frame_arrays(f) for f in frames]
+    if not arrays:
+        raise core().CalibrationError("calibrate_beams: no frames given")
     if beam_count is None:
         numbered = [a[1] for a in arrays if a[1] is not None and len(a[1])]
         beam_count = (info or {}).get("beams") or (

@@ -189,6 +189,9 @@ def test_python_api_saves_a_beams_file_that_applies(drive, tmp_path):
     with pytest.raises(rp.CalibrationError, match="no motion"):
         rp.calibrate_beams([(f.points, lidar.beam_index()) for f in frames[:3]], poses=[(0.0, 0.0, 0.0)] * 3,
                            beam_count=lidar.beams)
+    for method in ("motion", "surface"):  # once: "no points ahead beyond 4 m", as if the frames were empty
+        with pytest.raises(rp.CalibrationError, match="calibrate_beams: no frames given"):
+            rp.calibrate_beams([], speed=5.0, method=method)
 
 
 # KITTI odometry seq 00 ground-truth poses of frames 0-2 (KITTI, CC BY-NC-SA 3.0), turned from the camera's axes
