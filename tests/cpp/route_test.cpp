@@ -111,7 +111,7 @@ TEST(Route, ProfilesItCannotPlaceAreErrorsThatLeaveTheRouteAsItWas) {  // lines 
         EXPECT_EQ(route.left().z.size(), bins);
     };
     rp::Result far = frame(1, 1.0, 0.0);
-    far.right.s.back() = 1e9;  // would have been drive bin 10⁹⁰: gigabytes
+    far.right.s.back() = 1e9;  // would have been drive bin 10¹⁰: gigabytes
     expect_error(far, "route: frame 1: a profile bin lies at 1e+09 m, beyond the profiles' reach (40 m)");
     rp::Result fast = frame(1, 1.0, 0.0);
     fast.speed_mps = 1e12;

@@ -131,7 +131,7 @@ def test_lines_that_cannot_be_placed_are_errors_or_skipped_alike_and_leave_the_s
     bad = {"a speed no drive has": (dict(line(1, 0.1, 1e300, road, 1.0)), "moves the drive on by"),
            "no speed": (dict(line(1, 0.1, None, road, 1.0)), "moves the drive on by nan m"),
            "a time stamp no drive has": (dict(line(1, 1e300, 10.0, road, 1.0)), "moves the drive on by"),
-           "a bin 1000 km ahead": (far, "a profile bin lies"),
+           "a bin 10^9 m ahead": (far, "a profile bin lies"),
            "a wheel without a scale": (no_scale, "give no distance along the drive")}
     for what, (bad_line, message) in bad.items():
         with pytest.raises(ValueError, match=f"frame 1.*{message}"):

@@ -7,9 +7,10 @@
 
 namespace roadpreview {
 
-bool DriveDistance::placeable(const Result& r, const Profile& p, double drive_per_metre, double reach_m,
-                              const char* who) const {
-    for (const double s : p.s)
+bool DriveDistance::placeable(const Result& r, Wheel w, double reach_m, const char* who) const {
+    if (r.status != FrameStatus::Ok) return false;  // no profiles: the frame only moves the drive on
+    const double drive_per_metre = drive_per_wheel_metre(r.path, w);
+    for (const double s : (w == Wheel::Left ? r.left : r.right).s)
         if (!(std::abs(s) <= reach_m))
             throw std::invalid_argument(frame_name(r, who) + ": a profile bin lies at " + number_text(s) +
                                         " m, beyond the profiles' reach (" + number_text(reach_m) + " m)");

@@ -34,22 +34,19 @@ ProfileReadout::ProfileReadout(const Config& cfg, double ahead_m)
 
 void ProfileReadout::add(const Result& r, const std::optional<Pose2>& pose) {
     // Both wheels checked before anything changes: a frame that fails leaves the readout as it was.
-    const double q_left = drive_per_wheel_metre(r.path, Wheel::Left);
-    const double q_right = drive_per_wheel_metre(r.path, Wheel::Right);
-    const bool profiles = r.status == FrameStatus::Ok;  // else the frame only moves the drive on
-    const bool read_left = profiles && drive_.placeable(r, r.left, q_left, reach_m_, "readout");
-    const bool read_right = profiles && drive_.placeable(r, r.right, q_right, reach_m_, "readout");
+    const bool read_left = drive_.placeable(r, Wheel::Left, reach_m_, "readout");
+    const bool read_right = drive_.placeable(r, Wheel::Right, reach_m_, "readout");
     drive_.advance(r, pose, "readout");
-    const auto wheel = [&](const Profile& p, bool read_it, double drive_per_metre, WheelArray& w) {
+    const auto wheel = [&](Wheel side, bool read_it, WheelArray& w) {
         shift(w);
         if (read_it) {
-            w.drive_per_metre = drive_per_metre;
-            read(p, w);
+            w.drive_per_metre = drive_per_wheel_metre(r.path, side);
+            read(side == Wheel::Left ? r.left : r.right, w);
         }
         state(w);
     };
-    wheel(r.left, read_left, q_left, left_);
-    wheel(r.right, read_right, q_right, right_);
+    wheel(Wheel::Left, read_left, left_);
+    wheel(Wheel::Right, read_right, right_);
 }
 
 // Drops the bins the wheel has passed: the array starts at the wheel's bin.

@@ -93,16 +93,12 @@ RouteBuilder::RouteBuilder(const Config& cfg) : cfg_(cfg), drive_(cfg.fusion.fra
 
 void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
     // Both wheels checked before anything changes: a frame that fails leaves the route as it was.
-    const double q_left = drive_per_wheel_metre(r.path, Wheel::Left);
-    const double q_right = drive_per_wheel_metre(r.path, Wheel::Right);
-    const bool profiles = r.status == FrameStatus::Ok;  // else the frame only moves the drive on
-    const double reach = profile_reach_m(cfg_);
-    const bool stitch_left = profiles && drive_.placeable(r, r.left, q_left, reach, "route");
-    const bool stitch_right = profiles && drive_.placeable(r, r.right, q_right, reach, "route");
+    const bool stitch_left = drive_.placeable(r, Wheel::Left, profile_reach_m(cfg_), "route");
+    const bool stitch_right = drive_.placeable(r, Wheel::Right, profile_reach_m(cfg_), "route");
     drive_.advance(r, pose, "route");
     if (pose) track_.emplace_back(drive_.metres(), *pose);
-    if (stitch_left) stitch(r.left, q_left, left_);
-    if (stitch_right) stitch(r.right, q_right, right_);
+    if (stitch_left) stitch(r.left, drive_per_wheel_metre(r.path, Wheel::Left), left_);
+    if (stitch_right) stitch(r.right, drive_per_wheel_metre(r.path, Wheel::Right), right_);
 }
 
 // The frame's backed bins, shifted by the median of their differences to the drive's profile where both

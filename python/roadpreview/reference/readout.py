@@ -34,7 +34,7 @@ class Readout:
         return self._drive.distance
 
     def add(self, line: dict, pose=None) -> None:
-        wheels = [] if line.get("reason") else [w for w in ("left", "right") if self._drive.placeable(line, w)]
+        wheels = self._drive.placeable_wheels(line)
         self._drive.advance(line, pose)
         ds = self.cfg.profile.ds_m
         for wheel, bins in self._bins.items():

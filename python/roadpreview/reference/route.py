@@ -90,9 +90,13 @@ class DriveDistance:
         self.frames += 1
         self._last_time, self._last_pose = line.get("timestamp"), pose
 
-    def placeable(self, line: dict, wheel: str) -> bool:
-        """Whether the next line's profile of ``wheel`` can be placed along the drive (§10): False for q > 100;
-        ValueError for a bin further from the wheel than the profiles reach, or a q that is no positive number."""
+    def placeable_wheels(self, line: dict) -> list[str]:
+        """The wheels whose profiles the next line places along the drive (§10): none for a line with a reason,
+        not a wheel with q > 100; ValueError for a bin further from the wheel than the profiles reach, or a q that
+        is no positive number."""
+        return [] if line.get("reason") else [w for w in ("left", "right") if self._placeable(line, w)]
+
+    def _placeable(self, line: dict, wheel: str) -> bool:
         reach = self.cfg.profile.preview_length_m + self.cfg.fusion.behind_m
         s = _values(line["profiles"][wheel]["s"])
         if not np.all(np.abs(s) <= reach):
@@ -119,7 +123,7 @@ class Route:
         return self._drive.distance
 
     def add(self, line: dict, pose=None) -> None:
-        wheels = [] if line.get("reason") else [w for w in ("left", "right") if self._drive.placeable(line, w)]
+        wheels = self._drive.placeable_wheels(line)
         self._drive.advance(line, pose)
         if pose is not None:
             self._track.append((self.distance, tuple(pose)))

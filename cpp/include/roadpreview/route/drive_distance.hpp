@@ -40,11 +40,11 @@ public:
     /// not a finite number of at most kMaxFrameStepM.
     void advance(const Result& r, const std::optional<Pose2>& pose, const char* who);
 
-    /// Whether the next frame's profile `p` of a wheel with `drive_per_metre` (q) can be placed along the drive:
-    /// false for a wheel with q above kMaxDrivePerWheelMetre. What the pipeline never writes (a line read back from
-    /// a file may hold anything) throws std::invalid_argument starting as advance's errors: a bin not finite or
-    /// beyond `reach_m`, a q that is not a finite positive number.
-    bool placeable(const Result& r, const Profile& p, double drive_per_metre, double reach_m, const char* who) const;
+    /// Whether the next frame's profile of wheel `w` can be placed along the drive: false for a frame without
+    /// profiles and for a wheel with q = drive_per_wheel_metre above kMaxDrivePerWheelMetre. What the pipeline
+    /// never writes (a line read back from a file may hold anything) throws std::invalid_argument starting as
+    /// advance's errors: a bin not finite or beyond `reach_m`, a q that is not a finite positive number.
+    bool placeable(const Result& r, Wheel w, double reach_m, const char* who) const;
 
     double metres() const { return metres_; }       ///< driven up to the last frame
     std::size_t frames() const { return frames_; }  ///< frames advanced to
