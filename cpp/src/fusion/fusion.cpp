@@ -346,73 +346,23 @@ std::size_t TemporalFusion::fuse_samples(const std::vector<MapSample>& samples) 
 
 void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<double>& variances,
                            std::vector<double>& medians) {
-    using Shared = SharedCell;
     std::vector<Eigen::Vector3d>& v = align_v_;  // (1, x, y) about the vehicle, for a well-conditioned fit
     v.resize(slots.size());
-    std::vector<Shared>& shared = shared_;
-    shared.clear();
+    shared_.clear();
     for (std::size_t c = 0; c < slots.size(); ++c) {
         const auto [x, y] = map_.centre(slots[c]);
         v[c] = Eigen::Vector3d(1.0, x - pose_.x_m, y - pose_.y_m);
         const MapCell& cell = map_.cell(slots[c]);
         if (cell.observations > 0)
-            shared.push_back({c, medians[c] - cell.height,
-                              variances[c] + std::max<double>(cell.variance, kMinVariance), true});
+            shared_.push_back({c, medians[c] - cell.height,
+                               variances[c] + std::max<double>(cell.variance, kMinVariance), true});
     }
-    if (shared.size() < kMinAlignCells) return;
-    // Weighted least squares (weights 1 / variance) with a zero-mean prior of σ = align_tilt_sigma on the
-    // slopes: a few shared cells along one ring fix the offset but must not tilt the whole frame.
-    const double prior = 1.0 / (cfg_.fusion.align_tilt_sigma * cfg_.fusion.align_tilt_sigma);
-    auto fit = [&] {
-        Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
-        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-        for (const Shared& s : shared) {
-            if (!s.inlier) continue;
-            const Eigen::Vector3d weighted = v[s.index] / s.variance;
-            normal.noalias() += weighted * v[s.index].transpose();
-            rhs += weighted * s.difference;
-        }
-        return Eigen::Vector3d(normal.ldlt().solve(rhs));
-    };
-    // Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and their
-    // disagreement joins their own variance. They are judged against the median difference: a least-squares
-    // plane would tilt towards them (many shared cells outweigh the slope prior) and hide them.
-    std::vector<double>& deviations = deviations_;
-    deviations.clear();
-    for (const Shared& s : shared) deviations.push_back(s.difference);
-    const double offset = median(deviations.begin(), deviations.end());
-    for (std::size_t i = 0; i < shared.size(); ++i) deviations[i] = std::abs(shared[i].difference - offset);
-    const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
-    std::size_t inliers = 0;
-    for (Shared& s : shared) {
-        s.inlier = std::abs(s.difference - offset) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
-        inliers += s.inlier;
-    }
-    if (inliers < kMinAlignCells)
-        for (Shared& s : shared) s.inlier = true;
-    const Eigen::Vector3d plane = fit();
-    for (const Shared& s : shared)
+    if (shared_.size() < kMinAlignCells) return;
+    mark_disagreeing_cells();
+    const Eigen::Vector3d plane = fit_alignment_plane();
+    for (const SharedCell& s : shared_)
         if (!s.inlier) variances[s.index] += std::pow(s.difference - plane.dot(v[s.index]), 2);
-    // Disagreement of the rest beyond their variances (per-beam offsets, seams between frames) is error common
-    // to every frame that no cell's spread sees. Measured on the real OS1-128 and HDL-64E recordings it is the
-    // same at every range (method.md §7), so one variance, the excess, joins every cell of the frame. It is
-    // measured in the lane ahead, where the profiles are read: a verge's vegetation disagrees from frame to frame
-    // by centimetres more than a road does (KITTI) and is no measure of the road's cells.
-    const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
-    const auto in_lane = [&](const Shared& s) {  // |lateral offset| from the line ahead
-        return std::abs(-sin_yaw * v[s.index][1] + cos_yaw * v[s.index][2]) <= cfg_.fusion.align_excess_half_width_m;
-    };
-    const bool lane_only = std::count_if(shared.begin(), shared.end(), [&](const Shared& s) {
-                               return s.inlier && in_lane(s);
-                           }) >= kMinExcessCells;
-    double weighted = 0.0, weights = 0.0;
-    for (const Shared& s : shared) {
-        if (!s.inlier || (lane_only && !in_lane(s))) continue;
-        const double residual = s.difference - plane.dot(v[s.index]), weight = 1.0 / (s.variance * s.variance);
-        weighted += weight * (residual * residual - s.variance);
-        weights += weight;
-    }
-    double excess = std::max(0.0, weighted / weights);
+    double excess = excess_disagreement(plane);
     if (!map_has_excess_) {  // the map's cells come from frames never compared: half the excess is theirs
         excess /= 2.0;
         for (std::int64_t k = 0; k < map_.side() * map_.side(); ++k) {
@@ -425,6 +375,64 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
         medians[c] -= plane.dot(v[c]);
         variances[c] += excess;
     }
+}
+
+// Cells that disagree far beyond the others (the foot of a wall, a moving object) leave the fit, and their
+// disagreement joins their own variance. They are judged against the median difference: a least-squares
+// plane would tilt towards them (many shared cells outweigh the slope prior) and hide them.
+void TemporalFusion::mark_disagreeing_cells() {
+    std::vector<double>& deviations = deviations_;
+    deviations.clear();
+    for (const SharedCell& s : shared_) deviations.push_back(s.difference);
+    const double offset = median(deviations.begin(), deviations.end());
+    for (std::size_t i = 0; i < shared_.size(); ++i) deviations[i] = std::abs(shared_[i].difference - offset);
+    const double scale = kMadToSigma * median(deviations.begin(), deviations.end());
+    std::size_t inliers = 0;
+    for (SharedCell& s : shared_) {
+        s.inlier = std::abs(s.difference - offset) <= kOutlierSigmas * std::max(scale, std::sqrt(s.variance));
+        inliers += s.inlier;
+    }
+    if (inliers < kMinAlignCells)
+        for (SharedCell& s : shared_) s.inlier = true;
+}
+
+// Weighted least squares (weights 1 / variance) of the agreeing cells' differences with a zero-mean prior of
+// σ = align_tilt_sigma on the slopes: a few shared cells along one ring fix the offset but must not tilt the frame.
+Eigen::Vector3d TemporalFusion::fit_alignment_plane() const {
+    const double prior = 1.0 / (cfg_.fusion.align_tilt_sigma * cfg_.fusion.align_tilt_sigma);
+    Eigen::Matrix3d normal = Eigen::Vector3d(0.0, prior, prior).asDiagonal();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (const SharedCell& s : shared_) {
+        if (!s.inlier) continue;
+        const Eigen::Vector3d weighted = align_v_[s.index] / s.variance;
+        normal.noalias() += weighted * align_v_[s.index].transpose();
+        rhs += weighted * s.difference;
+    }
+    return Eigen::Vector3d(normal.ldlt().solve(rhs));
+}
+
+// Disagreement of the agreeing cells beyond their variances (per-beam offsets, seams between frames) is error
+// common to every frame that no cell's spread sees. Measured on the real OS1-128 and HDL-64E recordings it is the
+// same at every range (method.md §7), so one variance, the excess, joins every cell of the frame. It is measured in
+// the lane ahead, where the profiles are read: a verge's vegetation disagrees from frame to frame by centimetres
+// more than a road does (KITTI) and is no measure of the road's cells.
+double TemporalFusion::excess_disagreement(const Eigen::Vector3d& plane) const {
+    const std::vector<Eigen::Vector3d>& v = align_v_;
+    const double cos_yaw = std::cos(pose_.yaw_rad), sin_yaw = std::sin(pose_.yaw_rad);
+    const auto in_lane = [&](const SharedCell& s) {  // |lateral offset| from the line ahead
+        return std::abs(-sin_yaw * v[s.index][1] + cos_yaw * v[s.index][2]) <= cfg_.fusion.align_excess_half_width_m;
+    };
+    const bool lane_only = std::count_if(shared_.begin(), shared_.end(), [&](const SharedCell& s) {
+                               return s.inlier && in_lane(s);
+                           }) >= kMinExcessCells;
+    double weighted = 0.0, weights = 0.0;
+    for (const SharedCell& s : shared_) {
+        if (!s.inlier || (lane_only && !in_lane(s))) continue;
+        const double residual = s.difference - plane.dot(v[s.index]), weight = 1.0 / (s.variance * s.variance);
+        weighted += weight * (residual * residual - s.variance);
+        weights += weight;
+    }
+    return std::max(0.0, weighted / weights);
 }
 
 void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked,

@@ -145,6 +145,9 @@ private:
     /// Removes from the frame's cell medians the plane of their differences to the map and adds the excess
     /// disagreement to the variances (method.md §7); the first time, half of it to the map's cells.
     void align(const std::vector<std::int64_t>& slots, std::vector<double>& variances, std::vector<double>& medians);
+    void mark_disagreeing_cells();                                      // align's steps, on shared_
+    Eigen::Vector3d fit_alignment_plane() const;                        // (offset, x slope, y slope)
+    double excess_disagreement(const Eigen::Vector3d& plane) const;     // m², beyond the cells' variances
     void reserve_cells(std::size_t cells);
     // Puts item `i` (a point of fuse(), a sample of fuse_samples()) on the list of `slot`, noting a slot new this call.
     void link(std::int64_t slot, std::size_t i);
