@@ -116,6 +116,31 @@ void resolved_fraction(const std::int32_t* count, std::size_t bins, double ds, c
     }
 }
 
+// b.limit: each band's limit on the spreads it pools, max_spread_factor × its typical (median) spread — at most
+// the least typical spread of the nearer bands of min_bins bins at least: honest noise does not grow with range,
+// and a wall's foot that fills a far band's bins of several points must not set its own limit.
+template <class Band, class Measured>
+void band_spread_limits(const double* spread, std::size_t bins, std::size_t bands, Band band, Measured measured,
+                        double max_spread_factor, std::size_t min_bins, PoolBuffers& b) {
+    b.start.assign(bands + 1, 0);  // each band's spreads, contiguous (a counting sort), for its median
+    for (std::size_t j = 0; j < bins; ++j)
+        if (measured(j)) ++b.start[band(j) + 1];
+    for (std::size_t k = 0; k < bands; ++k) b.start[k + 1] += b.start[k];
+    b.next.assign(b.start.begin(), b.start.end() - 1);
+    b.spreads.resize(b.start[bands]);
+    for (std::size_t j = 0; j < bins; ++j)
+        if (measured(j)) b.spreads[b.next[band(j)]++] = spread[j];
+    double nearer = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < bands; ++k) {
+        const auto first = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k]);
+        const auto last = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k + 1]);
+        if (first == last) continue;
+        const double typical = median(first, last);
+        if (static_cast<std::size_t>(last - first) >= min_bins) nearer = std::min(nearer, typical);
+        b.limit[k] = max_spread_factor * std::min(typical, nearer);
+    }
+}
+
 }  // namespace
 
 void PoolBuffers::reserve(std::size_t bands, std::size_t bins) {
@@ -131,28 +156,8 @@ bool pooled_variances(const std::int32_t* count, const double* spread, const std
     for (std::size_t j = 0; j < bins; ++j) bands = std::max(bands, band(j) + 1);
     auto measured = [&](std::size_t j) { return count[j] >= 2 && std::isfinite(spread[j]); };
     b.limit.assign(bands, std::numeric_limits<double>::infinity());
-    if (std::isfinite(max_spread_factor)) {  // each band's spreads, contiguous (a counting sort), for its median
-        b.start.assign(bands + 1, 0);
-        for (std::size_t j = 0; j < bins; ++j)
-            if (measured(j)) ++b.start[band(j) + 1];
-        for (std::size_t k = 0; k < bands; ++k) b.start[k + 1] += b.start[k];
-        b.next.assign(b.start.begin(), b.start.end() - 1);
-        b.spreads.resize(b.start[bands]);
-        for (std::size_t j = 0; j < bins; ++j)
-            if (measured(j)) b.spreads[b.next[band(j)]++] = spread[j];
-        // Honest noise does not grow with range: a band's typical spread is at most the least of the nearer bands'
-        // (those of min_bins bins at least), lest a wall's foot that fills a far band's bins of several points
-        // set its own limit.
-        double nearer = std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < bands; ++k) {
-            const auto first = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k]);
-            const auto last = b.spreads.begin() + static_cast<std::ptrdiff_t>(b.start[k + 1]);
-            if (first == last) continue;
-            const double typical = median(first, last);
-            if (static_cast<std::size_t>(last - first) >= min_bins) nearer = std::min(nearer, typical);
-            b.limit[k] = max_spread_factor * std::min(typical, nearer);
-        }
-    }
+    if (std::isfinite(max_spread_factor))
+        band_spread_limits(spread, bins, bands, band, measured, max_spread_factor, min_bins, b);
     b.squares.assign(bands, 0.0);
     b.dof.assign(bands, 0.0);
     b.cells.assign(bands, 0);
