@@ -512,13 +512,7 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     const rp::SourceInfo info = frames.info();
     c.sensor_model = info.format == "files" ? o.source.sensor_model : info.sensor_model;
     c.serial = info.serial;
-    if (!unnumbered.empty()) {
-        c.index = indexing.index;
-        c.tilt_deg[0] = indexing.tilt_deg[0];
-        c.tilt_deg[1] = indexing.tilt_deg[1];
-        c.index_tolerance_deg = indexing.index_tolerance_deg;
-        for (std::size_t b = 0; b < c.beams.size(); ++b) c.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
-    }
+    rp::adopt_beam_indexing(c, indexing);
     rp::write_beam_calibration(c, o.output);
     int determined = 0;
     double largest = 0.0;

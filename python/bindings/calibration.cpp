@@ -47,16 +47,6 @@ std::vector<std::vector<std::int32_t>> frame_beams(const std::vector<rp::PointsV
     return out;
 }
 
-// The result indexes unnumbered points as the frames were indexed.
-void adopt_indexing(rp::BeamCalibration& out, const rp::BeamCalibration& indexing) {
-    if (indexing.beams.empty()) return;
-    out.index = indexing.index;
-    out.tilt_deg[0] = indexing.tilt_deg[0];
-    out.tilt_deg[1] = indexing.tilt_deg[1];
-    out.index_tolerance_deg = indexing.index_tolerance_deg;
-    for (std::size_t b = 0; b < out.beams.size(); ++b) out.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
-}
-
 std::vector<rp::PointsView> views_of(const std::vector<Points>& points, const std::vector<py::object>& beams) {
     if (points.size() != beams.size()) throw std::invalid_argument("calibrate_beams: one beams entry per frame");
     std::vector<rp::PointsView> views;
@@ -77,7 +67,7 @@ rp::BeamCalibration calibrate(const std::vector<Points>& points, const std::vect
     for (std::size_t k = 0; k < views.size(); ++k)
         calibrator.add_frame(views[k], index[k], rp::Pose2{poses[k][0], poses[k][1], poses[k][2]});
     rp::BeamCalibration out = calibrator.solve();
-    adopt_indexing(out, indexing);
+    rp::adopt_beam_indexing(out, indexing);
     return out;
 }
 
@@ -92,7 +82,7 @@ rp::BeamCalibration calibrate_on_surface(const std::vector<Points>& points, cons
     rp::SurfaceCalibrator calibrator(rp::config_from_json(config_json, "config"), beam_count, options);
     for (std::size_t k = 0; k < views.size(); ++k) calibrator.add_frame(views[k], index[k]);
     rp::BeamCalibration out = calibrator.solve();
-    adopt_indexing(out, indexing);
+    rp::adopt_beam_indexing(out, indexing);
     return out;
 }
 

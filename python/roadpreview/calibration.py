@@ -47,6 +47,26 @@ def _integrated_poses(times: list, speed: float, yaw_rate: float, frame_rate_hz:
     return poses
 
 
+def _beam_count(arrays: list, info: Optional[dict]) -> int:
+    """The recording's beam count, else the largest beam number + 1, else DEFAULT_UNNUMBERED_BEAMS."""
+    numbered = [a[1] for a in arrays if a[1] is not None and len(a[1])]
+    return (info or {}).get("beams") or (
+        int(max(b.max() for b in numbered)) + 1 if numbered else DEFAULT_UNNUMBERED_BEAMS)
+
+
+def _frame_poses(arrays: list, poses: Optional[Sequence], speed: Optional[float], yaw_rate: float,
+                 frame_rate_hz: float) -> list:
+    """One (x, y, yaw) per frame: the poses given, else the speed and yaw rate integrated over the frames' times."""
+    if poses is None:
+        if speed is None:
+            raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses "
+                             "(or method='surface', which needs none)")
+        poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
+    if len(poses) < len(arrays):
+        raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
+    return [tuple(map(float, p[:3])) for p in poses[:len(arrays)]]
+
+
 def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate: float = 0.0,
                     poses: Optional[Sequence] = None, config: Optional[Config] = None,
                     beam_count: Optional[int] = None, frame_rate_hz: float = 10.0, cell_m: float = 0.2,
@@ -72,25 +92,15 @@ def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate
     arrays = [_frame_arrays(f) for f in frames]
     if not arrays:
         raise core().CalibrationError("calibrate_beams: no frames given")
-    if beam_count is None:
-        numbered = [a[1] for a in arrays if a[1] is not None and len(a[1])]
-        beam_count = (info or {}).get("beams") or (
-            int(max(b.max() for b in numbered)) + 1 if numbered else DEFAULT_UNNUMBERED_BEAMS)
-    config_json = (config or Config()).to_json()
+    beam_count = beam_count if beam_count is not None else _beam_count(arrays, info)
+    points, beams, config_json = [a[0] for a in arrays], [a[1] for a in arrays], (config or Config()).to_json()
     if method == "surface":
-        out = core().calibrate_beams_on_surface([a[0] for a in arrays], [a[1] for a in arrays], int(beam_count),
-                                                config_json, float(max_sigma_deg or 0.05), int(min_frames))
+        out = core().calibrate_beams_on_surface(points, beams, int(beam_count), config_json,
+                                                float(max_sigma_deg or 0.05), int(min_frames))
     else:
-        if poses is None:
-            if speed is None:
-                raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses "
-                                 "(or method='surface', which needs none)")
-            poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
-        if len(poses) < len(arrays):
-            raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
-        out = core().calibrate_beams([a[0] for a in arrays], [a[1] for a in arrays],
-                                     [tuple(map(float, p[:3])) for p in poses[:len(arrays)]], int(beam_count),
-                                     config_json, float(cell_m), float(max_sigma_deg or 0.01), int(min_observations))
+        out = core().calibrate_beams(points, beams, _frame_poses(arrays, poses, speed, yaw_rate, frame_rate_hz),
+                                     int(beam_count), config_json, float(cell_m), float(max_sigma_deg or 0.01),
+                                     int(min_observations))
     if info:
         out.sensor_model, out.serial = info.get("sensor_model", ""), info.get("serial", "")
     return out

@@ -203,6 +203,19 @@ TEST(BeamsFile, FindsBeamsByElevationUnderATilt) {
     EXPECT_NEAR(c.tilt_deg[0], 0.2, 0.021);
     EXPECT_NEAR(c.tilt_deg[1], -0.3, 0.021);
     EXPECT_EQ(rp::beams_by_elevation(view, c), truth);
+
+    // Offsets estimated from such frames are saved with the way they were indexed, so applying them finds the
+    // same beams; frames the decoder numbered (no indexing) leave the estimate as it is.
+    rp::BeamCalibration estimated;
+    estimated.beam_count = kBeams;
+    estimated.beams.resize(kBeams);
+    rp::adopt_beam_indexing(estimated, rp::BeamCalibration{});
+    EXPECT_EQ(estimated.index, rp::BeamIndexMethod::Decoder);
+    EXPECT_TRUE(std::isnan(estimated.beams[0].elevation_deg));
+    rp::adopt_beam_indexing(estimated, c);
+    EXPECT_EQ(estimated.index, rp::BeamIndexMethod::Elevation);
+    EXPECT_EQ(estimated.index_tolerance_deg, c.index_tolerance_deg);
+    EXPECT_EQ(rp::beams_by_elevation(view, estimated), truth);
 }
 
 namespace {

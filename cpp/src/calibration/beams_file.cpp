@@ -324,6 +324,16 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
     c.index_tolerance_deg = gaps.empty() ? kMinBeamGapDeg : 0.5 * gaps[gaps.size() / 2];
 }
 
+void adopt_beam_indexing(BeamCalibration& out, const BeamCalibration& indexing) {
+    if (indexing.beams.empty()) return;
+    out.index = indexing.index;
+    out.tilt_deg[0] = indexing.tilt_deg[0];
+    out.tilt_deg[1] = indexing.tilt_deg[1];
+    out.index_tolerance_deg = indexing.index_tolerance_deg;
+    for (std::size_t b = 0; b < out.beams.size() && b < indexing.beams.size(); ++b)
+        out.beams[b].elevation_deg = indexing.beams[b].elevation_deg;
+}
+
 std::vector<std::int32_t> beams_of_points(PointsView points, const BeamCalibration& c, const std::string& name) {
     if (c.index != BeamIndexMethod::ScanOrder) return beams_by_elevation(points, c);
     std::vector<std::int32_t> ring;

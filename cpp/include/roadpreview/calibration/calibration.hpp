@@ -86,6 +86,9 @@ void find_beam_centres(const std::vector<PointsView>& frames, int beam_count, Be
 /// Beam of each point of an unnumbered frame by c's index (ScanOrder or Elevation); throws naming `name` when a
 /// frame is not in the scan order c needs.
 std::vector<std::int32_t> beams_of_points(PointsView points, const BeamCalibration& c, const std::string& name);
+/// Gives `out`, estimated from unnumbered frames, the way find_beam_centres indexed them (`indexing`: index, tilt,
+/// tolerance, each beam's elevation), so that applying it finds the same beams; nothing when `indexing` is empty.
+void adopt_beam_indexing(BeamCalibration& out, const BeamCalibration& indexing);
 /// Beam of each point by its elevation (c.index must be Elevation); −1 where none is near.
 std::vector<std::int32_t> beams_by_elevation(PointsView points, const BeamCalibration& c);
 /// Corrects the points of a file reader in place (x, y, z of each row) by their beams' offsets.
