@@ -20,8 +20,9 @@ inline std::string scratch_file(const std::uint8_t* data, std::size_t size, cons
     static const std::string base = "scratch_" + std::to_string(getpid());
     const std::string path = base + suffix;
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) std::abort();
-    if (size && std::fwrite(data, 1, size, f) != size) std::abort();
+    // A parser that leaks descriptors ends here once they run out (a finding: RangeReadingReader did).
+    if (!f) std::perror(("scratch_file: " + path).c_str()), std::abort();
+    if (size && std::fwrite(data, 1, size, f) != size) std::perror(("scratch_file: " + path).c_str()), std::abort();
     std::fclose(f);
     return path;
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -150,6 +151,19 @@ TEST(RangeSensor, ReadingErrorsNameFileAndLine) {
     expect_error("0.2,l1,10\n0.1,l1,10\n", "time goes backwards");
     expect_error("0.0,l1,10\n0.1,l1,nan\n", "not a finite number");
     expect_error("0.0,l1,10\n0.1,l1,5000\n", "outside the layout's range");
+}
+
+// A reader refusing a file's header closes the file (it leaked one descriptor per refused file, found by fuzzing:
+// a long-lived process reading many bad files ran out of descriptors).
+TEST(RangeSensor, AReadingsFileWithABadHeaderIsClosed) {
+    const auto open_descriptors = [] {
+        return std::distance(fs::directory_iterator("/proc/self/fd"), fs::directory_iterator{});
+    };
+    const auto layout = one_laser();
+    const std::string path = write_file("no_header.csv", "time,id,value\n0.0,l1,10\n");
+    const auto before = open_descriptors();
+    for (int k = 0; k < 50; ++k) EXPECT_THROW(rp::RangeReadingReader(path, layout), std::runtime_error);
+    EXPECT_EQ(open_descriptors(), before);
 }
 
 TEST(RangeSensor, ReadingsOutsideTheMotionTableNameTheReadingsFile) {

@@ -53,7 +53,7 @@ bool parse_double(std::string_view s, double& v) {
 
 RangeReadingReader::RangeReadingReader(const std::string& path, const std::vector<RangeSensor>& layout)
     : path_(path), layout_(layout), buffer_(kBufferBytes) {
-    file_ = std::fopen(path.c_str(), "rb");
+    file_.reset(std::fopen(path.c_str(), "rb"));
     if (!file_) throw std::runtime_error(path + ": cannot open the readings file");
     const char *b = nullptr, *e = nullptr;
     while (next_line(b, e)) {
@@ -76,10 +76,6 @@ RangeReadingReader::RangeReadingReader(const std::string& path, const std::vecto
         return;
     }
     fail("empty file, expected a header t,sensor,count or t,sensor,distance");
-}
-
-RangeReadingReader::~RangeReadingReader() {
-    if (file_) std::fclose(file_);
 }
 
 void RangeReadingReader::fail(const std::string& what) const {
@@ -107,8 +103,8 @@ bool RangeReadingReader::next_line(const char*& begin, const char*& end) {
         std::memmove(buffer_.data(), start, end_ - begin_);  // keep the partial line, refill behind it
         end_ -= begin_;
         begin_ = 0;
-        const std::size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
-        if (std::ferror(file_)) fail("read error");
+        const std::size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_.get());
+        if (std::ferror(file_.get())) fail("read error");
         end_ += got;
         eof_ = got == 0;
     }

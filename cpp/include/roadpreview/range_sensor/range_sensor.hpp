@@ -156,7 +156,6 @@ public:
     };
     /// Throws std::runtime_error naming the file (and line) for an unreadable file or a bad header.
     RangeReadingReader(const std::string& path, const std::vector<RangeSensor>& layout);
-    ~RangeReadingReader();
     RangeReadingReader(const RangeReadingReader&) = delete;
     RangeReadingReader& operator=(const RangeReadingReader&) = delete;
     /// The next reading; throws std::runtime_error "file:line: ..." for a malformed line, an unknown sensor,
@@ -169,9 +168,13 @@ private:
     bool next_line(const char*& begin, const char*& end);
     [[noreturn]] void fail(const std::string& what) const;
 
+    struct CloseFile {
+        void operator()(std::FILE* f) const { std::fclose(f); }
+    };
+
     std::string path_;
     const std::vector<RangeSensor>& layout_;
-    std::FILE* file_ = nullptr;
+    std::unique_ptr<std::FILE, CloseFile> file_;  // closed however the reader ends, a constructor's throw too
     std::vector<char> buffer_;
     std::size_t begin_ = 0, end_ = 0;
     bool eof_ = false;
