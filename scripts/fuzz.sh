@@ -37,6 +37,8 @@ for target in "${TARGETS[@]}"; do
     log="build/fuzz/work/$target/log.txt"
     runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{print $2}' | tail -1)
     found=$(find "build/fuzz/findings/$target" -type f | wc -l)
+    # A crash whose input could not be saved (the process out of descriptors, say) still counts.
+    if [ "$found" -eq 0 ] && grep -q '^SUMMARY: ' "$log"; then found=1; fi
     printf '| %s | %s | %s | %s |\n' "$target" "${runs:-?}" "$(ls "build/fuzz/corpus/$target" | wc -l)" "$found"
     total=$((total + ${runs:-0})) findings=$((findings + found))
 done

@@ -89,6 +89,16 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     expect_error(written("heights.pcd", header.substr(0, fields) + "HEIGHT 1\n" + header.substr(fields) +
                                             std::string(24, '\0')),
                  "a second HEIGHT line");
+    // A header line of blanks only: PCL dereferenced a null pointer (a crash of the CLI; found by fuzzing). A blank
+    // line of a CRLF file is one. An empty line PCL skips, and so do we.
+    for (const std::string blank : {" ", "\t", "\r"})
+        expect_error(written("blank.pcd", header.substr(0, fields) + blank + "\n" + header.substr(fields) +
+                                              std::string(24, '\0')),
+                     "a line of only spaces, tabs or a carriage return before DATA");
+    EXPECT_EQ(rp::read_frame(written("empty_line.pcd", header.substr(0, fields) + "\n" + header.substr(fields) +
+                                                           std::string(24, '\0')))
+                  .points.rows(),
+              2);
 }
 
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {

@@ -81,6 +81,11 @@ PcdHeader scan_header(const std::string& path) {
     for (std::string line; std::getline(in, line);) {
         if (static_cast<std::size_t>(in.tellg()) > kMaxHeaderBytes) break;
         const auto w = header_words(line);
+        // PCL skips an empty line but crashes on one of blanks only, as a CRLF file's blank line "\r" (found by
+        // fuzzing: a null dereference in pcl::PCDReader::read).
+        if (w.empty() && !line.empty())
+            fail_file(path, "PCD header: a line of only spaces, tabs or a carriage return before DATA (PCL cannot "
+                            "read such a header; make the line empty or remove it)");
         if (w.empty() || w[0][0] == '#') continue;
         if (holds_control_character(line))  // PCL reads such a header out of bounds (found by fuzzing)
             fail_file(path, "PCD header: line '" + w[0] + " …' holds a control character (the header is text)");
