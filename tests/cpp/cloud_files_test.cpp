@@ -101,6 +101,23 @@ TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
               2);
 }
 
+// Fields PCL would read as what they are not (found by fuzzing): without a TYPE line every field is a 4-byte float
+// to PCL whatever its SIZE (a SIZE of 1 or 2 read past the data), and x, y, z of another type (8-byte doubles)
+// were left unread, every point 0.
+TEST(CloudFiles, PcdFieldsMustBeWhatPclReadsThemAs) {
+    const std::string untyped = "VERSION 0.7\nFIELDS x y z\nSIZE 4 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n";
+    expect_error(written("untyped.pcd", untyped + std::string(12, '\1')),
+                 "without a TYPE line PCL reads every field as a 4-byte float, but field 2 has SIZE 1");
+    const std::string floats = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n";
+    const float xyz[3] = {1.5f, -2.0f, 3.25f};
+    const rp::Frame f = rp::read_frame(written("untyped_floats.pcd", floats + std::string(reinterpret_cast<const char*>(xyz), 12)));
+    ASSERT_EQ(f.points.rows(), 1);
+    EXPECT_EQ(f.points(0, 2), 3.25f);
+    std::string doubles = pcd_header("1", "1", "binary");
+    doubles.replace(doubles.find("SIZE 4 4 4"), 10, "SIZE 8 8 8");
+    expect_error(written("doubles.pcd", doubles + std::string(24, '\1')), "the 'x' field is not a 4-byte float");
+}
+
 TEST(CloudFiles, AsciiPcdLinesMustBeNumbers) {
     const std::string good = written("good.pcd", pcd_header("2", "2", "ascii") + "1 2 3\n4 5.5 nan\n");
     const rp::Frame f = rp::read_frame(good);
@@ -164,6 +181,10 @@ TEST(CloudFiles, DuplicatedOrGarbledPlyHeaderLinesAreErrorsNotPclCrashes) {
     expect_error(written("twice_b.ply", ply(ascii, kVertices2 + empty_vertex) + data),
                  "line 7 'element vertex 0': element 'vertex' is declared twice");
     EXPECT_EQ(rp::read_frame(written("fine.ply", ply(ascii, kVertices2) + data)).points.rows(), 2);
+    // A line beginning with a carriage return: PCL failed an assertion on "\robj_info" (found by fuzzing).
+    expect_error(written("cr.ply", ply(ascii, kVertices2 + "\robj_info\n") + data),
+                 "begins with a blank or holds a carriage return before its end");
+    expect_error(written("indented.ply", ply(ascii, " " + kVertices2) + data), "begins with a blank");
     // The format line: missing, garbled, twice.
     expect_error(written("no_format.ply", ply("", kVertices2) + data), "PLY header: no format line");
     expect_error(written("short_format.ply", ply("format ascii\n", kVertices2) + data),

@@ -110,6 +110,10 @@ PcdHeader scan_header(const std::string& path) {
         fail_file(path, "PCD header: SIZE and COUNT must give one number per field (" + std::to_string(fields) +
                             " FIELDS)");
     if (has_types) check_types(path, types, sizes);
+    for (std::size_t i = 0; i < fields && !has_types; ++i)  // PCL reads 4 bytes of each: past the data (fuzzing)
+        if (sizes[i] != 4)
+            fail_file(path, "PCD header: without a TYPE line PCL reads every field as a 4-byte float, but field " +
+                                std::to_string(i + 1) + " has SIZE " + std::to_string(sizes[i]));
     for (std::size_t i = 0; i < fields; ++i) {
         const std::uint64_t count = counts.empty() ? 1 : counts[i];
         if (sizes[i] > 8 || count > kMaxValuesPerField)
@@ -218,8 +222,14 @@ Frame read_cloud(const std::string& path, const char* kind, const std::function<
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are reported by our exception
     pcl::PCLPointCloud2 blob;
     if (read(blob) < 0) fail_file(path, std::string("not a readable ") + kind + " file (corrupt header or data)");
-    for (const char* axis : {"x", "y", "z"})
-        if (pcl::getFieldIndex(blob, axis) < 0) fail_file(path, std::string("the cloud has no '") + axis + "' field");
+    for (const char* axis : {"x", "y", "z"}) {
+        const int field = pcl::getFieldIndex(blob, axis);
+        if (field < 0) fail_file(path, std::string("the cloud has no '") + axis + "' field");
+        // PCL's conversion leaves a field of another type unread: the points would all be 0 (8-byte doubles too).
+        if (blob.fields[static_cast<std::size_t>(field)].datatype != pcl::PCLPointField::FLOAT32)
+            fail_file(path, std::string("the '") + axis + "' field is not a 4-byte float (PCD: TYPE F, SIZE 4; " +
+                                "PLY: float or float32), which is what the reader takes");
+    }
     const std::size_t expected = static_cast<std::size_t>(blob.width) * blob.height * blob.point_step;
     if (blob.data.size() != expected)  // a PLY camera element or range grid can set other dimensions
         fail_file(path, "the cloud's data (" + std::to_string(blob.data.size()) + " bytes) is not the " +

@@ -124,6 +124,9 @@ PlyHeader scan_header(const std::string& path) {
             fail_file(path, "PLY header line " + std::to_string(number) + " '" + (w.empty() ? "" : w[0]) +
                                 " …' holds a control character (the header is text)");
         const Line line{path, number, text};
+        // PCL reads a line's first word from its first character (a leading "\r" failed an assertion; fuzzing).
+        if (!text.empty() && (text[0] == ' ' || text[0] == '\t' || text.find('\r') != std::string::npos))
+            line.fail("begins with a blank or holds a carriage return before its end, which PCL cannot read");
         if (w.empty() || w[0] == "comment") continue;
         if (w[0] == "format") read_format(line, w, h);
         else if (w[0] == "element") read_element(line, w, h);
