@@ -110,7 +110,8 @@ TEST(CloudFiles, PcdFieldsMustBeWhatPclReadsThemAs) {
                  "without a TYPE line PCL reads every field as a 4-byte float, but field 2 has SIZE 1");
     const std::string floats = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n";
     const float xyz[3] = {1.5f, -2.0f, 3.25f};
-    const rp::Frame f = rp::read_frame(written("untyped_floats.pcd", floats + std::string(reinterpret_cast<const char*>(xyz), 12)));
+    const std::string xyz_bytes(reinterpret_cast<const char*>(xyz), sizeof xyz);
+    const rp::Frame f = rp::read_frame(written("untyped_floats.pcd", floats + xyz_bytes));
     ASSERT_EQ(f.points.rows(), 1);
     EXPECT_EQ(f.points(0, 2), 3.25f);
     std::string doubles = pcd_header("1", "1", "binary");
