@@ -48,6 +48,7 @@ struct RunOptions {
     rp::SourceOptions source;
     std::string fusion;
     double alpha = 0.0;
+    double beam_sigma_deg = 0.0;
     std::string poses_file;
     int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
     double cell = 0.2;    // calibrate: road cell, m
@@ -93,6 +94,7 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
         cfg.fusion.method = o.fusion == "ema" ? rp::FusionMethod::Ema
                             : o.fusion == "kalman" ? rp::FusionMethod::Kalman : rp::FusionMethod::None;
     if (given(run, "--alpha")) cfg.fusion.alpha = o.alpha;
+    if (given(run, "--beam-sigma-deg")) cfg.profile.beam_sigma_deg = o.beam_sigma_deg;
     if (given(run, "--threads")) cfg.threads = o.threads;
     if (given(run, "--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
     rp::validate(cfg);
@@ -666,6 +668,10 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"none", "ema", "kalman"}));
     run_cmd->add_option("--alpha", o.alpha, "EMA fusion: weight of the newest frame, (0, 1] (default 0.5)")
         ->check(CLI::Range(0.0, 1.0));
+    run_cmd->add_option("--beam-sigma-deg", o.beam_sigma_deg,
+                        "σ of each beam's elevation angle, deg: counted in the profiles' noise for points whose beam "
+                        "the decoder or a beams file gives (default 0: not counted)")
+        ->check(CLI::Range(0.0, 10.0));
     run_cmd->add_option("--poses", o.poses_file, "KITTI poses file (one 3x4 row-major pose per frame of the input): "
                                                   "moves the fusion map instead of integrating the motion");
     run_cmd->add_option("--segments", o.segment_lengths_m,

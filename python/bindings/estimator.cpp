@@ -9,7 +9,7 @@ void bind_estimator(py::module_& m) {
                            std::optional<double> timestamp, const std::string& yaw_rate_source,
                            std::optional<std::array<double, 3>> pose,
                            std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> range_variances,
-                           std::optional<py::array> error_groups) {
+                           std::optional<py::array> error_groups, std::optional<py::array> beams) {
             py::object holder;
             const rp::PointsView view = points_from(points, holder);
             rp::FrameMotion motion{timestamp, std::nullopt};
@@ -25,14 +25,22 @@ void bind_estimator(py::module_& m) {
                 one_per_point(*range_variances, "range_variances");
                 errors.range_variances_m2 = range_variances->data();
             }
-            py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> groups;
+            using Ids = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>;
+            const auto ids = [&](const py::array& a, const char* name) {
+                if (a.dtype().kind() != 'i' && a.dtype().kind() != 'u')
+                    throw py::type_error(std::string(name) + " must be an integer array, got dtype " +
+                                         py::str(a.dtype()).cast<std::string>());
+                one_per_point(a, name);
+                return a.cast<Ids>();
+            };
+            Ids groups, beam_ids;
             if (error_groups) {
-                if (error_groups->dtype().kind() != 'i' && error_groups->dtype().kind() != 'u')
-                    throw py::type_error("error_groups must be an integer array, got dtype " +
-                                         py::str(error_groups->dtype()).cast<std::string>());
-                one_per_point(*error_groups, "error_groups");
-                groups = error_groups->cast<py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>>();
+                groups = ids(*error_groups, "error_groups");
                 errors.error_groups = groups.data();
+            }
+            if (beams) {
+                beam_ids = ids(*beams, "beams");
+                errors.beams = beam_ids.data();
             }
             rp::Result r;
             {
@@ -43,6 +51,6 @@ void bind_estimator(py::module_& m) {
             return r;
         }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
            py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none(),
-           py::arg("error_groups") = py::none())
+           py::arg("error_groups") = py::none(), py::arg("beams") = py::none())
         .def("reset", &rp::Estimator::reset, "Forgets the fused map, the pose and the clock");
 }

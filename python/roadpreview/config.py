@@ -72,6 +72,9 @@ class ProfileConfig:
     level: bool = True  #: remove the fitted ground plane's tilt before reading heights
     level_local: bool = True  #: with level: heights above the local ground's plane in bands of level_band_m (§3)
     level_band_m: float = 10.0  #: radial width of those bands; sets which long waves the levelling removes
+    #: σ (degrees) of each LiDAR beam's elevation angle, an error all of a beam's points share (method.md §3): counted
+    #: in the bins' and the map's noise for points whose beam is known (``beams=``, a decoder's frames); 0: not counted
+    beam_sigma_deg: float = 0.0
 
 
 @dataclass

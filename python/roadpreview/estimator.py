@@ -24,7 +24,7 @@ class Estimator:
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
                 timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None, range_variances=None,
-                error_groups=None):
+                error_groups=None, beams=None):
         """One frame.
 
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
@@ -39,22 +39,30 @@ class Estimator:
         ``range_variances``); it sets a floor under the noise of the profiles' bins and the map's cells.
         error_groups: (N,) integers, points with one id share their range error (a stereo frame's
         ``error_groups``); a bin or a map cell counts each group once when it rates its median's noise.
+        beams: (N,) integers, each point's LiDAR beam (a decoder's frame's ``beams``): with
+        ``cfg.profile.beam_sigma_deg`` > 0, a beam's elevation error, shared by its points, is counted in that noise
+        (method.md §3); without error_groups the beams are the groups.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
         if pose is not None:
             pose = tuple(float(v) for v in pose)
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
-        if error_groups is not None:
-            error_groups = np.asarray(error_groups)
-            int32 = np.iinfo(np.int32)
-            if error_groups.dtype.kind in "iu" and error_groups.size and (
-                    error_groups.min() < int32.min or error_groups.max() > int32.max):
-                raise ValueError(f"error_groups must fit in int32, got values {error_groups.min()}…"
-                                 f"{error_groups.max()}")
+        error_groups, beams = _int32_ids(error_groups, "error_groups"), _int32_ids(beams, "beams")
         return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose,
-                                  range_variances, error_groups)
+                                  range_variances, error_groups, beams)
 
     def reset(self):
         """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""
         self._impl.reset()
+
+
+def _int32_ids(ids, name: str):
+    """``ids`` (None passes) as an array; integers beyond int32 are a ValueError (the C++ core's ids are int32)."""
+    if ids is None:
+        return None
+    ids = np.asarray(ids)
+    int32 = np.iinfo(np.int32)
+    if ids.dtype.kind in "iu" and ids.size and (ids.min() < int32.min or ids.max() > int32.max):
+        raise ValueError(f"{name} must fit in int32, got values {ids.min()}…{ids.max()}")
+    return ids

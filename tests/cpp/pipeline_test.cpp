@@ -317,3 +317,76 @@ TEST(Pipeline, LocallyLevelledProfilesAreThoseOfTheStageFunctions) {
         }
     }
 }
+
+namespace {
+
+// A flat road seen by a sensor 1.7 m up whose beams are off: 31 rings from 5.05 to 20.05 m ahead, 0.5 m apart,
+// each one beam, points 2 cm apart across the road with heights off by up to 1 mm, and each ring x·δθ_b higher
+// for its beam's elevation error δθ_b, drawn uniformly from ±0.1°.
+rp::Frame ringed_road() {
+    rp::Frame f;
+    const int rings = 31, across = 301;
+    f.points.resize(rings * across, 4);
+    for (int b = 0; b < rings; ++b) {
+        const double u = std::sin(12.9898 * b + 1.0) * 43758.5453;
+        const double offset_rad = (2.0 * (std::abs(u) - std::floor(std::abs(u))) - 1.0) * 0.1 * M_PI / 180.0;
+        const float x = 5.05f + 0.5f * static_cast<float>(b);
+        for (int j = 0; j < across; ++j) {
+            const int i = b * across + j;
+            const float wiggle = 0.001f * std::sin(12.9898f * static_cast<float>(i));
+            f.points.row(i) << x, -3.0f + 0.02f * static_cast<float>(j),
+                -1.7f + wiggle + x * static_cast<float>(offset_rad), 0.0f;
+            f.beams.push_back(b);
+        }
+    }
+    return f;
+}
+
+rp::Config ringed_road_config(double beam_sigma_deg) {
+    rp::Config cfg;
+    cfg.sensor_height = 1.7;
+    cfg.ground.method = rp::GroundMethod::Pca;
+    cfg.obstacles.enabled = false;
+    cfg.profile.beam_sigma_deg = beam_sigma_deg;
+    return cfg;
+}
+
+}  // namespace
+
+TEST(Pipeline, ABeamsElevationErrorCountsOncePerBinWhenItsSigmaIsGiven) {
+    // A bin's points all come from one ring. Not counted, the beams' offsets read as relief: the flat road is
+    // classified rough. With beam_sigma_deg a bin's median is as uncertain as its beam's angle at the bin's
+    // distance d (d·σ, whatever the spread of its points) and counts as one measurement (× √count), and the
+    // roughness declines; the heights do not change, and without beams nothing does.
+    rp::Frame f = ringed_road();
+    const rp::Result none = rp::Estimator(ringed_road_config(0.0)).process(f, 5.0, 0.0);
+    const double sigma_deg = 0.05, sigma = sigma_deg * M_PI / 180.0;
+    const rp::Result counted = rp::Estimator(ringed_road_config(sigma_deg)).process(f, 5.0, 0.0);
+    std::vector<std::int32_t> beams;
+    beams.swap(f.beams);
+    const rp::Result unknown = rp::Estimator(ringed_road_config(sigma_deg)).process(f, 5.0, 0.0);
+    std::size_t compared = 0;
+    for (std::size_t k = 0; k < none.left.z.size(); ++k) {
+        const int count = none.left.count[k];
+        if (count < 2) continue;
+        EXPECT_EQ(unknown.left.spread[k], none.left.spread[k]) << "bin " << k;
+        EXPECT_EQ(counted.left.z[k], none.left.z[k]) << "bin " << k;
+        EXPECT_LT(none.left.spread[k], 1e-3);
+        const double x = 0.1 * static_cast<double>(k);  // straight: s = x; the corridor's points 0.65–0.95 m aside
+        EXPECT_GE(counted.left.spread[k], x * sigma * std::sqrt(count)) << "bin " << k;
+        EXPECT_LE(counted.left.spread[k], std::hypot(x + 0.1, 0.95) * sigma * std::sqrt(count)) << "bin " << k;
+        ++compared;
+    }
+    EXPECT_EQ(compared, 31u);
+    ASSERT_TRUE(none.left.roughness.iso_class) << rp::to_string(none.left.roughness.reason);
+    EXPECT_GE(*none.left.roughness.iso_class, 'C');
+    EXPECT_EQ(counted.left.roughness.reason, rp::RoughnessReason::NoiseDominates);
+    EXPECT_EQ(unknown.left.roughness.iso_class, none.left.roughness.iso_class);
+    f.beams.assign(beams.begin(), beams.end() - 1);
+    try {
+        rp::Estimator(ringed_road_config(sigma_deg)).process(f, 5.0, 0.0);
+        ADD_FAILURE() << "beams for all but one point were accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("beams for"), std::string::npos) << e.what();
+    }
+}

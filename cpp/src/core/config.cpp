@@ -23,7 +23,7 @@ using nlohmann::json;
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level, level_local,
-                                                level_band_m)
+                                                level_band_m, beam_sigma_deg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
                                                 min_cycles, min_band_points, noise_aware, min_resolved_fraction)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
@@ -264,6 +264,8 @@ void validate(const Config& c) {
     require(p.preview_length_m / p.ds_m <= 1e6, "profile.preview_length_m / profile.ds_m must be <= 1e6 bins");
     require(std::isfinite(p.max_gap_m) && p.max_gap_m >= 0.0, "profile.max_gap_m must be >= 0");
     require(std::isfinite(p.level_band_m) && p.level_band_m >= 0.5, "profile.level_band_m must be >= 0.5");
+    require(std::isfinite(p.beam_sigma_deg) && p.beam_sigma_deg >= 0.0 && p.beam_sigma_deg <= 10.0,
+            "profile.beam_sigma_deg must be in [0, 10]");
 
     const RoughnessConfig& r = c.roughness;
     require(positive(r.band_min_cpm) && std::isfinite(r.band_max_cpm) && r.band_min_cpm < r.band_max_cpm,

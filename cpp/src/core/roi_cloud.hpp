@@ -45,9 +45,11 @@ struct RoiCloud {
 /// buffers. The rows are transformed on up to `threads` threads (the same answer for any number).
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out, int threads = 1);
 
-/// Each ROI point's height variance from its input row's range variance (none: cleared): an error along the line
-/// of sight from the sensor (at T's origin) moves the point by u_z per metre, u the ray's direction; and its input
-/// row's error group (none: cleared).
-void roi_point_errors(const PointErrors& errors, const RigidTransform& T, RoiCloud& roi);
+/// Each ROI point's height variance (none: cleared): from its input row's range variance, an error along the line of
+/// sight from the sensor (at T's origin) moving the point by u_z per metre, u the ray's direction; plus, with its
+/// beam known and beam_sigma_rad > 0, its beam's elevation error, which moves it by its horizontal distance d from
+/// the sensor per radian (d²·σ²). And its error group (none: cleared): its input row's, else its beam while that
+/// error is counted.
+void roi_point_errors(const PointErrors& errors, const RigidTransform& T, double beam_sigma_rad, RoiCloud& roi);
 
 }  // namespace roadpreview

@@ -167,7 +167,7 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
 
 void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
     crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, threads);  // or reversing
-    roi_point_errors(errors, sensor_to_base, roi);
+    roi_point_errors(errors, sensor_to_base, cfg.profile.beam_sigma_deg * M_PI / 180.0, roi);
     fit_ground(roi, cfg.ground, ground_scratch, ground, threads);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;
@@ -322,6 +322,9 @@ Status check_frame(const Frame& frame) noexcept {
     if (!frame.error_groups.empty() && frame.error_groups.size() != rows)
         return Status::error(StatusCode::InvalidArgument, "%s: %zu error groups for %zu points",
                              frame.source.c_str(), frame.error_groups.size(), rows);
+    if (!frame.beams.empty() && frame.beams.size() != rows)
+        return Status::error(StatusCode::InvalidArgument, "%s: %zu beams for %zu points", frame.source.c_str(),
+                             frame.beams.size(), rows);
     return {};
 }
 
@@ -331,7 +334,8 @@ void throw_unless_ok(const Status& s) {
 
 PointErrors errors_of(const Frame& frame) {
     return {frame.range_variances.empty() ? nullptr : frame.range_variances.data(),
-            frame.error_groups.empty() ? nullptr : frame.error_groups.data()};
+            frame.error_groups.empty() ? nullptr : frame.error_groups.data(),
+            frame.beams.empty() ? nullptr : frame.beams.data()};
 }
 
 PointsView points_of(const Frame& frame) { return points_view(frame.points.data(), frame.points.rows(), 4); }

@@ -61,3 +61,10 @@ def to_base_frame(points, cfg: Config | None = None) -> tuple[np.ndarray, np.nda
     xyz = points[:, :3].astype(np.float64)
     finite = np.isfinite(xyz).all(axis=1)
     return xyz[finite] @ rotation.T + translation, finite
+
+
+def sensor_origin(cfg: Config) -> np.ndarray:
+    """The sensor's position in the base frame (m): the extrinsics' translation, or (0, 0, sensor_height)."""
+    if cfg.extrinsics is not None:
+        return np.array([cfg.extrinsics.x_m, cfg.extrinsics.y_m, cfg.extrinsics.z_m])
+    return np.array([0.0, 0.0, cfg.sensor_height or 0.0])

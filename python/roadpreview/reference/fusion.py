@@ -14,13 +14,14 @@ from typing import Optional
 import numpy as np
 
 from ..config import Config
-from .frames import check_per_point, check_points, to_base_frame
+from .frames import check_points, to_base_frame
 from .ground import NO_GROUND, ground_model, roi_facing
 from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
+from .point_errors import point_errors
 from .profile import Profile, bin_count, fill_gaps, level_points
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
-from .stereo import groups_per_bin, height_variances
+from .stereo import groups_per_bin
 from .support import pooled_variances
 
 _MEDIAN_VARIANCE_FACTOR = math.pi / 2  # Var(median of n Gaussians) ≈ (π/2)σ²/n
@@ -261,9 +262,9 @@ class FusedResult:
 
 
 def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, pose=None,
-                  range_variances=None, error_groups=None) -> FusedResult:
+                  range_variances=None, error_groups=None, beams=None) -> FusedResult:
     """One frame through the fusing pipeline without obstacles (cfg.obstacles is not consulted); with the points'
-    ``range_variances`` (m², stereo) and ``error_groups`` as in method.md §12."""
+    ``range_variances`` (m², stereo) and ``error_groups`` as in method.md §12, ``beams`` as in §3."""
     cfg = state.cfg
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
@@ -272,11 +273,7 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
     base_xyz, finite = to_base_frame(points, cfg)
-    range_variances = check_per_point(range_variances, points, "range_variances")
-    error_groups = check_per_point(error_groups, points, "error_groups")
-    variances = None if range_variances is None else \
-        height_variances(base_xyz, range_variances[finite], cfg)
-    groups = None if error_groups is None else error_groups[finite]
+    variances, groups = point_errors(points, base_xyz, finite, cfg, range_variances, error_groups, beams)
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)

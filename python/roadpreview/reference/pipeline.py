@@ -8,12 +8,12 @@ from typing import Optional
 import numpy as np
 
 from ..config import Config
-from .frames import check_per_point, check_points, to_base_frame
+from .frames import check_points, to_base_frame
 from .ground import ground_model, roi_facing, roi_mask
 from .obstacles import Obstacles, PathObstacles, blocked_bins, find_obstacles, wheel_obstacles
 from .path import check_motion, plan_path
+from .point_errors import point_errors
 from .profile import Profile, empty_profile, wheel_profile
-from .stereo import height_variances
 from .iri import Iri, vehicle_iri
 from .roughness import Roughness, vehicle_from_wheels, vehicle_roughness
 
@@ -65,27 +65,26 @@ def _clusters(base_xyz, ground, plane, cfg: Config):
     return find_obstacles(base_xyz, ground, plane, cfg)
 
 
-def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=None, error_groups=None) -> Result:
+def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=None, error_groups=None,
+            beams=None) -> Result:
     """Road profiles and roughness of one frame. Bad input raises ValueError; an empty scene, no ground
     or a stopped vehicle give a result with the reason (checked in that order). ``range_variances`` (m², one per
-    point: a stereo frame's) and ``error_groups`` (one per point) raise the profile bins' spreads (method.md §12)."""
+    point: a stereo frame's) and ``error_groups`` (one per point) raise the profile bins' spreads (method.md §12),
+    and so do ``beams`` (one per point) with ``cfg.profile.beam_sigma_deg`` > 0 (§3)."""
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
-    result = _process(points, speed, yaw_rate, cfg, range_variances, error_groups)
+    result = _process(points, speed, yaw_rate, cfg, (range_variances, error_groups, beams))
     result.speed, result.yaw_rate, result.config = speed, yaw_rate, cfg
     return result
 
 
-def _process(points, speed: float, yaw_rate: float, cfg: Config, range_variances=None, error_groups=None) -> Result:
+def _process(points, speed: float, yaw_rate: float, cfg: Config, errors=(None, None, None)) -> Result:
     path = plan_path(speed, yaw_rate, cfg)
     if path["status"] != "stopped":
         cfg = roi_facing(cfg, speed)  # reversing looks behind
     base_xyz, finite = to_base_frame(points, cfg)
-    range_variances = check_per_point(range_variances, points, "range_variances")
-    error_groups = check_per_point(error_groups, points, "error_groups")
-    variances = None if range_variances is None else height_variances(base_xyz, range_variances[finite], cfg)
-    groups = None if error_groups is None else error_groups[finite]
+    variances, groups = point_errors(points, base_xyz, finite, cfg, *errors)
     counts = {"input": len(points), "finite": len(base_xyz), "roi": 0, "ground": 0}
     ground_mask = np.zeros(len(points), dtype=bool)
     labels = np.full(len(points), -1, dtype=np.int32)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config, StereoConfig
-from .frames import rotation_matrix
+from .frames import rotation_matrix, sensor_origin
 
 
 def kitti_calibration(path) -> dict:
@@ -71,9 +71,7 @@ def disparity_to_points(disparity, first_row: int, calib: dict, stereo: StereoCo
 def height_variances(base_xyz, range_variances, cfg: Config) -> np.ndarray:
     """Variance of each base-frame point's height from its range variance: a range error moves the point along its
     line of sight from the sensor, u_z metres up per metre."""
-    origin = np.array([0.0, 0.0, cfg.sensor_height or 0.0]) if cfg.extrinsics is None else \
-        np.array([cfg.extrinsics.x_m, cfg.extrinsics.y_m, cfg.extrinsics.z_m])
-    ray = np.asarray(base_xyz, float)[:, :3] - origin
+    ray = np.asarray(base_xyz, float)[:, :3] - sensor_origin(cfg)
     squared = np.einsum("ij,ij->i", ray, ray)
     uz2 = np.divide(ray[:, 2] ** 2, squared, out=np.ones(len(ray)), where=squared > 0)
     v = np.asarray(range_variances, float)

@@ -61,6 +61,9 @@ struct ProfileConfig {
     bool level = true;       ///< remove the fitted ground plane's tilt before reading heights
     bool level_local = true; ///< with level: heights above the local ground's plane in bands of level_band_m (§3)
     double level_band_m = 10.0;  ///< radial width of those bands; sets which long waves the levelling removes
+    /// σ (degrees) of each LiDAR beam's elevation angle: an error all of a beam's points share (method.md §3), counted
+    /// in the bins' and the map's noise for points whose beam is known; 0: not counted
+    double beam_sigma_deg = 0.0;
 };
 
 struct RoughnessConfig {

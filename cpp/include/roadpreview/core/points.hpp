@@ -18,16 +18,19 @@ inline PointsView points_view(const float* data, Eigen::Index rows, Eigen::Index
     return PointsView(data, rows, 3, Eigen::OuterStride<>(stride));
 }
 
-/// What a source states about its points' errors (docs/method.md §12), one entry per point each, or nullptr when
-/// unknown (LiDAR): each point's range variance (m², Frame::range_variances), which sets a floor under the noise of
-/// the profiles' bins and the map's cells, and its error group (Frame::error_groups): points of one group share
-/// their error, so a bin or cell counts them as one measurement when it rates its median.
+/// What a source states about its points' errors (docs/method.md §12, §3), one entry per point each, or nullptr when
+/// unknown: each point's range variance (m², Frame::range_variances), which sets a floor under the noise of the
+/// profiles' bins and the map's cells; its error group (Frame::error_groups): points of one group share their error,
+/// so a bin or cell counts them as one measurement when it rates its median; and its LiDAR beam (Frame::beams),
+/// whose elevation error (ProfileConfig::beam_sigma_deg) all of the beam's points share.
 struct PointErrors {
     // implicit: range variances alone (a const float*) pass as before
-    PointErrors(const float* range_variances = nullptr, const std::int32_t* groups = nullptr)
-        : range_variances_m2(range_variances), error_groups(groups) {}
+    PointErrors(const float* range_variances = nullptr, const std::int32_t* groups = nullptr,
+                const std::int32_t* beam_of_point = nullptr)
+        : range_variances_m2(range_variances), error_groups(groups), beams(beam_of_point) {}
     const float* range_variances_m2;
     const std::int32_t* error_groups;
+    const std::int32_t* beams;
 };
 
 }  // namespace roadpreview

@@ -100,11 +100,11 @@ public:
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                    const FrameMotion& motion);
     /// The same with what the source states about its points' errors (see PointErrors; a `const float*` of range
-    /// variances converts to it). LiDAR frames state nothing and are processed exactly as before.
+    /// variances converts to it). A LiDAR frame's beams count only with ProfileConfig::beam_sigma_deg > 0.
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                    const FrameMotion& motion, const PointErrors& errors);
-    /// A frame of a FrameSource: its points, source, range variances and error groups (checked: one per point or
-    /// none).
+    /// A frame of a FrameSource: its points, source, range variances, error groups and beams (checked: one per point
+    /// or none).
     Result process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion = {});
 
     /// The real-time forms of the above: the result goes into `out`, reusing its buffers.

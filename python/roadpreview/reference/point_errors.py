@@ -1,0 +1,31 @@
+"""What a frame states about its points' errors, as each finite point's height variance and error group: range
+variances and error groups (docs/method.md §12), and LiDAR beams, whose elevation errors their points share (§3)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..config import Config
+from .frames import check_per_point, sensor_origin
+from .stereo import height_variances
+
+
+def point_errors(points, base_xyz, finite, cfg: Config, range_variances=None, error_groups=None, beams=None):
+    """(height variances, error groups) of the finite points ``base_xyz`` (``finite`` picks them from the rows of
+    ``points``; each None when nothing is stated). A beam's elevation error of σ = ``cfg.profile.beam_sigma_deg``
+    moves a point by its horizontal distance d from the sensor per radian: d²σ² joins its height variance, and its
+    beam is its error group unless ``error_groups`` are given. With σ = 0 the beams are not used."""
+    range_variances = check_per_point(range_variances, points, "range_variances")
+    error_groups = check_per_point(error_groups, points, "error_groups")
+    beams = check_per_point(beams, points, "beams")
+    sigma = math.radians(cfg.profile.beam_sigma_deg)
+    counted = beams is not None and sigma > 0
+    variances = None if range_variances is None else height_variances(base_xyz, range_variances[finite], cfg)
+    if counted:
+        ray = np.asarray(base_xyz, float)[:, :2] - sensor_origin(cfg)[:2]
+        beam = np.einsum("ij,ij->i", ray, ray) * sigma ** 2
+        variances = beam if variances is None else variances + beam
+    groups = error_groups[finite] if error_groups is not None else beams[finite] if counted else None
+    return variances, groups
