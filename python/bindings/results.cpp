@@ -58,7 +58,8 @@ std::string printed(const char* format, double v) {
 
 std::string iri_text(const rp::Iri& i) {
     if (!i.value) return std::string("None (") + rp::to_string(i.reason) + ")";
-    return printed("%.2f", *i.value) + " m/km over " + printed("%.1f", i.length_m) + " m";
+    const std::string noise = i.noise ? " (noise alone " + printed("%.2f", *i.noise) + ")" : "";
+    return printed("%.2f", *i.value) + " m/km over " + printed("%.1f", i.length_m) + " m" + noise;
 }
 
 std::string iri_repr(const rp::Iri& i) { return "<roadpreview.Iri " + iri_text(i) + ">"; }
@@ -118,6 +119,8 @@ void bind_results(py::module_& m) {
         .def_readonly("length", &rp::Iri::length_m, "m, the stretch it covers")
         .def_property_readonly("backed_fraction", [](const rp::Iri& i) { return optional_value(i.backed_fraction); },
                                "bins of the stretch that hold points (the rest interpolated), or None when unknown")
+        .def_property_readonly("noise", [](const rp::Iri& i) { return optional_value(i.noise); },
+                               "m/km, the IRI the stretch's bin errors alone would give, or None when unknown")
         .def_property_readonly("reason", [](const rp::Iri& i) { return text_or_none(rp::to_string(i.reason)); })
         .def("__repr__", &iri_repr);
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <limits>
 #include <numeric>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -147,4 +148,70 @@ TEST(Iri, WheelIriReportsItsBackingAndDeclinesWhereItCannotBeTrusted) {
     EXPECT_NEAR(*mean.backed_fraction, 0.5 * (1.0 + 40.0 / 200.0), 1e-12);
     const rp::Profile third = sine_profile(3, true);  // 67 of 200 bins backed: above the default 0.25
     EXPECT_TRUE(rp::wheel_iri(third, third.roughness, cfg).value);
+}
+
+namespace {
+
+// 30 m of flat road whose bins hold 3 points each every `backed_every`-th bin (and the last), with that spread.
+rp::Profile noisy_flat(int backed_every, double spread) {
+    rp::Profile p;
+    p.ds = kDs;
+    const int bins = 301;
+    for (int k = 0; k < bins; ++k) {
+        const bool backed = k % backed_every == 0 || k == bins - 1;
+        p.z.push_back(0.0);
+        p.count.push_back(backed ? 3 : 0);
+        p.spread.push_back(backed ? spread : std::numeric_limits<double>::quiet_NaN());
+    }
+    p.roughness.iso_class = 'A';
+    return p;
+}
+
+// The mean IRI of `draws` profiles whose backed bins err by independent normal errors of the bins' stated
+// variance (π/2·s²/3, the median of 3 points), linear between them.
+double monte_carlo_iri(const rp::Profile& p, int draws) {
+    std::mt19937 rng(7);
+    const double sigma = std::sqrt(M_PI / 2.0 * p.spread[0] * p.spread[0] / 3.0);
+    std::normal_distribution<double> error(0.0, sigma);
+    double sum = 0.0;
+    for (int d = 0; d < draws; ++d) {
+        std::vector<double> z(p.z.size());
+        std::size_t last = 0;
+        for (std::size_t k = 0; k < z.size(); ++k) {
+            if (p.count[k] == 0) continue;
+            z[k] = error(rng);
+            for (std::size_t j = last + 1; j < k; ++j)
+                z[j] = z[last] + (z[k] - z[last]) * static_cast<double>(j - last) / static_cast<double>(k - last);
+            last = k;
+        }
+        sum += rp::iri(z.data(), z.size(), kDs);
+    }
+    return sum / draws;
+}
+
+}  // namespace
+
+TEST(Iri, NoiseIsTheIriOfTheBinsErrorsAlone) {
+    // Known answer by Monte Carlo: every bin backed (white errors), and one bin in five (errors drawn across the
+    // gaps by the interpolation, which the golden car feels more); the noise scales with the spreads.
+    rp::IriConfig cfg;
+    cfg.min_backed_fraction = 0.0;
+    for (const int every : {1, 5}) {
+        const rp::Profile p = noisy_flat(every, 0.004);
+        const rp::Iri iri = rp::wheel_iri(p, p.roughness, cfg);
+        ASSERT_TRUE(iri.noise) << "one bin in " << every;
+        EXPECT_NEAR(*iri.noise, monte_carlo_iri(p, 400), 0.04 * *iri.noise) << "one bin in " << every;
+        EXPECT_DOUBLE_EQ(*iri.value, 0.0);  // the profile itself is flat
+        const rp::Profile doubled = noisy_flat(every, 0.008);
+        EXPECT_NEAR(*rp::wheel_iri(doubled, doubled.roughness, cfg).noise, 2.0 * *iri.noise, 1e-9 * *iri.noise);
+    }
+    const rp::Profile white = noisy_flat(1, 0.004), sparse = noisy_flat(5, 0.004);
+    const rp::Iri a = rp::wheel_iri(white, white.roughness, cfg), b = rp::wheel_iri(sparse, sparse.roughness, cfg);
+    EXPECT_GT(*b.noise, *a.noise);  // each backed bin's error spans its gaps
+    EXPECT_DOUBLE_EQ(*rp::vehicle_iri(a, b).noise, 0.5 * (*a.noise + *b.noise));
+    rp::Profile unknown = white;
+    unknown.spread.assign(unknown.spread.size(), std::numeric_limits<double>::quiet_NaN());
+    unknown.count.assign(unknown.count.size(), 1);  // single points without a spread: no noise to pool
+    EXPECT_FALSE(rp::wheel_iri(unknown, unknown.roughness, cfg).noise);
+    EXPECT_FALSE(rp::vehicle_iri(a, rp::wheel_iri(unknown, unknown.roughness, cfg)).noise);
 }

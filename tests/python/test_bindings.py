@@ -208,8 +208,9 @@ def test_json_line_carries_the_noise_aware_fields_and_iri(est, kitti):
         assert line["confidence"] == (None if roughness.iso_class is None else pytest.approx(roughness.confidence))
         assert line["iri"] == {"value": roughness.iri.value if roughness.iri.value is None else pytest.approx(roughness.iri.value),
                                "length": pytest.approx(roughness.iri.length), "reason": roughness.iri.reason,
-                               "backed_fraction": pytest.approx(roughness.iri.backed_fraction)}
-        assert 0 < roughness.iri.backed_fraction <= 1
+                               "backed_fraction": pytest.approx(roughness.iri.backed_fraction),
+                               "noise": pytest.approx(roughness.iri.noise)}
+        assert 0 < roughness.iri.backed_fraction <= 1 and 0 < roughness.iri.noise < 10
     spread = d["profiles"]["left"]["spread"]
     assert len(spread) == len(res.left.z)
     assert [v is None for v in spread] == list(np.isnan(res.left.spread))

@@ -85,3 +85,63 @@ def test_profile_iri_declines_short_or_empty_profiles(impl):
     assert impl.profile_iri(short, 0.1, Config(iri={"min_length_m": 9.0})).value == pytest.approx(0.0, abs=1e-12)
     empty = impl.profile_iri(np.full(10, np.nan), 0.1, Config())
     assert empty.value is None and empty.reason == "no valid profile"
+
+
+# ------------------------------------------------------------------------------- the IRI of the bins' errors alone
+def _noisy_flat(backed_every: int, spread: float, bins: int = 301):
+    count = np.where((np.arange(bins) % backed_every == 0) | (np.arange(bins) == bins - 1), 3, 0)
+    return count, np.where(count > 0, spread, np.nan)
+
+
+def _monte_carlo_iri(count, spread, draws: int = 300, seed: int = 0) -> float:
+    """Mean IRI of flat profiles whose backed bins err by their stated σ (the median of 3 points: π/2·s²/3),
+    linear between them."""
+    from roadpreview.reference import iri as ref
+    rng = np.random.default_rng(seed)
+    backed = np.flatnonzero(count > 0)
+    sigma = np.sqrt(np.pi / 2 * spread[backed] ** 2 / count[backed])
+    return float(np.mean([ref.iri(np.interp(np.arange(len(count)), backed, rng.normal(0, sigma)), 0.1)
+                          for _ in range(draws)]))
+
+
+@pytest.mark.parametrize("backed_every", [1, 5])
+def test_reference_noise_is_the_iri_of_the_bins_errors_alone(backed_every):
+    from roadpreview.reference import iri as ref
+    count, spread = _noisy_flat(backed_every, 0.004)
+    noise = ref.noise_iri(count, spread, 0.1)
+    assert noise == pytest.approx(_monte_carlo_iri(count, spread), rel=0.04)
+    assert ref.noise_iri(count, 2 * spread, 0.1) == pytest.approx(2 * noise, rel=1e-12)
+    assert ref.noise_iri(np.ones(301, int), np.full(301, np.nan), 0.1) is None  # single points, nothing to pool
+
+
+def test_noise_rising_along_the_stretch_is_overstated_a_little():
+    """The errors' power is averaged over the stretch (method.md §6): where it rises fivefold along the stretch, the
+    noise errs high by about a tenth, the safe side."""
+    from roadpreview.reference import iri as ref
+    count, _ = _noisy_flat(3, 0.0)
+    spread = np.where(count > 0, np.linspace(0.002, 0.01, len(count)), np.nan)
+    ratio = ref.noise_iri(count, spread, 0.1) / _monte_carlo_iri(count, spread)
+    assert 1.0 < ratio < 1.2
+
+
+def test_cpp_noise_agrees_with_the_reference_on_real_profiles():
+    """The C++ core's noise (lag sums of the error covariance) and the reference's (FFT of the interpolation matrix)
+    on the wheel profiles of the bundled KITTI frames: the same number."""
+    import roadpreview as rp
+    from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
+    from roadpreview.reference import iri as ref
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    compared = 0
+    for path in KITTI_FRAMES:
+        res = rp.Estimator(cfg).process(rp.io.read(path), 5.0, 0.0)
+        for p in (res.left, res.right):
+            mine = ref.wheel_iri(np.asarray(p.z), np.asarray(p.count), 0.1, p.roughness.iso_class, cfg,
+                                 np.asarray(p.spread))
+            assert (mine.noise is None) == (p.roughness.iri.noise is None)
+            if mine.noise is not None:
+                assert p.roughness.iri.noise == pytest.approx(mine.noise, rel=1e-9)
+                assert 0 < mine.noise < 10  # m/km: a few, against IRIs of 10–13 on these frames
+                compared += 1
+        assert res.vehicle.iri.noise == pytest.approx((res.left.roughness.iri.noise + res.right.roughness.iri.noise)
+                                                      / 2, rel=1e-12)
+    assert compared >= 6

@@ -130,6 +130,7 @@ void write_iri(JsonWriter& w, const Iri& i) {
     w.Key("length"), write_number(w, i.length_m);
     w.Key("reason"), write_text_or_null(w, to_string(i.reason));
     w.Key("backed_fraction"), write_optional_number(w, i.backed_fraction);
+    w.Key("noise"), write_optional_number(w, i.noise);
     w.EndObject();
 }
 

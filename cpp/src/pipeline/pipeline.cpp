@@ -225,7 +225,7 @@ void reserve_roughness(Roughness& r, std::size_t bins) {
 void Estimator::Impl::rate(Result& r) {
     for (Profile* p : {&r.left, &r.right}) {
         analyze_roughness(*p, cfg.roughness, roughness_scratch, p->roughness);
-        wheel_iri(*p, p->roughness, cfg.iri, p->roughness.iri);
+        wheel_iri(*p, p->roughness, cfg.iri, roughness_scratch, p->roughness.iri);
     }
     vehicle_roughness(r.left, r.right, cfg.roughness, roughness_scratch, r.vehicle);
     reconcile_vehicle(r.vehicle, r.left.roughness, r.right.roughness);

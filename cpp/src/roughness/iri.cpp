@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -38,6 +40,35 @@ void transition(double ds, Matrix4& st, Vector4& pr) {
 
 std::size_t moving_average_samples(double ds) {
     return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(kBaseLengthM / ds + 0.5 + 1e-9)));
+}
+
+// |H(n)|²: the power gain of the IRI filter from the profile to the sprung − unsprung slope at n cycles/m — the
+// k-sample average's slope, (z^k − 1)/(kΔ), then the car's steps, C·(zI − ST)⁻¹·PR, with z = e^(2πinΔ).
+double iri_gain(double n, double ds, std::size_t k, const Matrix4& st, const Vector4& pr) {
+    using Complex = std::complex<double>;
+    const Complex z = std::polar(1.0, 2.0 * M_PI * n * ds);
+    const Eigen::Matrix4cd system = z * Eigen::Matrix4cd::Identity() - st.cast<Complex>();
+    const Eigen::Vector4cd state = system.partialPivLu().solve(pr.cast<Complex>());
+    const double slope = 2.0 * std::sin(M_PI * n * static_cast<double>(k) * ds) / (static_cast<double>(k) * ds);
+    return std::norm(state[0] - state[2]) * slope * slope;
+}
+
+// The IRI of the errors of bins [first, last) alone (method.md §6): √(2/π) × their filtered RMS, from their
+// unwindowed noise PSD weighted by the filter's gain; nullopt when the bins' noise is unknown.
+std::optional<double> iri_noise(const Profile& p, std::size_t first, std::size_t last, RoughnessScratch& s) {
+    const std::size_t bins = last - first;
+    if (p.count.size() != p.z.size() || p.spread.size() != p.z.size() ||
+        !noise_psd(p.count.data() + first, p.spread.data() + first, bins, p.ds, false, s, s.iri_noise))
+        return std::nullopt;
+    Matrix4 st;
+    Vector4 pr;
+    transition(p.ds, st, pr);
+    const std::size_t k = moving_average_samples(p.ds);
+    const double dn = 1.0 / (static_cast<double>(bins) * p.ds);
+    double variance = 0.0;
+    for (std::size_t j = 1; j < s.iri_noise.size(); ++j)
+        variance += s.iri_noise[j] * iri_gain(static_cast<double>(j) * dn, p.ds, k, st, pr) * dn;
+    return 1000.0 * std::sqrt(2.0 / M_PI * variance);
 }
 
 }  // namespace
@@ -120,7 +151,7 @@ Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
     return out;
 }
 
-void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, Iri& out) {
+void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, RoughnessScratch& s, Iri& out) {
     profile_iri(p.z, p.ds, cfg, out);
     const auto [first, last] = longest_valid_stretch(p.z);
     if (last > first && p.count.size() == p.z.size()) {
@@ -129,6 +160,7 @@ void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, I
                                           begin + static_cast<std::ptrdiff_t>(last), [](auto c) { return c > 0; });
         out.backed_fraction = static_cast<double>(backed) / static_cast<double>(last - first);
     }
+    if (out.reason == IriReason::None) out.noise = iri_noise(p, first, last, s);
     if (!out.value) return;
     if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = IriReason::TooSparse;
     else if (!wheel.iso_class) out.reason = IriReason::ClassDeclined;
@@ -137,7 +169,8 @@ void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, I
 
 Iri wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg) {
     Iri out;
-    wheel_iri(p, wheel, cfg, out);
+    RoughnessScratch s;
+    wheel_iri(p, wheel, cfg, s, out);
     return out;
 }
 
@@ -145,6 +178,7 @@ void vehicle_iri(const Iri& left, const Iri& right, Iri& out) {
     clear(out);
     if (left.backed_fraction && right.backed_fraction)
         out.backed_fraction = 0.5 * (*left.backed_fraction + *right.backed_fraction);
+    if (left.noise && right.noise) out.noise = 0.5 * (*left.noise + *right.noise);
     if (!left.value || !right.value) {
         out.reason = left.reason != IriReason::None ? left.reason : right.reason;
         return;

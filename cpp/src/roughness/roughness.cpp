@@ -118,7 +118,7 @@ void displacement_psd(const double* z, std::size_t count, double ds, RoughnessSc
 
 void RoughnessScratch::plan_ffts(std::size_t bins) {
     const std::size_t ordinates = bins / 2 + 1;
-    for (auto* v : {&x, &y, &shape, &floor, &share, &corrected}) v->reserve(ordinates);
+    for (auto* v : {&x, &y, &shape, &floor, &share, &corrected, &iri_noise}) v->reserve(ordinates);
     used.reserve(ordinates);
     strong.reserve(ordinates);
     for (auto* v : {&variance, &lag_sum, &window, &pooled, &support.noise, &support.resolved, &other.noise,
@@ -347,6 +347,7 @@ void clear(Iri& iri) {
     iri.length_m = 0.0;
     iri.reason = IriReason::None;
     iri.backed_fraction.reset();
+    iri.noise.reset();
 }
 
 void clear(Roughness& r) {

@@ -64,6 +64,7 @@ struct RoughnessScratch {
     // the fits
     std::vector<std::size_t> used, strong;
     std::vector<double> x, y, shape, floor, share, corrected;
+    std::vector<double> iri_noise;  // the IRI's: the unwindowed noise PSD
 
     /// Plans the FFT of every stretch length up to `bins`, so that no frame pays (or allocates) for a plan, and
     /// reserves the transform's and the fits' buffers for that many bins.
@@ -85,8 +86,12 @@ void stretch_support(const std::vector<std::int32_t>& count, const std::vector<d
 /// backed_variances into `v`; false when no bin holds points, or a single point has neither spread nor pool.
 bool backed_variances(const std::int32_t* count, const double* spread, std::size_t bins, RoughnessScratch& s,
                       std::vector<double>& v);
-/// wheel_iri and vehicle_iri into `out`.
-void wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg, Iri& out);
+/// noise_psd of `bins` bins (support.hpp) into `psd`, windowed as the profile's PSD or not at all (w = 1, U = 1:
+/// the errors' power averaged over the stretch); false when the bins' noise is unknown.
+bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins, double ds, bool windowed,
+               RoughnessScratch& s, std::vector<double>& psd);
+/// wheel_iri and vehicle_iri into `out` (its noise from the scratch's buffers).
+void wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg, RoughnessScratch& s, Iri& out);
 void vehicle_iri(const Iri& left, const Iri& right, Iri& out);
 
 /// Every field back to its default, keeping the vectors' and strings' capacity.

@@ -46,9 +46,11 @@ double shared_covariance(const Anchors& a, const Anchors& b, const std::vector<d
 
 double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(M_PI * x) / (M_PI * x); }
 
-// noise_psd into `psd`; false when the bins' noise is unknown.
-bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins, double ds, RoughnessScratch& s,
-               std::vector<double>& psd) {
+}  // namespace
+
+// noise_psd into `psd` (with the Hann window, or none); false when the bins' noise is unknown.
+bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins, double ds, bool windowed,
+               RoughnessScratch& s, std::vector<double>& psd) {
     if (!backed_variances(count, spread, bins, s, s.variance)) return false;
     interpolation_anchors(count, bins, s.anchors);
     const auto& anchors = s.anchors;
@@ -57,7 +59,10 @@ bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins
     s.lag_sum.assign(bins, 0.0);
     s.window.resize(bins);
     double window_power = 0.0;
-    for (std::size_t j = 0; j < bins; ++j) s.window[j] = hann(j, bins), window_power += s.window[j] * s.window[j];
+    for (std::size_t j = 0; j < bins; ++j) {
+        s.window[j] = windowed ? hann(j, bins) : 1.0;
+        window_power += s.window[j] * s.window[j];
+    }
     std::size_t max_lag = 0;
     for (std::size_t j = 0; j < bins; ++j) {
         const std::size_t reach = anchors[j].weight[1] != 0.0 ? anchors[j].bin[1] : anchors[j].bin[0];
@@ -81,6 +86,8 @@ bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins
     }
     return true;
 }
+
+namespace {
 
 void resolved_fraction(const std::int32_t* count, std::size_t bins, double ds, const std::vector<double>& n,
                        RoughnessScratch& s, std::vector<double>& phi) {
@@ -225,7 +232,7 @@ std::optional<std::vector<double>> noise_psd(const std::int32_t* count, const do
                                              double ds) {
     RoughnessScratch scratch;
     std::vector<double> psd;
-    if (!noise_psd(count, spread, bins, ds, scratch, psd)) return std::nullopt;
+    if (!noise_psd(count, spread, bins, ds, true, scratch, psd)) return std::nullopt;
     return psd;
 }
 
@@ -241,7 +248,7 @@ void stretch_support(const std::vector<std::int32_t>& count, const std::vector<d
                      std::size_t last, double ds, const std::vector<double>& n, RoughnessScratch& s,
                      SupportBuffers& out) {
     const std::size_t bins = last - first;
-    out.noise_known = noise_psd(count.data() + first, spread.data() + first, bins, ds, s, out.noise);
+    out.noise_known = noise_psd(count.data() + first, spread.data() + first, bins, ds, true, s, out.noise);
     resolved_fraction(count.data() + first, bins, ds, n, s, out.resolved);
     std::size_t backed = 0;
     for (std::size_t j = first; j < last; ++j) backed += count[j] > 0 ? 1 : 0;

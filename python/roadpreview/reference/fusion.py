@@ -241,7 +241,7 @@ class FusedMap:
             spread[k] = spread_for_variance(sum(c.variance for c in found) / len(found) ** 2, count[k])
         z = fill_gaps(z, ds, cfg.profile.max_gap_m, flags)
         roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
-        roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg)
+        roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg, spread)
         return Profile(s=s, z=z, count=count, spread=spread, roughness=roughness, blocked=flags), ahead, ahead_now
 
     def _cell_at(self, path, wheel, s, offset, speed, yaw_rate) -> Optional[Cell]:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..config import Config
 from .runs import NO_VALID_BIN, longest_valid_stretch
+from .support import backed_variances, interpolation_matrix
 
 # Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
 K1, K2, C, MU = 653.0, 63.3, 6.0, 0.15
@@ -27,6 +28,7 @@ class Iri:
     length: float = 0.0  #: m, the stretch it covers (0 without one)
     reason: Optional[str] = None
     backed_fraction: Optional[float] = None  #: share of the stretch's bins that hold points (None: unknown)
+    noise: Optional[float] = None  #: m/km, the IRI of the stretch's bin errors alone (None: unknown)
 
 
 def golden_car() -> tuple[np.ndarray, np.ndarray]:
@@ -96,14 +98,50 @@ def profile_iri(z, ds: float, cfg: Config | None = None) -> Iri:
     return Iri(value=iri(np.asarray(z, dtype=np.float64)[start:stop], ds), length=length)
 
 
-def wheel_iri(z, count, ds: float, wheel_class: Optional[str], cfg: Config | None = None) -> Iri:
+def gain(n, ds: float) -> np.ndarray:
+    """|H(n)|², the IRI filter's power gain from profile height to sprung − unsprung slope at n cycles/m: the
+    k-sample average's slope (z^k − 1)/(k·ds), then one step of the car, with z = exp(2πi·n·ds)."""
+    st, pr = transition(ds)
+    k = moving_average_samples(ds)
+    out = []
+    for z in np.exp(2j * np.pi * np.asarray(n, float) * ds):
+        state = np.linalg.solve(z * np.eye(4) - st, pr)  # the state per unit input slope, in steady state
+        out.append(abs(state[0] - state[2]) ** 2 * abs(z ** k - 1) ** 2 / (k * ds) ** 2)
+    return np.array(out)
+
+
+def noise_iri(count, spread, ds: float) -> Optional[float]:
+    """The IRI (m/km) that the bin errors of a stretch alone give: their periodogram over the whole stretch (as
+    support.noise_psd, without a window), through the filter's gain; a zero-mean Gaussian's mean absolute value
+    is √(2/π) of its RMS. None when the bins' variances are unknown."""
+    variance = backed_variances(count, spread)
+    if variance is None:
+        return None
+    count = np.asarray(count)
+    n = len(count)
+    spectra = np.fft.rfft(interpolation_matrix(count), axis=0)
+    expected = np.abs(spectra) ** 2 @ variance[count > 0]
+    one_sided = np.full(len(expected), 2.0)
+    one_sided[0] = 1.0
+    if n % 2 == 0:
+        one_sided[-1] = 1.0
+    psd = one_sided * expected * ds / n
+    frequency = np.arange(len(psd)) / (n * ds)
+    power = np.sum(psd[1:] * gain(frequency[1:], ds)) / (n * ds)
+    return float(1000.0 * np.sqrt(2 / np.pi * power))
+
+
+def wheel_iri(z, count, ds: float, wheel_class: Optional[str], cfg: Config | None = None, spread=None) -> Iri:
     """A wheel's IRI as the pipeline reports it: profile_iri, plus the share of the stretch's bins with points
-    (count > 0); no value when that share is below iri.min_backed_fraction, or when the wheel has no class."""
+    (count > 0) and, with their spreads, the IRI of their errors alone; no value when that share is below
+    iri.min_backed_fraction, or when the wheel has no class."""
     cfg = cfg or Config()
     result = profile_iri(z, ds, cfg)
     start, stop = longest_valid_stretch(z)
     if stop > start:
         result.backed_fraction = float(np.mean(np.asarray(count)[start:stop] > 0))
+    if result.reason is None and spread is not None:
+        result.noise = noise_iri(np.asarray(count)[start:stop], np.asarray(spread)[start:stop], ds)
     if result.value is None:
         return result
     if result.backed_fraction < cfg.iri.min_backed_fraction - 1e-12:
@@ -118,6 +156,8 @@ def vehicle_iri(left: Iri, right: Iri) -> Iri:
     backed = None
     if left.backed_fraction is not None and right.backed_fraction is not None:
         backed = (left.backed_fraction + right.backed_fraction) / 2
+    noise = None if left.noise is None or right.noise is None else (left.noise + right.noise) / 2
     if left.value is None or right.value is None:
-        return Iri(reason=left.reason or right.reason, backed_fraction=backed)
-    return Iri(value=(left.value + right.value) / 2, length=min(left.length, right.length), backed_fraction=backed)
+        return Iri(reason=left.reason or right.reason, backed_fraction=backed, noise=noise)
+    return Iri(value=(left.value + right.value) / 2, length=min(left.length, right.length), backed_fraction=backed,
+               noise=noise)

@@ -33,7 +33,7 @@ def _rounded3(row) -> list:
 
 def _iri(i) -> dict:
     return {"value": _number(i.value), "length": float(i.length), "reason": i.reason,
-            "backed_fraction": _number(i.backed_fraction)}
+            "backed_fraction": _number(i.backed_fraction), "noise": _number(i.noise)}
 
 
 def _roughness(r) -> dict:

@@ -231,5 +231,5 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
     z = fill_gaps(median, ds, cfg.profile.max_gap_m, blocked)
     centres = (np.arange(len(z)) + 0.5) * ds
     roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
-    roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg)
+    roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg, spread)
     return Profile(s=centres, z=z, count=count, spread=spread, roughness=roughness, blocked=blocked)

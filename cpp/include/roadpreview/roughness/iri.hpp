@@ -36,6 +36,8 @@ struct Iri {
     double length_m = 0.0;        ///< length of the stretch it covers
     IriReason reason = IriReason::None;     ///< None when there is a value
     std::optional<double> backed_fraction;  ///< bins of the stretch that hold points; nullopt: unknown
+    /// m/km, the IRI the stretch's bin errors alone would give (docs/method.md §6); nullopt: the errors are unknown
+    std::optional<double> noise;
 };
 
 /// |sprung − unsprung slope| (m/m) of the golden car after each step of the 250 mm moving average of an
@@ -50,11 +52,13 @@ double iri(const double* z, std::size_t count, double ds);
 Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg);
 
 /// A wheel's IRI as the pipeline reports it (docs/method.md §6): profile_iri over the longest valid stretch,
-/// with the share of its bins that hold points; null when that share is below cfg.min_backed_fraction
-/// (IriReason::TooSparse) or when `wheel`, the roughness of the same profile, has no class (ClassDeclined).
+/// with the share of its bins that hold points and the IRI of their errors alone (from their counts and spreads);
+/// null when that share is below cfg.min_backed_fraction (IriReason::TooSparse) or when `wheel`, the roughness of
+/// the same profile, has no class (ClassDeclined).
 Iri wheel_iri(const Profile& profile, const Roughness& wheel, const IriConfig& cfg);
 
-/// Mean of both wheels' IRI (the mean roughness index) when both have one; its backed fraction is their mean.
+/// Mean of both wheels' IRI (the mean roughness index) when both have one; its backed fraction and its noise are
+/// their means (when both wheels have them).
 Iri vehicle_iri(const Iri& left, const Iri& right);
 
 }  // namespace roadpreview
