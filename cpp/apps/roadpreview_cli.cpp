@@ -169,7 +169,7 @@ void report_source(const rp::SourceInfo& s) {
 // What the summary line at the end of a run counts: classes, why classes were declined, the vehicle's IRI.
 struct RunSummary {
     std::map<std::string, int> classes, declined;
-    BoundedSample ms, iri_m_per_km;
+    BoundedSample ms, iri_m_per_km, iri_noise_m_per_km;
 
     void add(const rp::Result& r) {
         ++classes[class_of(r.vehicle)];
@@ -177,7 +177,16 @@ struct RunSummary {
             if (!x->iso_class)
                 ++declined[x->reason == rp::RoughnessReason::None ? "no reason given" : rp::to_string(x->reason)];
         if (r.vehicle.iri.value) iri_m_per_km.add(*r.vehicle.iri.value);
+        if (r.vehicle.iri.value && r.vehicle.iri.noise) iri_noise_m_per_km.add(*r.vehicle.iri.noise);
         ms.add(r.timing_ms.total);
+    }
+
+    // "; the bins' errors alone 2.41": the median of iri.noise over the frames with an IRI, when known.
+    std::string noise_text() const {
+        if (iri_noise_m_per_km.empty()) return "";
+        char text[64];
+        std::snprintf(text, sizeof text, "; the bins' errors alone %.2f", iri_noise_m_per_km.median());
+        return text;
     }
 
     void print() const {
@@ -186,9 +195,9 @@ struct RunSummary {
         for (const auto& [cls, n] : classes) std::fprintf(stderr, " %s×%d", cls.c_str(), n);
         if (iri_m_per_km.empty()) std::fprintf(stderr, "; vehicle IRI: none");
         else
-            std::fprintf(stderr, "; vehicle IRI median %.2f m/km (%llu of %llu frames)", iri_m_per_km.median(),
+            std::fprintf(stderr, "; vehicle IRI median %.2f m/km (%llu of %llu frames%s)", iri_m_per_km.median(),
                          static_cast<unsigned long long>(iri_m_per_km.count()),
-                         static_cast<unsigned long long>(ms.count()));
+                         static_cast<unsigned long long>(ms.count()), noise_text().c_str());
         if (!declined.empty()) std::fprintf(stderr, "; declined classes (L, R, vehicle):");
         const char* separator = " ";
         for (const auto& [reason, n] : declined)

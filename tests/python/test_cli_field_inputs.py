@@ -228,9 +228,11 @@ def declined_reasons(out) -> dict:
 @pytest.mark.parametrize("speed", [5, 0])  # moving: classes and IRI; stopped: every class declined, no IRI
 def test_summary_line_has_the_iri_and_counts_the_reasons_for_declined_classes(speed):
     out, summary = summary_of("--speed", speed)
-    iris = [o["roughness"]["vehicle"]["iri"]["value"] for o in out if o["roughness"]["vehicle"]["iri"]["value"]]
+    iris = [o["roughness"]["vehicle"]["iri"] for o in out if o["roughness"]["vehicle"]["iri"]["value"]]
     if iris:
-        assert f"vehicle IRI median {sorted(iris)[len(iris) // 2]:.2f} m/km ({len(iris)} of 3 frames)" in summary
+        value, noise = (sorted(i[key] for i in iris)[len(iris) // 2] for key in ("value", "noise"))
+        assert (f"vehicle IRI median {value:.2f} m/km ({len(iris)} of 3 frames; the bins' errors alone {noise:.2f})"
+                in summary)
     else:
         assert "vehicle IRI: none" in summary
     reasons = declined_reasons(out)
