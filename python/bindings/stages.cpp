@@ -190,6 +190,11 @@ void bind_stages(py::module_& m) {
         if (!psd) return py::none();
         return py::array_t<double>(static_cast<py::ssize_t>(psd->size()), psd->data());
     });
+    m.def("iri_noise", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count,
+                          DoubleArray spread, double ds) -> std::optional<double> {
+        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
+        return rp::iri_noise(count.data(), spread.data(), static_cast<std::size_t>(count.size()), ds);
+    });
     m.def("resolved_fraction", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count, double ds,
                                   DoubleArray n) {
         const std::vector<double> phi = rp::resolved_fraction(count.data(), static_cast<std::size_t>(count.size()), ds, as_vector(n));

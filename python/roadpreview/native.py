@@ -91,6 +91,10 @@ def rectified_slope(z, ds):
     return core().iri_rectified_slope(np.asarray(z, dtype=float), float(ds))
 
 
+def noise_iri(count, spread, ds):
+    return core().iri_noise(np.asarray(count), np.asarray(spread, dtype=float), float(ds))
+
+
 def profile_iri(z, ds, cfg: Config | None = None):
     return core().profile_iri(np.asarray(z, dtype=float), float(ds), _cfg(cfg))
 

@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from paths import DATA
 from roadpreview.config import Config
@@ -105,13 +107,26 @@ def _monte_carlo_iri(count, spread, draws: int = 300, seed: int = 0) -> float:
 
 
 @pytest.mark.parametrize("backed_every", [1, 5])
-def test_reference_noise_is_the_iri_of_the_bins_errors_alone(backed_every):
-    from roadpreview.reference import iri as ref
+def test_noise_is_the_iri_of_the_bins_errors_alone(impl, backed_every):
     count, spread = _noisy_flat(backed_every, 0.004)
-    noise = ref.noise_iri(count, spread, 0.1)
+    noise = impl.noise_iri(count, spread, 0.1)
     assert noise == pytest.approx(_monte_carlo_iri(count, spread), rel=0.04)
-    assert ref.noise_iri(count, 2 * spread, 0.1) == pytest.approx(2 * noise, rel=1e-12)
-    assert ref.noise_iri(np.ones(301, int), np.full(301, np.nan), 0.1) is None  # single points, nothing to pool
+    assert impl.noise_iri(count, 2 * spread, 0.1) == pytest.approx(2 * noise, rel=1e-12)
+    assert impl.noise_iri(np.ones(301, int), np.full(301, np.nan), 0.1) is None  # single points, nothing to pool
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(12, 400), st.floats(0.05, 0.9), st.integers(0, 2 ** 32 - 1))
+def test_cpp_noise_is_the_reference_s(bins, share, seed):
+    """Any pattern of backed bins and spreads (1–6 points each, a single point's spread pooled from the others)."""
+    import roadpreview as rp
+    rng = np.random.default_rng(seed)
+    count = np.where(rng.random(bins) < share, rng.integers(1, 7, bins), 0)
+    count[0] = count[-1] = 3
+    spread = np.where(count >= 2, rng.uniform(0.001, 0.02, bins), np.nan)
+    ref = rp.reference.noise_iri(count, spread, 0.1)
+    assert rp.native.noise_iri(count, spread, 0.1) == pytest.approx(ref, rel=1e-9)
+    assert ref > 0
 
 
 def test_noise_rising_along_the_stretch_is_overstated_a_little():

@@ -53,21 +53,19 @@ double iri_gain(double n, double ds, std::size_t k, const Matrix4& st, const Vec
     return std::norm(state[0] - state[2]) * slope * slope;
 }
 
-// The IRI of the errors of bins [first, last) alone (method.md §6): √(2/π) × their filtered RMS, from their
-// unwindowed noise PSD weighted by the filter's gain; nullopt when the bins' noise is unknown.
-std::optional<double> iri_noise(const Profile& p, std::size_t first, std::size_t last, RoughnessScratch& s) {
-    const std::size_t bins = last - first;
-    if (p.count.size() != p.z.size() || p.spread.size() != p.z.size() ||
-        !noise_psd(p.count.data() + first, p.spread.data() + first, bins, p.ds, false, s, s.iri_noise))
-        return std::nullopt;
+// iri_noise with the scratch's buffers: √(2/π) × the errors' filtered RMS, from their unwindowed noise PSD
+// weighted by the filter's gain.
+std::optional<double> iri_noise(const std::int32_t* count, const double* spread, std::size_t bins, double ds,
+                                RoughnessScratch& s) {
+    if (!noise_psd(count, spread, bins, ds, false, s, s.iri_noise)) return std::nullopt;
     Matrix4 st;
     Vector4 pr;
-    transition(p.ds, st, pr);
-    const std::size_t k = moving_average_samples(p.ds);
-    const double dn = 1.0 / (static_cast<double>(bins) * p.ds);
+    transition(ds, st, pr);
+    const std::size_t k = moving_average_samples(ds);
+    const double dn = 1.0 / (static_cast<double>(bins) * ds);
     double variance = 0.0;
     for (std::size_t j = 1; j < s.iri_noise.size(); ++j)
-        variance += s.iri_noise[j] * iri_gain(static_cast<double>(j) * dn, p.ds, k, st, pr) * dn;
+        variance += s.iri_noise[j] * iri_gain(static_cast<double>(j) * dn, ds, k, st, pr) * dn;
     return 1000.0 * std::sqrt(2.0 / M_PI * variance);
 }
 
@@ -145,6 +143,12 @@ double iri(const double* z, std::size_t count, double ds) {
     return 1000.0 * sum / static_cast<double>(steps);
 }
 
+std::optional<double> iri_noise(const std::int32_t* count, const double* spread, std::size_t bins, double ds) {
+    if (!(ds > 0.0)) throw std::invalid_argument("iri_noise: ds must be > 0");
+    RoughnessScratch s;
+    return iri_noise(count, spread, bins, ds, s);
+}
+
 Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg) {
     Iri out;
     profile_iri(z, ds, cfg, out);
@@ -160,7 +164,8 @@ void wheel_iri(const Profile& p, const Roughness& wheel, const IriConfig& cfg, R
                                           begin + static_cast<std::ptrdiff_t>(last), [](auto c) { return c > 0; });
         out.backed_fraction = static_cast<double>(backed) / static_cast<double>(last - first);
     }
-    if (out.reason == IriReason::None) out.noise = iri_noise(p, first, last, s);
+    if (out.reason == IriReason::None && p.count.size() == p.z.size() && p.spread.size() == p.z.size())
+        out.noise = iri_noise(p.count.data() + first, p.spread.data() + first, last - first, p.ds, s);
     if (!out.value) return;
     if (out.backed_fraction && *out.backed_fraction < cfg.min_backed_fraction - 1e-12) out.reason = IriReason::TooSparse;
     else if (!wheel.iso_class) out.reason = IriReason::ClassDeclined;

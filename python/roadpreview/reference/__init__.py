@@ -9,7 +9,7 @@ from .frames import to_base_frame
 from .fusion import FusedMap, integrate_motion, process_fused
 from .ground import fit_ground, fit_plane
 from .obstacles import Obstacles, PathObstacles, blocked_bins, cluster_labels, find_obstacles, wheel_obstacles
-from .iri import Iri, profile_iri, rectified_slope
+from .iri import Iri, noise_iri, profile_iri, rectified_slope
 from .mounting import check_mounting, estimate_mounting, mounting_from_plane
 from .path import plan_path
 from .pipeline import Result, process
@@ -51,6 +51,7 @@ __all__ = [
     "fill_gaps",
     "find_obstacles",
     "Iri",
+    "noise_iri",
     "noise_psd",
     "profile_iri",
     "rectified_slope",

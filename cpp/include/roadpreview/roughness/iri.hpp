@@ -48,6 +48,11 @@ std::vector<double> iri_rectified_slope(const double* z, std::size_t count, doub
 /// IRI of an all-finite profile, m/km: the mean of iri_rectified_slope × 1000.
 double iri(const double* z, std::size_t count, double ds);
 
+/// The IRI (m/km) that the bin errors of a stretch alone would give (docs/method.md §6): their noise PSD without
+/// a window (support.hpp's noise_psd, w = 1) through the IRI filter's power gain, × √(2/π); nullopt when the
+/// bins' variances are unknown.
+std::optional<double> iri_noise(const std::int32_t* count, const double* spread, std::size_t bins, double ds);
+
 /// IRI over the longest valid stretch of a profile (NaN = missing bin), if it is at least cfg.min_length_m long.
 Iri profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg);
 
