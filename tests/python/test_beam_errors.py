@@ -124,3 +124,16 @@ def test_a_recordings_decoded_beams_are_counted_through_run_and_the_cli(tmp_path
     assert [line["roughness"]["left"]["reason"] for line in lines] == ["noise dominates the band"] * 3
     bad = run_cli("run", OS1_128_PCAP, "--speed", 2.5, "--beam-sigma-deg", -1, check=False)
     assert bad.returncode != 0 and "--beam-sigma-deg" in bad.stderr
+
+
+def test_frames_without_beams_say_their_beams_errors_are_not_counted():
+    from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, profile={"beam_sigma_deg": 0.02})
+    drive = rp.run(KITTI_FRAMES[0], cfg, speed=5.0)
+    with pytest.warns(RuntimeWarning, match="carry no beam numbers"):
+        results = list(drive)
+    assert results[0].left.roughness.iso_class is not None  # as if σ were 0: nothing to count it on
+    assert sum("carry no beam numbers" in note for note in drive.notes) == 1
+    proc = run_cli("run", *KITTI_FRAMES[:2], "--sensor-height", KITTI_SENSOR_HEIGHT, "--speed", 5,
+                   "--beam-sigma-deg", 0.02, "-o", "/dev/null")
+    assert proc.stderr.count("carry no beam numbers") == 1

@@ -110,12 +110,14 @@ public:
 
 private:
     void check_mounting_of(const Result& r, const Frame& f);
+    void check_beams_of(const Frame& f);
 
     std::function<void(bool, const std::string&)> on_note_;
     bool has_poses_file_;
     DriveFrames frames_;
     std::optional<Estimator> estimator_;  // made at the first frame, again when a later one gives the mounting
     std::int64_t disagreeing_ = 0;
+    bool beamless_noted_ = false;
     std::int64_t processed_ = 0;
 };
 
