@@ -189,6 +189,19 @@ TEST(Realtime, FramesWithPointErrorsAllocateNothingOnceWarmWithKalmanFusion) {
     expect_no_allocations(frame_allocations(frames, kitti_config(rp::FusionMethod::Kalman), 5, 20), 5);
 }
 
+// LiDAR frames whose beams' errors are counted (profile.beam_sigma_deg): the beams are the error groups, and each
+// point's height variance is its beam's — the same buffers again.
+TEST(Realtime, FramesWithCountedBeamsAllocateNothingOnceWarm) {
+    std::vector<rp::Frame> frames = kitti_frames();
+    for (rp::Frame& f : frames)
+        for (Eigen::Index i = 0; i < f.points.rows(); ++i) f.beams.push_back(static_cast<std::int32_t>(i % 64));
+    for (const auto fusion : {rp::FusionMethod::None, rp::FusionMethod::Kalman}) {
+        rp::Config cfg = kitti_config(fusion);
+        cfg.profile.beam_sigma_deg = 0.01;
+        expect_no_allocations(frame_allocations(frames, cfg, 5, 20), 5);
+    }
+}
+
 // Range-sensor samples fused into the map between frames (a preview sensor's window, README "Range sensors"):
 // once its per-slot lists have grown, a batch of samples allocates nothing either.
 TEST(Realtime, RangeSamplesEnterTheMapWithoutAllocatingOnceWarm) {
