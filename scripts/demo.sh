@@ -17,6 +17,8 @@ for line in open("demo_output.jsonl"):
     v = rough["vehicle"]
     fit = f'G_d(n0) = {v["gd_n0"] * 1e6:.0f}e-6 m³, confidence {v["confidence"]:.2f}' if v["class"] else v["reason"]
     iri = f'{v["iri"]["value"]:.1f} m/km' if v["iri"]["value"] is not None else v["iri"]["reason"]
+    if v["iri"]["noise"] is not None:
+        iri += f' (its bins\' errors alone: {v["iri"]["noise"]:.1f})'  # docs/method.md §6
     print(f'frame at t = {r["timestamp"]:.3f} s: yaw rate {r["motion"]["yaw_rate"]:+.4f} rad/s '
           f'({r["path"]["yaw_rate_source"]}), left {rough["left"]["class"]}, right {rough["right"]["class"]}, '
           f'vehicle {v["class"]} ({fit}), IRI {iri}, {r["timing_ms"]["total"]:.2f} ms')
