@@ -268,7 +268,8 @@ def SEGMENT_SCHEMA():  # noqa: N802 (as FRAME_SCHEMA)
     for side in ("left", "right", "vehicle"):
         cols += [(f"class_{side}", pa.string()), (f"gd_n0_m3_{side}", pa.float64()),
                  (f"iri_m_per_km_{side}", pa.float64()), (f"backed_fraction_{side}", pa.float64()),
-                 (f"class_reason_{side}", pa.string()), (f"iri_reason_{side}", pa.string())]
+                 (f"class_reason_{side}", pa.string()), (f"iri_reason_{side}", pa.string()),
+                 (f"iri_noise_m_per_km_{side}", pa.float64())]
     cols += [(f"{q}_{end}", pa.float64()) for end in ("start", "end") for q in ("lat", "lon")]
     return pa.schema(cols)
 
@@ -364,6 +365,7 @@ def segment_rows(rid: str, route, lengths_m: Sequence[float]) -> list[dict]:
                 row[f"backed_fraction_{side}"] = seg[side]["backed_fraction"]
                 row[f"class_reason_{side}"] = None if cls else getattr(rough, "reason", None)
                 row[f"iri_reason_{side}"] = getattr(iri, "reason", None)
+                row[f"iri_noise_m_per_km_{side}"] = getattr(iri, "noise", None)
             rows.append(row)
     return rows
 

@@ -142,7 +142,7 @@ def test_segments_of_a_recording_match_the_cli(client, recordings, tmp_path):
         assert mine["start_m"] == pytest.approx(float(theirs["start_m"])), theirs
         for side in ("left", "right", "vehicle"):
             assert (mine[f"class_{side}"] or "") == theirs[f"class_{side}"], (side, theirs)
-            for key in (f"gd_n0_m3_{side}", f"iri_m_per_km_{side}"):
+            for key in (f"gd_n0_m3_{side}", f"iri_m_per_km_{side}", f"iri_noise_m_per_km_{side}"):
                 expected = float(theirs[key]) if theirs[key] else None
                 assert mine[key] == (pytest.approx(expected, rel=1e-3) if expected is not None else None), key
 

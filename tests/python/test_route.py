@@ -96,6 +96,9 @@ def test_route_matches_the_numpy_reference_on_the_same_run(kitti_route):
             assert number(row[f"iri_m_per_km_{side}"]) == pytest.approx(iri.value if iri.value is not None else np.nan,
                                                                         abs=1e-3, nan_ok=True)
             assert number(row[f"backed_fraction_{side}"]) == pytest.approx(seg[side]["backed_fraction"], abs=1e-4)
+            assert number(row[f"iri_noise_m_per_km_{side}"]) == pytest.approx(
+                iri.noise if iri.noise is not None else np.nan, rel=1e-3, abs=1e-3, nan_ok=True)
+            assert (iri.noise is None) == (iri.value is None)  # a segment with an IRI states its errors' share
 
 
 def test_erd_export_reads_back_as_the_stitched_profile(kitti_route):

@@ -42,8 +42,10 @@ std::vector<double> rectified_slope_by_bin(const std::vector<double>& z, double 
     return out;
 }
 
-// IRI over bins [j0, j1): the mean rectified slope there, when the car ran over every one of them.
-Iri segment_iri(const std::vector<double>& slope_by_bin, std::size_t j0, std::size_t j1, double ds) {
+// IRI over bins [j0, j1): the mean rectified slope there, when the car ran over every one of them; its noise that
+// of the segment's bins (`segment`, their profile) alone.
+Iri segment_iri(const std::vector<double>& slope_by_bin, const Profile& segment, std::size_t j0, std::size_t j1) {
+    const double ds = segment.ds;
     Iri out;
     double sum = 0.0;
     for (std::size_t j = j0; j < j1; ++j) {
@@ -59,6 +61,7 @@ Iri segment_iri(const std::vector<double>& slope_by_bin, std::size_t j0, std::si
     }
     out.value = 1000.0 * sum / static_cast<double>(j1 - j0);
     out.length_m = static_cast<double>(j1 - j0) * ds;
+    out.noise = iri_noise(segment.count.data(), segment.spread.data(), segment.count.size(), ds);
     return out;
 }
 
@@ -191,8 +194,8 @@ std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
         s.start = pose_at(s.start_m);
         s.end = pose_at(s.end_m);
         const Profile pl = segment_profile(l, j0, j1), pr = segment_profile(r, j0, j1);
-        s.left = {analyze_roughness(pl, cfg_.roughness), segment_iri(slope_l, j0, j1, ds), backed_fraction(pl)};
-        s.right = {analyze_roughness(pr, cfg_.roughness), segment_iri(slope_r, j0, j1, ds), backed_fraction(pr)};
+        s.left = {analyze_roughness(pl, cfg_.roughness), segment_iri(slope_l, pl, j0, j1), backed_fraction(pl)};
+        s.right = {analyze_roughness(pr, cfg_.roughness), segment_iri(slope_r, pr, j0, j1), backed_fraction(pr)};
         s.vehicle = {vehicle_roughness(pl, pr, cfg_.roughness), vehicle_iri(s.left.iri, s.right.iri),
                      0.5 * (s.left.backed_fraction + s.right.backed_fraction)};
         out.push_back(std::move(s));

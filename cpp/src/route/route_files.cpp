@@ -41,7 +41,8 @@ constexpr const char* kSides[] = {"left", "right", "vehicle"};
 void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segments) {
     out << "segment_length_m,start_m,end_m,x_start_m,y_start_m,x_end_m,y_end_m";
     for (const char* prefix :
-         {"class_", "gd_n0_m3_", "iri_m_per_km_", "backed_fraction_", "class_reason_", "iri_reason_"})
+         {"class_", "gd_n0_m3_", "iri_m_per_km_", "backed_fraction_", "class_reason_", "iri_reason_",
+          "iri_noise_m_per_km_"})
         for (const char* side : kSides) out << ',' << prefix << side;
     out << '\n';
     for (const RouteSegment& s : segments) {
@@ -57,6 +58,7 @@ void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segm
         for (const auto* w : sides) out << ',' << field("%.4f", w->backed_fraction);
         for (const auto* w : sides) out << ',' << text(w->roughness.iso_class ? "" : to_string(w->roughness.reason));
         for (const auto* w : sides) out << ',' << text(to_string(w->iri.reason));
+        for (const auto* w : sides) out << ',' << field("%.4f", w->iri.noise);
         out << '\n';
     }
     if (!out) throw std::runtime_error("segments CSV: write failed");

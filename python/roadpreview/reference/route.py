@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config
-from .iri import Iri, rectified_slope, vehicle_iri
+from .iri import Iri, noise_iri, rectified_slope, vehicle_iri
 from .profile import fill_gaps
 from .roughness import analyze_roughness, vehicle_roughness
 
@@ -199,7 +199,8 @@ class Route:
             parts = {w: _part(p, j0, j1) for w, p in wheels.items()}
             for w, (z, count, spread) in parts.items():
                 row[w] = {"roughness": analyze_roughness(z, ds, self.cfg, count=count, spread=spread),
-                          "iri": _segment_iri(slopes[w], j0, j1, ds), "backed_fraction": float(np.mean(count > 0))}
+                          "iri": _segment_iri(slopes[w], j0, j1, ds, count, spread),
+                          "backed_fraction": float(np.mean(count > 0))}
             (zl, cl, sl), (zr, cr, sr) = parts["left"], parts["right"]
             vehicle = vehicle_roughness(zl, zr, ds, self.cfg, count_left=cl, spread_left=sl, count_right=cr,
                                         spread_right=sr)
@@ -236,11 +237,13 @@ def _slope_by_bin(z: np.ndarray, ds: float) -> np.ndarray:
     return out
 
 
-def _segment_iri(slope: np.ndarray, j0: int, j1: int, ds: float) -> Iri:
+def _segment_iri(slope: np.ndarray, j0: int, j1: int, ds: float, count, spread) -> Iri:
+    """The mean rectified slope over bins [j0, j1) when the car ran over all of them; its noise that of the segment's
+    own bins (``count``, ``spread``) alone."""
     part = slope[j0:j1]
     if j1 <= j0:
         return Iri(reason="no valid profile")
     if len(part) < j1 - j0 or not np.isfinite(part).all():
         return Iri(reason="segment not covered by one valid stretch")
-    return Iri(value=float(part.mean() * 1000.0), length=(j1 - j0) * ds)
+    return Iri(value=float(part.mean() * 1000.0), length=(j1 - j0) * ds, noise=noise_iri(count, spread, ds))
 
