@@ -26,8 +26,8 @@ import roadpreview as rp
 from roadpreview import sim
 from roadpreview.reference.iri import iri
 from roadpreview.reference.runs import longest_valid_stretch
-from roadpreview.reference.surface_calibration import rings_in_scan_order
 from accuracy import SENSOR_HEIGHT_M, SENSORS, SPEED_MPS
+from beam_errors import kitti_numbered
 from calibration import KITTI_HEIGHT_M, OS1_HEIGHT_M, OS1_PCAP, SHARED, kitti_files, md_table
 
 DS_M = 0.1
@@ -72,8 +72,9 @@ def wheel_cell(roughness) -> str:
 
 
 def real_rows(shared: Path) -> list:
-    frames = [(f"KITTI seq 00 {path.stem}", points, rings_in_scan_order(points), KITTI_HEIGHT_M)
-              for path in kitti_files(shared) for points in [rp.io.read(path)]]
+    files = kitti_files(shared)
+    frames = [(f"KITTI seq 00 {path.stem}", points, beams, KITTI_HEIGHT_M)
+              for path, (points, beams) in zip(files, kitti_numbered(files))]
     frames += [(f"OS1-128 recording, frame {k}", f.points.copy(), np.asarray(f.beams).copy(), OS1_HEIGHT_M)
                for k, f in enumerate(rp.io.open(OS1_PCAP))]
     rows = []

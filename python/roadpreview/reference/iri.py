@@ -10,7 +10,7 @@ import numpy as np
 
 from ..config import Config
 from .runs import NO_VALID_BIN, longest_valid_stretch
-from .support import backed_variances, interpolation_matrix
+from .support import noise_psd
 
 # Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
 K1, K2, C, MU = 653.0, 63.3, 6.0, 0.15
@@ -114,18 +114,10 @@ def noise_iri(count, spread, ds: float) -> Optional[float]:
     """The IRI (m/km) that the bin errors of a stretch alone give: their periodogram over the whole stretch (as
     support.noise_psd, without a window), through the filter's gain; a zero-mean Gaussian's mean absolute value
     is √(2/π) of its RMS. None when the bins' variances are unknown."""
-    variance = backed_variances(count, spread)
-    if variance is None:
+    psd = noise_psd(count, spread, ds, windowed=False)
+    if psd is None:
         return None
-    count = np.asarray(count)
     n = len(count)
-    spectra = np.fft.rfft(interpolation_matrix(count), axis=0)
-    expected = np.abs(spectra) ** 2 @ variance[count > 0]
-    one_sided = np.full(len(expected), 2.0)
-    one_sided[0] = 1.0
-    if n % 2 == 0:
-        one_sided[-1] = 1.0
-    psd = one_sided * expected * ds / n
     frequency = np.arange(len(psd)) / (n * ds)
     power = np.sum(psd[1:] * gain(frequency[1:], ds)) / (n * ds)
     return float(1000.0 * np.sqrt(2 / np.pi * power))

@@ -93,17 +93,18 @@ def interpolation_matrix(count) -> np.ndarray:
     return a
 
 
-def noise_psd(count, spread, ds: float) -> Optional[np.ndarray]:
+def noise_psd(count, spread, ds: float, windowed: bool = True) -> Optional[np.ndarray]:
     """Expected one-sided PSD (m³, on the grid of displacement_psd) of the bin errors of a stretch: independent
     errors of the backed bins, carried into the gaps by the linear interpolation, windowed like the profile
-    (periodic Hann; the detrend is neglected). None when the bin variances are unknown."""
+    (periodic Hann; the detrend is neglected), or not at all (``windowed`` false: the errors' power averaged over
+    the stretch, which the IRI's noise reads). None when the bin variances are unknown."""
     variance = backed_variances(count, spread)
     if variance is None:
         return None
     count = np.asarray(count)
     n = len(count)
     a = interpolation_matrix(count)
-    window = 0.5 * (1 - np.cos(2 * np.pi * np.arange(n) / n))
+    window = 0.5 * (1 - np.cos(2 * np.pi * np.arange(n) / n)) if windowed else np.ones(n)
     weighted = window[:, None] * a  # windowed error = weighted @ ε, ε independent with these variances
     spectra = np.fft.rfft(weighted, axis=0)  # (frequencies, backed bins)
     expected = np.abs(spectra) ** 2 @ variance[count > 0]  # E|X_k|²
