@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -127,32 +128,46 @@ TEST(GridRadiusSearch, GivesPclsEuclideanClusterExtractionTheKdTreesClusters) {
 }
 
 // The clusters the obstacle stage grows itself (into kept buffers) are those of PCL's extraction (which lists
-// them largest first; the components are numbered by their first point), also when the same scratch serves a second, different cloud and when the grid is rebuilt in place.
+// them largest first; the components are numbered by their first point), also when the same scratch serves
+// another cloud, when the grid is rebuilt in place, on a lattice whose neighbours lie exactly one tolerance apart (a
+// strict "less than" keeps every point apart) and on a far-spread cloud whose grid widens its columns.
 TEST(GridRadiusSearch, EuclideanComponentsAreThoseOfPclsExtraction) {
     rp::ComponentScratch scratch;
     rp::GridRadiusSearch grid(0.5);
-    for (unsigned seed : {6u, 8u}) {
-        const auto cloud = random_cloud(6000, 30.0, 2.0, seed);
+    auto spread = random_cloud(3000, 2000.0, 3.0, 2);
+    for (const auto& p : *random_cloud(1000, 20.0, 3.0, 3)) spread->push_back(p);
+    const std::tuple<Cloud::Ptr, double, std::int32_t> cases[] = {{random_cloud(6000, 30.0, 2.0, 6), 0.5, 50},
+                                                                  {random_cloud(6000, 30.0, 2.0, 8), 0.5, 50},
+                                                                  {lattice(), 0.25, 575},
+                                                                  {spread, 0.5, 3000}};
+    for (const auto& [cloud, tolerance, at_least] : cases) {
         pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
         extraction.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
-        extraction.setClusterTolerance(0.5);
+        extraction.setClusterTolerance(tolerance);
         extraction.setInputCloud(cloud);
         std::vector<pcl::PointIndices> want;
         extraction.extract(want);
         grid.setInputCloud(cloud);
         std::vector<std::int32_t> component_of;
-        const auto n = rp::euclidean_components(grid, 0.5, scratch, component_of);
+        const auto n = rp::euclidean_components(grid, tolerance, scratch, component_of);
         ASSERT_EQ(static_cast<std::size_t>(n), want.size());
-        EXPECT_GT(n, 50);
+        EXPECT_GT(n, at_least);
         std::vector<std::int32_t> seen;  // each cluster's component: one per cluster, all different
+        std::vector<std::int32_t> first_of(want.size());
         for (const auto& cluster : want) {
             const std::int32_t c = component_of[static_cast<std::size_t>(cluster.indices.front())];
             for (const auto i : cluster.indices) ASSERT_EQ(component_of[static_cast<std::size_t>(i)], c);
             seen.push_back(c);
+            first_of[static_cast<std::size_t>(c)] = *std::min_element(cluster.indices.begin(), cluster.indices.end());
         }
         std::sort(seen.begin(), seen.end());
         EXPECT_EQ(std::unique(seen.begin(), seen.end()), seen.end());
+        EXPECT_TRUE(std::is_sorted(first_of.begin(), first_of.end()));  // numbered by their first points
     }
+    auto odd = pcl::make_shared<pcl::Indices>(pcl::Indices{1, 3});
+    grid.setInputCloud(lattice(), odd);
+    std::vector<std::int32_t> component_of;
+    EXPECT_THROW(rp::euclidean_components(grid, 0.5, scratch, component_of), std::invalid_argument);
 }
 
 TEST(GridRadiusSearch, RejectsWhatItCannotDo) {
@@ -182,5 +197,29 @@ TEST(ColumnGrid, VisitsEveryPointInARectangleOnce) {
             if (p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1) want.push_back(p.index);
         std::sort(seen.begin(), seen.end());
         EXPECT_EQ(seen, want);
+    }
+}
+
+TEST(ColumnGrid, VisitsEveryPairWithinReachOnce) {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-20.0f, 20.0f);
+    std::vector<rp::ColumnGrid::Point> points;
+    for (std::int32_t i = 0; i < 3000; ++i) points.push_back({u(rng), u(rng), 0.0f, i});
+    for (const double edge : {0.7, 0.5}) {  // columns wider than the reach, and exactly as wide
+        const rp::ColumnGrid grid(points, edge);
+        const double reach = 0.5;
+        const auto near = [&](const rp::ColumnGrid::Point& p, const rp::ColumnGrid::Point& q) {
+            return std::abs(double(p.x) - q.x) <= reach && std::abs(double(p.y) - q.y) <= reach;
+        };
+        std::vector<std::pair<std::int32_t, std::int32_t>> seen, want;
+        grid.visit_pairs(reach, [&](const rp::ColumnGrid::Point& p, const rp::ColumnGrid::Point& q) {
+            if (near(p, q)) seen.emplace_back(std::min(p.index, q.index), std::max(p.index, q.index));
+        });
+        for (std::size_t a = 0; a < points.size(); ++a)
+            for (std::size_t b = a + 1; b < points.size(); ++b)
+                if (near(points[a], points[b])) want.emplace_back(points[a].index, points[b].index);
+        std::sort(seen.begin(), seen.end());
+        EXPECT_GT(want.size(), 1000u);
+        EXPECT_EQ(seen, want);  // each once: a pair seen twice would appear twice
     }
 }

@@ -58,50 +58,16 @@ bool ray_reaches(const SensorRoi& roi, const RigidTransform& T, const double ori
 
 namespace {
 
-// ROI cells: columns about the clustering's reach and the obstacles' ground columns wide, so that neighbours in
-// space are neighbours in memory (a huge ROI gets wider columns rather than millions of empty ones), cut into
-// slabs of base-frame height, so that within a column the road comes before what stands on it and a test for
-// ground or not ground sees long runs of equal answers, whatever the order of the input rows.
-constexpr double kCellEdgeM = 1.0;
-constexpr double kMaxCellsPerSide = 128.0;  // at most 128 × 128 columns × kSlabs cells: 2 MB of counts
-constexpr double kSlabLowM = -1.0, kSlabM = 0.1;  // below kSlabLowM: the first slab
-constexpr std::uint32_t kSlabs = 32;                // from kSlabLowM + (kSlabs - 1)·kSlabM up: the last one
 // Rows are transformed and cropped on several threads in runs of at least this many (fewer do not repay a thread).
 constexpr Eigen::Index kRowsPerThread = 16384;
 constexpr int kMaxRowParts = 8;
-
-// The cells of the ROI: square columns, each cut into slabs of height.
-struct CellGrid {
-    explicit CellGrid(const GroundConfig& g)
-        : x_lo(g.roi_x_min_m), y_lo(-g.roi_y_abs_max_m),
-          per_m(1.0 / std::max({kCellEdgeM, (g.roi_x_max_m - x_lo) / (kMaxCellsPerSide - 1.0),
-                                -2.0 * y_lo / (kMaxCellsPerSide - 1.0)})),  // multiplications, not divisions, per point
-          x_last(index(g.roi_x_max_m, x_lo)), y_last(index(-y_lo, y_lo)) {}
-
-    std::uint32_t cells() const { return (x_last + 1) * (y_last + 1) * kSlabs; }
-
-    // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0).
-    std::uint32_t cell(float x, float y, float z) const {
-        const std::uint32_t column = std::min(index(x, x_lo), x_last) * (y_last + 1) + std::min(index(y, y_lo), y_last);
-        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) * (1.0 / kSlabM));
-        return column * kSlabs + std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
-    }
-
-    double x_lo, y_lo, per_m;
-    std::uint32_t x_last, y_last;
-
-private:
-    std::uint32_t index(double v, double lo) const {
-        return static_cast<std::uint32_t>(std::clamp((v - lo) * per_m, 0.0, 1e9));
-    }
-};
 
 // Rows [first, last) of `input` in the base frame, the ROI points among them stored from `at` on in input order,
 // then given their cells. Written without a branch on the ROI test (a point is always stored, then kept or
 // overwritten, so one slot beyond the kept ones is written): in an unordered cloud that branch would be
 // mispredicted half of the time. Returns how many were kept; `finite` counts the finite rows.
 std::size_t roi_points(PointsView input, Eigen::Index first, Eigen::Index last, const RigidTransform& T,
-                       const GroundConfig& g, const CellGrid& grid, RoiCloud::Candidate* at, std::int64_t& finite) {
+                       const GroundConfig& g, const RoiCells& grid, RoiCloud::Candidate* at, std::int64_t& finite) {
     std::size_t kept = 0;
     finite = 0;
     for (Eigen::Index i = first; i < last; ++i) {
@@ -122,7 +88,8 @@ std::size_t roi_points(PointsView input, Eigen::Index first, Eigen::Index last, 
 }  // namespace
 
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out, int threads) {
-    const CellGrid grid(g);
+    out.cells = RoiCells(g);
+    const RoiCells& grid = out.cells;
     // The rows in `parts` runs, each stored from its own offset (one slot of room each), then closed up in order.
     const int parts = input.rows() >= kRowsPerThread * 2 ? std::clamp(threads, 1, kMaxRowParts) : 1;
     auto& scratch = out.scratch;
@@ -161,6 +128,8 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
         out.input_index[at] = c.row;
         out.input_order[k] = static_cast<std::int32_t>(at);
     }
+    std::copy_backward(start.begin(), start.end() - 1, start.end());  // each cell's end → the next cell's start
+    start[0] = 0;
     out.cloud->width = static_cast<std::uint32_t>(pts.size());
     out.cloud->height = 1;
 }

@@ -5,6 +5,7 @@
 // that every later stage reads memory in spatial order whatever the order of the input rows.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -16,6 +17,55 @@
 #include "roadpreview/core/points.hpp"
 
 namespace roadpreview {
+
+// The cells of the ROI: square columns about the clustering's reach and the obstacles' ground columns wide, so that
+// neighbours in space are neighbours in memory (a huge ROI gets wider columns rather than millions of empty ones),
+// cut into slabs of base-frame height, so that within a column the road comes before what stands on it and a test
+// for ground or not ground sees long runs of equal answers, whatever the order of the input rows.
+class RoiCells {
+public:
+    static constexpr double kCellEdgeM = 1.0;
+    static constexpr double kMaxCellsPerSide = 128.0;  // at most 128 × 128 columns × kSlabs cells: 2 MB of counts
+    static constexpr double kSlabLowM = -1.0, kSlabM = 0.1;  // below kSlabLowM: the first slab
+    static constexpr std::uint32_t kSlabs = 32;                // from kSlabLowM + (kSlabs - 1)·kSlabM up: the last one
+
+    RoiCells() = default;
+    explicit RoiCells(const GroundConfig& g)
+        : x_lo_(g.roi_x_min_m), y_lo_(-g.roi_y_abs_max_m),
+          // a factor: multiplications, not divisions, per point
+          per_m_(1.0 / std::max({kCellEdgeM, (g.roi_x_max_m - x_lo_) / (kMaxCellsPerSide - 1.0),
+                                 -2.0 * y_lo_ / (kMaxCellsPerSide - 1.0)})),
+          x_last_(index(g.roi_x_max_m, x_lo_)), y_last_(index(-y_lo_, y_lo_)) {}
+
+    std::uint32_t cells() const { return columns() * kSlabs; }
+
+    // min: a coordinate rounded to float may lie just beyond the ROI (just before it truncates to cell 0).
+    std::uint32_t cell(float x, float y, float z) const {
+        const double above = std::max(0.0, (static_cast<double>(z) - kSlabLowM) * (1.0 / kSlabM));
+        return column(x, y) * kSlabs + std::min(static_cast<std::uint32_t>(std::min(above, 1e6)), kSlabs - 1);
+    }
+
+    /// The columns overlapping [x_lo, x_hi] × [y_lo, y_hi]: calls visit(column) for each (those beyond the ROI's
+    /// edge columns fall into them).
+    template <class Visit>
+    void visit_columns(double x_lo, double x_hi, double y_lo, double y_hi, Visit&& visit) const {
+        const std::uint32_t ix1 = x_index(x_hi), iy0 = y_index(y_lo), iy1 = y_index(y_hi);
+        for (std::uint32_t ix = x_index(x_lo); ix <= ix1; ++ix)
+            for (std::uint32_t iy = iy0; iy <= iy1; ++iy) visit(ix * (y_last_ + 1) + iy);
+    }
+
+private:
+    std::uint32_t columns() const { return (x_last_ + 1) * (y_last_ + 1); }
+    std::uint32_t column(double x, double y) const { return x_index(x) * (y_last_ + 1) + y_index(y); }
+    std::uint32_t x_index(double x) const { return std::min(index(x, x_lo_), x_last_); }
+    std::uint32_t y_index(double y) const { return std::min(index(y, y_lo_), y_last_); }
+    std::uint32_t index(double v, double lo) const {
+        return static_cast<std::uint32_t>(std::clamp((v - lo) * per_m_, 0.0, 1e9));
+    }
+
+    double x_lo_ = 0.0, y_lo_ = 0.0, per_m_ = 1.0;
+    std::uint32_t x_last_ = 0, y_last_ = 0;
+};
 
 struct RoiCloud {
     pcl::PointCloud<pcl::PointXYZ>::Ptr cloud{new pcl::PointCloud<pcl::PointXYZ>};
@@ -31,6 +81,18 @@ struct RoiCloud {
         return points_view(cloud->points.empty() ? nullptr : cloud->points[0].data, size(), 4);
     }
 
+    /// Calls visit(k) for every ROI point k of the cells' columns that overlap [x_lo, x_hi] × [y_lo, y_hi]: those
+    /// inside it and some around it, for the caller to test.
+    template <class Visit>
+    void visit_columns(double x_lo, double x_hi, double y_lo, double y_hi, Visit&& visit) const {
+        if (input_index.empty()) return;
+        cells.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](std::uint32_t column) {
+            const std::uint32_t first = cell_start[column * RoiCells::kSlabs];
+            const std::uint32_t last = cell_start[(column + 1) * RoiCells::kSlabs];
+            for (std::uint32_t k = first; k < last; ++k) visit(static_cast<Eigen::Index>(k));
+        });
+    }
+
     // Scratch of crop_roi, kept so that a stream of frames allocates nothing once the buffers have grown.
     struct Candidate {
         float x, y, z;
@@ -38,7 +100,8 @@ struct RoiCloud {
         std::int32_t row;
     };
     std::vector<Candidate> scratch;
-    std::vector<std::uint32_t> cell_start;
+    RoiCells cells;                        ///< the cells the points are ordered by
+    std::vector<std::uint32_t> cell_start;  ///< cell c holds points cell_start[c] … cell_start[c + 1]
 };
 
 /// Transform, drop non-finite rows (counted), crop to the ROI and order the points by cell; reuses `out`'s

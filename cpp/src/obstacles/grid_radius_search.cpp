@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include <boost/pending/disjoint_sets.hpp>
+
 namespace roadpreview {
 
 GridRadiusSearch::GridRadiusSearch(double column_edge) : Search("GridRadiusSearch", false), column_edge_(column_edge) {
@@ -25,23 +27,35 @@ void GridRadiusSearch::setInputCloud(const PointCloudConstPtr& cloud, const Indi
     });
 }
 
+namespace {
+
+// The square of the distance, in float and summed in FLANN's order as pcl::KdTreeFLANN computes it.
+template <class P>
+float sqr_distance(const P& p, const ColumnGrid::Point& q) {
+    const float dx = p.x - q.x, dy = p.y - q.y, dz = p.z - q.z;
+    float d = dx * dx;
+    d += dy * dy;
+    d += dz * dz;
+    return d;
+}
+
+// The columns visited reach a little beyond the radius: float rounding can accept a point just outside it.
+double reach(double radius) { return radius * (1.0 + 1e-5); }
+
+}  // namespace
+
 int GridRadiusSearch::radiusSearch(const pcl::PointXYZ& point, double radius, pcl::Indices& k_indices,
                                    std::vector<float>& k_sqr_distances, unsigned int max_nn) const {
     k_indices.clear();
     k_sqr_distances.clear();
     const auto sqr_radius = static_cast<float>(radius * radius);  // as pcl::KdTreeFLANN
-    // The columns visited reach a little beyond the radius: float rounding can accept a point just outside it.
-    const double reach = radius * (1.0 + 1e-5);
-    grid_.visit_columns(point.x - reach, point.x + reach, point.y - reach, point.y + reach,
-                        [&](const ColumnGrid::Point& q) {
-                            const float dx = point.x - q.x, dy = point.y - q.y, dz = point.z - q.z;
-                            float sqr_distance = dx * dx;  // summed in FLANN's order
-                            sqr_distance += dy * dy;
-                            sqr_distance += dz * dz;
-                            if (sqr_distance >= sqr_radius) return;
-                            k_indices.push_back(q.index);
-                            k_sqr_distances.push_back(sqr_distance);
-                        });
+    const double r = reach(radius);
+    grid_.visit_columns(point.x - r, point.x + r, point.y - r, point.y + r, [&](const ColumnGrid::Point& q) {
+        const float d = sqr_distance(point, q);
+        if (d >= sqr_radius) return;
+        k_indices.push_back(q.index);
+        k_sqr_distances.push_back(d);
+    });
     if (sorted_results_ || (max_nn > 0 && k_indices.size() > max_nn)) sortResults(k_indices, k_sqr_distances);
     if (max_nn > 0 && k_indices.size() > max_nn) {
         k_indices.resize(max_nn);
@@ -50,25 +64,30 @@ int GridRadiusSearch::radiusSearch(const pcl::PointXYZ& point, double radius, pc
     return static_cast<int>(k_indices.size());
 }
 
+// Every pair the searches would join, found once: for each point, the points after it in the grid's order that a
+// radius search about it would return (a pair closer than the radius lies within the reach of both). A pair whose
+// points are joined already needs no distance.
 std::int32_t euclidean_components(const GridRadiusSearch& search, double tolerance, ComponentScratch& scratch,
                                   std::vector<std::int32_t>& component_of) {
-    const auto& cloud = *search.getInputCloud();
-    component_of.assign(cloud.size(), -1);
+    if (search.getIndices()) throw std::invalid_argument("euclidean_components: the search must grid its whole cloud");
+    const auto n = search.getInputCloud()->size();
+    scratch.parent.resize(n);
+    scratch.rank.resize(n);
+    boost::disjoint_sets<int*, std::int32_t*> sets(scratch.rank.data(), scratch.parent.data());
+    for (std::size_t i = 0; i < n; ++i) sets.make_set(static_cast<std::int32_t>(i));
+    const auto sqr_radius = static_cast<float>(tolerance * tolerance);
+    search.grid().visit_pairs(reach(tolerance), [&](const ColumnGrid::Point& p, const ColumnGrid::Point& q) {
+        const std::int32_t a = sets.find_set(p.index), b = sets.find_set(q.index);
+        if (a != b && sqr_distance(p, q) < sqr_radius) sets.link(a, b);
+    });
+    // Numbered in the order of their first points, as growing them from each point not yet taken numbers them.
+    component_of.assign(n, -1);
+    scratch.number.assign(n, -1);
     std::int32_t components = 0;
-    for (std::size_t seed = 0; seed < cloud.size(); ++seed) {
-        if (component_of[seed] >= 0) continue;
-        scratch.queue.assign(1, static_cast<std::int32_t>(seed));
-        component_of[seed] = components;
-        for (std::size_t next = 0; next < scratch.queue.size(); ++next) {
-            const auto& p = cloud[static_cast<std::size_t>(scratch.queue[next])];
-            search.radiusSearch(p, tolerance, scratch.neighbours, scratch.sqr_distances);
-            for (const auto j : scratch.neighbours) {
-                if (component_of[static_cast<std::size_t>(j)] >= 0) continue;
-                component_of[static_cast<std::size_t>(j)] = components;
-                scratch.queue.push_back(j);
-            }
-        }
-        ++components;
+    for (std::size_t i = 0; i < n; ++i) {
+        std::int32_t& number = scratch.number[static_cast<std::size_t>(sets.find_set(static_cast<std::int32_t>(i)))];
+        if (number < 0) number = components++;
+        component_of[i] = number;
     }
     return components;
 }

@@ -33,6 +33,9 @@ public:
     int nearestKSearch(const pcl::PointXYZ& point, int k, pcl::Indices& k_indices,
                        std::vector<float>& k_sqr_distances) const override;
 
+    /// The grid of the input cloud's points.
+    const ColumnGrid& grid() const { return grid_; }
+
 private:
     double column_edge_;
     ColumnGrid grid_;
@@ -40,16 +43,17 @@ private:
 
 /// Buffers of euclidean_components, kept between calls so that clustering a stream of frames allocates nothing.
 struct ComponentScratch {
-    std::vector<std::int32_t> queue;
-    pcl::Indices neighbours;
-    std::vector<float> sqr_distances;
+    std::vector<std::int32_t> parent, number;  // of each point: its disjoint set's parent, its set's number
+    std::vector<int> rank;
 };
 
-/// The clusters of PCL's Euclidean cluster extraction (pcl::extractEuclideanClusters, every size kept), grown
-/// the same way — from each point not yet taken, by radius searches — into buffers kept between frames, where
-/// PCL allocates a queue and an index list per cluster: the connected components of the search's whole input
-/// cloud, points joined when closer than `tolerance`. Writes each point's component, numbered in the order of
-/// their first points (PCL's extract() then lists its clusters largest first), and returns how many there are.
+/// The clusters of PCL's Euclidean cluster extraction (pcl::extractEuclideanClusters, every size kept): the
+/// connected components of the search's whole input cloud (it must have no indices), points joined when closer
+/// than `tolerance` by the float test of radiusSearch. Where PCL grows each cluster by a radius search about every
+/// point of it (meeting each pair twice, and allocating a queue and an index list per cluster), each pair the
+/// searches would meet is tested once, and not at all when its points are joined already (Boost's disjoint sets),
+/// into buffers kept between frames. Writes each point's component, numbered in the order of their first points
+/// (PCL's extract() then lists its clusters largest first), and returns how many there are.
 std::int32_t euclidean_components(const GridRadiusSearch& search, double tolerance, ComponentScratch& scratch,
                                   std::vector<std::int32_t>& component_of);
 

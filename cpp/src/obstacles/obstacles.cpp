@@ -7,7 +7,6 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "core/column_grid.hpp"
 #include "obstacles/grid_radius_search.hpp"
 #include "core/median.hpp"
 #include "obstacles/obstacles_pcl.hpp"
@@ -203,57 +202,26 @@ Cluster describe(PointsView pts, const Members& members) {
     return c;
 }
 
-// The ground points that may lie within `reach` of a cluster's box, in columns 1 m wide, to find those around a
-// cluster in O(nearby). A frame's ground holds tens of thousands of points and its clusters stand on a small part
-// of it: only ground points in a 1 m column that some grown box overlaps are gridded (all of them when those
-// columns would outnumber the points: a huge region of interest).
-void ground_near_clusters(PointsView pts, const std::vector<std::uint8_t>& ground,
-                          const std::vector<Cluster>& clusters, double reach, ObstacleScratch& s) {
-    s.ground_grid.rebuild(1.0, [&](std::vector<ColumnGrid::Point>& points) {
-        if (clusters.empty()) return;
-        double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
-        for (const Cluster& c : clusters) {
-            x0 = std::min(x0, c.aabb_min[0] - reach), x1 = std::max(x1, c.aabb_max[0] + reach);
-            y0 = std::min(y0, c.aabb_min[1] - reach), y1 = std::max(y1, c.aabb_max[1] + reach);
-        }
-        const double columns = (std::floor(x1 - x0) + 1.0) * (std::floor(y1 - y0) + 1.0);
-        const bool filter = columns <= 4.0 * static_cast<double>(pts.rows()) + 4096.0;
-        const auto column = [](double v, double lo) { return static_cast<std::size_t>(v - lo); };  // v ≥ lo
-        const std::size_t ny = filter ? column(y1, y0) + 1 : 0;
-        const auto at = [&](double x, double y) { return column(x, x0) * ny + column(y, y0); };
-        if (filter) {
-            s.near_column.assign(static_cast<std::size_t>(columns), 0);
-            for (const Cluster& c : clusters) {
-                const std::size_t ix1 = column(c.aabb_max[0] + reach, x0), iy1 = column(c.aabb_max[1] + reach, y0);
-                for (std::size_t ix = column(c.aabb_min[0] - reach, x0); ix <= ix1; ++ix)
-                    for (std::size_t iy = column(c.aabb_min[1] - reach, y0); iy <= iy1; ++iy)
-                        s.near_column[ix * ny + iy] = 1;
-            }
-        }
-        for (Eigen::Index i = 0; i < pts.rows(); ++i) {
-            if (!ground[static_cast<std::size_t>(i)]) continue;
-            const double x = pts(i, 0), y = pts(i, 1);
-            if (filter && !(x >= x0 && x <= x1 && y >= y0 && y <= y1 && s.near_column[at(x, y)])) continue;
-            points.push_back({pts(i, 0), pts(i, 1), pts(i, 2), static_cast<std::int32_t>(i)});
-        }
-    });
-}
-
-// Median height above the plane of the ground points within `reach` of the footprint; 0 when there are none.
-double local_ground(const ColumnGrid& ground, const Plane& plane, const Cluster& c, double reach,
-                    std::vector<double>& h) {
+// Median height above the plane of the ground points within `reach` of the footprint, found in the ROI's own
+// columns; 0 when there are none.
+double local_ground(const RoiCloud& roi, const std::vector<std::uint8_t>& ground, const Plane& plane,
+                    const Cluster& c, double reach, std::vector<double>& h) {
     const double x_lo = c.aabb_min[0] - reach, x_hi = c.aabb_max[0] + reach;
     const double y_lo = c.aabb_min[1] - reach, y_hi = c.aabb_max[1] + reach;
+    const PointsView pts = roi.view();
     h.clear();
-    ground.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](const ColumnGrid::Point& q) {
-        if (q.x >= x_lo && q.x <= x_hi && q.y >= y_lo && q.y <= y_hi) h.push_back(height_above(plane, q.x, q.y, q.z));
+    roi.visit_columns(x_lo, x_hi, y_lo, y_hi, [&](Eigen::Index i) {
+        const double x = pts(i, 0), y = pts(i, 1);
+        if (ground[static_cast<std::size_t>(i)] && x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi)
+            h.push_back(height_above(plane, x, y, pts(i, 2)));
     });
     return h.empty() ? 0.0 : median(h.begin(), h.end());
 }
 
 // The clusters of out.label described: boxes, local ground, height and bottom.
-void describe_all(PointsView pts, const std::vector<std::uint8_t>& ground, const Plane& plane,
+void describe_all(const RoiCloud& roi, const std::vector<std::uint8_t>& ground, const Plane& plane,
                   const ObstaclesConfig& cfg, ObstacleScratch& s, Clustering& out) {
+    const PointsView pts = roi.view();
     group_members(out.label, s.kept.size(), s);
     const auto members_of = [&](std::size_t g) {
         return Members{s.members.data() + s.member_start[g], s.members.data() + s.member_start[g + 1]};
@@ -263,11 +231,10 @@ void describe_all(PointsView pts, const std::vector<std::uint8_t>& ground, const
         out.clusters.push_back(describe(pts, members_of(g)));
         out.clusters.back().id = static_cast<std::int32_t>(g);
     }
-    ground_near_clusters(pts, ground, out.clusters, cfg.ground_search_m, s);
     for (std::size_t g = 0; g < out.clusters.size(); ++g) {
         const Members members = members_of(g);
         Cluster& c = out.clusters[g];
-        c.ground_offset = local_ground(s.ground_grid, plane, c, cfg.ground_search_m, s.heights);
+        c.ground_offset = local_ground(roi, ground, plane, c, cfg.ground_search_m, s.heights);
         double top = -kInf, low = kInf;
         for (const auto i : members) {
             const double h = height_above(plane, pts(i, 0), pts(i, 1), pts(i, 2));
@@ -289,7 +256,7 @@ void find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground
     for (std::size_t i = 0; i < ground_mask.size(); ++i)
         if (!ground_mask[i]) s.candidates.push_back(static_cast<pcl::index_t>(i));
     point_labels(roi.view(), s.candidates, cfg, &roi.input_index, s, out.label);
-    describe_all(roi.view(), ground_mask, plane, cfg, s, out);
+    describe_all(roi, ground_mask, plane, cfg, s, out);
 }
 
 Clustering find_obstacles(const RoiCloud& roi, const std::vector<std::uint8_t>& ground_mask, const Plane& plane,

@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "roadpreview/obstacles/obstacles.hpp"
-#include "core/column_grid.hpp"
 #include "core/roi_cloud.hpp"
 #include "obstacles/grid_radius_search.hpp"
 
@@ -45,8 +44,6 @@ struct ObstacleScratch {
     std::vector<std::int32_t> candidate_label;
     std::vector<std::uint32_t> member_start;      // each cluster's points
     std::vector<pcl::index_t> members;
-    ColumnGrid ground_grid;                       // the ground points near some cluster
-    std::vector<std::uint8_t> near_column;        // 1 m columns within reach of some cluster
     std::vector<double> heights;                  // of the ground around one cluster
 };
 
