@@ -121,7 +121,7 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     for (auto* v : {&x, &y, &shape, &floor, &share, &corrected, &iri_noise}) v->reserve(ordinates);
     used.reserve(ordinates);
     strong.reserve(ordinates);
-    for (auto* v : {&variance, &lag_sum, &window, &pooled, &support.noise, &support.resolved, &other.noise,
+    for (auto* v : {&variance, &lag_sum, &window, &pooled, &cosine, &support.noise, &support.resolved, &other.noise,
                     &other.resolved})
         v->reserve(bins);
     pool.reserve(1, bins);

@@ -57,6 +57,7 @@ struct RoughnessScratch {
     SupportBuffers support, other;  // the wheel's (the left's), and the right wheel's for the vehicle
     // stretch_support
     std::vector<double> variance, lag_sum, window, pooled;
+    std::vector<double> cosine;  // cos(2π m / N), m = 0 … N − 1, for the last stretch of N bins
     PoolBuffers pool;
     std::vector<Anchors> anchors;
     std::vector<std::size_t> interval;

@@ -46,6 +46,18 @@ double shared_covariance(const Anchors& a, const Anchors& b, const std::vector<d
 
 double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(M_PI * x) / (M_PI * x); }
 
+// cos(2π m / n) for m = 0 … n − 1, kept in the scratch for the next call of the same length (both wheels, and the
+// windowed and the unwindowed noise of each, share it).
+const std::vector<double>& unit_circle(std::size_t n, RoughnessScratch& s) {
+    if (s.cosine.size() == n) return s.cosine;
+    s.cosine.resize(n);
+    for (std::size_t m = 0; m < n; ++m) {
+        const double turns = static_cast<double>(m) / static_cast<double>(n);
+        s.cosine[m] = std::cos(2.0 * M_PI * turns);
+    }
+    return s.cosine;
+}
+
 }  // namespace
 
 // noise_psd into `psd` (with the Hann window, or none); false when the bins' noise is unknown.
@@ -75,12 +87,10 @@ bool noise_psd(const std::int32_t* count, const double* spread, std::size_t bins
     }
     const std::size_t half = bins / 2;
     psd.resize(half + 1);
+    const std::vector<double>& cosine = unit_circle(bins, s);
     for (std::size_t k = 0; k <= half; ++k) {
         double power = s.lag_sum[0];
-        for (std::size_t lag = 1; lag <= max_lag; ++lag) {
-            const double turns = static_cast<double>(lag * k % bins) / static_cast<double>(bins);
-            power += 2.0 * s.lag_sum[lag] * std::cos(2.0 * M_PI * turns);
-        }
+        for (std::size_t lag = 1; lag <= max_lag; ++lag) power += 2.0 * s.lag_sum[lag] * cosine[lag * k % bins];
         const bool unpaired = k == 0 || 2 * k == bins;
         psd[k] = (unpaired ? 1.0 : 2.0) * power * ds / window_power;
     }
