@@ -3,8 +3,11 @@ beam's elevation error is counted in the profiles' noise, from not at all (0, th
 
 KITTI seq 00 frames 0–5 (the HDL-64E's beams numbered by scan order) uncalibrated and after a surface calibration
 that did not see the frame (from the other half of the six, as in bench/calibration.py), and the bundled OS1-128
-recording (its decoder's beams), uncalibrated: per frame the left, right and vehicle class ('·' declined), 5 m/s
-straight; then fused (kalman) with each recording's poses. The README's "Beam self-calibration" quotes the tables.
+recording (its decoder's beams), uncalibrated and calibrated by its own three frames: per frame the left, right and
+vehicle class ('·' declined), 5 m/s straight; then fused (kalman) with each recording's poses. The calibrated
+recordings also with each beam's own σ as its calibration states it (``profile.beam_sigmas_deg`` from
+``BeamCalibration.beam_sigmas_deg``; the beams it could not determine at 0). The README's "Beam self-calibration"
+quotes the tables.
 
 Usage: ``python bench/beam_errors.py [--shared DIR]``; prints Markdown, progress on stderr.
 """
@@ -65,9 +68,34 @@ def kitti_recordings(shared: Path, tmp: Path) -> list:
         paths[name] = tmp / f"{name}.yaml"
         rp.calibrate_beams([frames[i] for i in idx], method="surface", config=cfg).save(str(paths[name]))
     crossed = kitti_numbered(files[:3], paths["3–5"]) + kitti_numbered(files[3:], paths["0–2"])
-    return [("KITTI seq 00, frames 0–5, uncalibrated", kitti_numbered(files), poses, KITTI_HEIGHT_M, 8.6),
+    stated = {name: rp.read_beam_calibration(path).beam_sigmas_deg(0.0) for name, path in paths.items()}
+    return [("KITTI seq 00, frames 0–5, uncalibrated", kitti_numbered(files), poses, KITTI_HEIGHT_M, 8.6, None),
             ("KITTI seq 00, calibrated by the other half (single) / all six (fused)", crossed, poses,
-             KITTI_HEIGHT_M, 8.6, kitti_numbered(files, paths["0–5"]))]
+             KITTI_HEIGHT_M, 8.6, {"single": [stated["3–5"]] * 3 + [stated["0–2"]] * 3, "fused": stated["0–5"],
+                                   "fused_frames": kitti_numbered(files, paths["0–5"])})]
+
+
+def os1_recordings(tmp: Path) -> list:
+    """The OS1-128 rows: uncalibrated, and calibrated by its own three frames (motion method, its poses)."""
+    points, poses = os1_frames()
+    numbered = [(p, np.asarray(f.beams).copy()) for p, f in zip(points, rp.io.open(OS1_PCAP))]
+    cfg = rp.Config(sensor_height=OS1_HEIGHT_M)
+    source = rp.io.open(OS1_PCAP)
+    c = rp.calibrate_beams(numbered, poses=poses, config=cfg, beam_count=source.info["beams"])
+    c.sensor_model, c.serial = source.info["sensor_model"], source.info["serial"]
+    path = tmp / "os1.yaml"
+    c.save(str(path))
+    corrected = [(f.points.copy(), np.asarray(f.beams).copy()) for f in rp.io.open(OS1_PCAP, beam_calibration=path)]
+    sigmas = c.beam_sigmas_deg(0.0)
+    return [("OS1-128 recording, uncalibrated", numbered, poses, OS1_HEIGHT_M, 2.5, None),
+            ("OS1-128 recording, calibrated by its own frames", corrected, poses, OS1_HEIGHT_M, 2.5,
+             {"single": [sigmas] * len(corrected), "fused": sigmas})]
+
+
+def stated_classes(frames, per_frame_sigmas: list, height: float) -> str:
+    """classes() of single frames, each with its own calibration's stated σ per beam."""
+    return " ".join(classes([frame], rp.Config(sensor_height=height, profile={"beam_sigmas_deg": list(sigmas)}))
+                    for frame, sigmas in zip(frames, per_frame_sigmas))
 
 
 def main(argv=None) -> int:
@@ -75,18 +103,21 @@ def main(argv=None) -> int:
     parser.add_argument("--shared", type=Path, default=SHARED, help="the shared data folder (KITTI frames 3-5, poses)")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        recordings = kitti_recordings(args.shared, Path(tmp))
-    os1_points, os1_poses = os1_frames()
-    os1 = [(p, np.asarray(f.beams).copy()) for p, f in zip(os1_points, rp.io.open(OS1_PCAP))]
-    recordings.append(("OS1-128 recording, uncalibrated", os1, os1_poses, OS1_HEIGHT_M, 2.5))
+        recordings = kitti_recordings(args.shared, Path(tmp)) + os1_recordings(Path(tmp))
     single, fused = [], []
-    for name, frames, poses, height, speed, *in_sample in recordings:
+    for name, frames, poses, height, speed, stated in recordings:
         log(name)
+        fused_frames = (stated or {}).get("fused_frames", frames)
         for sigma in SIGMAS_DEG:
             cfg = rp.Config(sensor_height=height, profile={"beam_sigma_deg": sigma})
             kalman = rp.Config(sensor_height=height, profile={"beam_sigma_deg": sigma}, fusion={"method": "kalman"})
             single.append([name, f"{sigma:g}", classes(frames, cfg)])
-            fused.append([name, f"{sigma:g}", classes(in_sample[0] if in_sample else frames, kalman, poses, speed)])
+            fused.append([name, f"{sigma:g}", classes(fused_frames, kalman, poses, speed)])
+        if stated:
+            kalman = rp.Config(sensor_height=height, profile={"beam_sigmas_deg": list(stated["fused"])},
+                               fusion={"method": "kalman"})
+            single.append([name, "each beam's stated", stated_classes(frames, stated["single"], height)])
+            fused.append([name, "each beam's stated", classes(fused_frames, kalman, poses, speed)])
     print("# Beam errors counted\n")
     print(f"## Single frames, {SPEED_MPS:g} m/s straight: left, right, vehicle class per frame\n")
     print(md_table(["recording", "beam σ °", "classes"], single) + "\n")

@@ -49,6 +49,7 @@ struct RunOptions {
     std::string fusion;
     double alpha = 0.0;
     double beam_sigma_deg = 0.0;
+    bool beam_sigmas_from_calibration = false;  // each calibrated beam's σ from the --beam-calibration file
     std::string poses_file;
     int beams = 64;       // calibrate: beams of a sensor whose files do not number them (KITTI: HDL-64E)
     double cell = 0.2;    // calibrate: road cell, m
@@ -95,6 +96,9 @@ rp::Config build_config(const RunOptions& o, const CLI::App& run) {
                             : o.fusion == "kalman" ? rp::FusionMethod::Kalman : rp::FusionMethod::None;
     if (given(run, "--alpha")) cfg.fusion.alpha = o.alpha;
     if (given(run, "--beam-sigma-deg")) cfg.profile.beam_sigma_deg = o.beam_sigma_deg;
+    if (o.beam_sigmas_from_calibration)
+        cfg.profile.beam_sigmas_deg = rp::calibrated_beam_sigmas_deg(
+            rp::read_beam_calibration(o.source.beam_calibration), cfg.profile.beam_sigma_deg);
     if (given(run, "--threads")) cfg.threads = o.threads;
     if (given(run, "--frame-rate")) cfg.fusion.frame_rate_hz = o.frame_rate;
     rp::validate(cfg);
@@ -681,6 +685,10 @@ int main(int argc, char** argv) {
                         "σ of each beam's elevation angle, deg: counted in the profiles' noise for points whose beam "
                         "the decoder or a beams file gives (default 0: not counted)")
         ->check(CLI::Range(0.0, 10.0));
+    run_cmd->add_flag("--beam-sigmas-from-calibration", o.beam_sigmas_from_calibration,
+                      "Count each calibrated beam's remaining elevation error, the σ the --beam-calibration file "
+                      "states for it (--beam-sigma-deg for the beams it could not determine)")
+        ->needs(run_cmd->get_option("--beam-calibration"));
     run_cmd->add_option("--poses", o.poses_file, "KITTI poses file (one 3x4 row-major pose per frame of the input): "
                                                   "moves the fusion map instead of integrating the motion");
     run_cmd->add_option("--segments", o.segment_lengths_m,

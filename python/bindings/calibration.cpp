@@ -139,6 +139,9 @@ void bind_calibration(py::module_& m) {
             rp::apply_beam_calibration(out.mutable_data(), points.shape(0), points.shape(1), index, c);
             return out;
         }, py::arg("points"), py::arg("beams"), "a corrected copy of sensor-frame points (beam −1: left as is)")
+        .def("beam_sigmas_deg", &rp::calibrated_beam_sigmas_deg, py::arg("others_deg") = 0.0,
+             "each beam's stated elevation σ (deg), for Config.profile.beam_sigmas_deg; others_deg for the beams the "
+             "drive could not determine")
         .def("to_yaml", &rp::beam_calibration_to_yaml)
         .def("save", &rp::write_beam_calibration, py::arg("path"), "write the beams file (YAML)");
     m.def("read_beam_calibration", &rp::read_beam_calibration, py::arg("path"));

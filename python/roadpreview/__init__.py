@@ -22,7 +22,7 @@ if native_available():
     from . import io, range_sensor, roadside
     from . import batch, drive, geo, io_bags, odometry  # drives: bags, odometry, batches, maps (their deps lazily)
     from ._core import BeamCalibration, CalibrationError
-    from .calibration import calibrate_beams
+    from .calibration import calibrate_beams, read_beam_calibration
     from .drive_runner import Drive, run
     from .readout import ProfileReadout
     from ._core import Iri, Obstacles, PathObstacles, Profile, Result, Roughness, __version__
@@ -37,8 +37,8 @@ def cmake_dir() -> str:
 
 __all__ = [
     "Config", "Extrinsics", "GroundConfig", "IriConfig", "PathConfig", "ProfileConfig", "RoughnessConfig",
-    "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles", "PathObstacles", "io",
-    "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "BeamCalibration", "CalibrationError",
-    "Repeatability", "repeatability", "world_profile", "range_sensor", "run", "Drive", "roadside",
-    "drive", "io_bags", "odometry", "batch", "geo", "ProfileReadout",
+    "ObstaclesConfig", "FusionConfig", "Estimator", "Result", "Profile", "Roughness", "Iri", "Obstacles",
+    "PathObstacles", "io", "reference", "sim", "cmake_dir", "__version__", "calibrate_beams", "read_beam_calibration",
+    "BeamCalibration", "CalibrationError", "Repeatability", "repeatability", "world_profile", "range_sensor", "run",
+    "Drive", "roadside", "drive", "io_bags", "odometry", "batch", "geo", "ProfileReadout",
 ]

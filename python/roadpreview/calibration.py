@@ -4,12 +4,15 @@
     beams = rp.calibrate_beams(frames, speed=2.5, config=rp.Config(sensor_height=1.97))   # or poses=[...]
     beams.elevation_offset_deg, beams.elevation_sigma_deg, beams.determined
     beams.save("beams.yaml")            # then rp.io.open(..., beam_calibration="beams.yaml")
+    beams = rp.read_beam_calibration("beams.yaml")
+    rp.Config(profile={"beam_sigmas_deg": beams.beam_sigmas_deg(0.02)})  # count what each beam's offset leaves
 """
 
 from __future__ import annotations
 
 import math
-from typing import Iterable, Optional, Sequence
+import os
+from typing import Iterable, Optional, Sequence, Union
 
 import numpy as np
 
@@ -17,6 +20,12 @@ from ._native import core
 from .config import Config
 
 DEFAULT_UNNUMBERED_BEAMS = 64  #: a sensor whose frames do not number their points: the KITTI HDL-64E
+
+
+def read_beam_calibration(path: Union[str, os.PathLike]):
+    """The beams file at ``path`` (written by ``roadpreview calibrate`` or ``BeamCalibration.save``) as a
+    BeamCalibration; a bad or missing field raises RuntimeError naming the file."""
+    return core().read_beam_calibration(os.fspath(path))
 
 
 def _frame_arrays(frame):

@@ -75,6 +75,9 @@ class ProfileConfig:
     #: σ (degrees) of each LiDAR beam's elevation angle, an error all of a beam's points share (method.md §3): counted
     #: in the bins' and the map's noise for points whose beam is known (``beams=``, a decoder's frames); 0: not counted
     beam_sigma_deg: float = 0.0
+    #: σ (degrees) of beam b's elevation angle at [b], in place of beam_sigma_deg for the beams it lists (e.g. a
+    #: beams file's ``BeamCalibration.beam_sigmas_deg()``); empty: beam_sigma_deg for every beam
+    beam_sigmas_deg: list = field(default_factory=list)
 
 
 @dataclass

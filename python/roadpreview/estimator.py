@@ -40,8 +40,8 @@ class Estimator:
         error_groups: (N,) integers, points with one id share their range error (a stereo frame's
         ``error_groups``); a bin or a map cell counts each group once when it rates its median's noise.
         beams: (N,) integers, each point's LiDAR beam (a decoder's frame's ``beams``): with
-        ``cfg.profile.beam_sigma_deg`` > 0, a beam's elevation error, shared by its points, is counted in that noise
-        (method.md §3); without error_groups the beams are the groups.
+        ``cfg.profile.beam_sigma_deg`` (or that beam's ``beam_sigmas_deg``) > 0, a beam's elevation error, shared by
+        its points, is counted in that noise (method.md §3); without error_groups the beams are the groups.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
         if pose is not None:

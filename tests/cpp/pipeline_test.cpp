@@ -390,3 +390,42 @@ TEST(Pipeline, ABeamsElevationErrorCountsOncePerBinWhenItsSigmaIsGiven) {
         EXPECT_NE(std::string(e.what()).find("beams for"), std::string::npos) << e.what();
     }
 }
+
+TEST(Pipeline, EachBeamsOwnSigmaCountsInPlaceOfTheCommonOne) {
+    // beam_sigmas_deg gives beam b its own σ. Listing every beam at the common σ is the common σ; listing the even
+    // beams at σ and the odd ones at 0 counts the even rings' bins as before and leaves the odd rings' as if nothing
+    // were counted (their points no error group either); beams the list does not reach keep beam_sigma_deg.
+    const rp::Frame f = ringed_road();
+    const double sigma_deg = 0.05;
+    const rp::Result none = rp::Estimator(ringed_road_config(0.0)).process(f, 5.0, 0.0);
+    const rp::Result common = rp::Estimator(ringed_road_config(sigma_deg)).process(f, 5.0, 0.0);
+    rp::Config listed = ringed_road_config(0.0);
+    listed.profile.beam_sigmas_deg.assign(31, sigma_deg);
+    const rp::Result all = rp::Estimator(listed).process(f, 5.0, 0.0);
+    EXPECT_EQ(all.left.roughness.reason, common.left.roughness.reason);
+    for (std::size_t b = 1; b < 31; b += 2) listed.profile.beam_sigmas_deg[b] = 0.0;
+    const rp::Result even = rp::Estimator(listed).process(f, 5.0, 0.0);
+    listed.profile.beam_sigmas_deg.resize(16);  // beams 16–30 take the common σ
+    listed.profile.beam_sigma_deg = sigma_deg;
+    const rp::Result short_list = rp::Estimator(listed).process(f, 5.0, 0.0);
+    std::size_t odd = 0, even_bins = 0;
+    for (std::size_t k = 0; k < none.left.z.size(); ++k) {
+        if (none.left.count[k] < 2) continue;
+        const auto ring = static_cast<int>(std::lround((0.1 * static_cast<double>(k) + 0.05 - 5.05) / 0.5));
+        const bool counted = ring % 2 == 0;
+        EXPECT_EQ(all.left.spread[k], common.left.spread[k]) << "bin " << k;
+        EXPECT_EQ(even.left.spread[k], counted ? common.left.spread[k] : none.left.spread[k]) << "bin " << k;
+        EXPECT_EQ(short_list.left.spread[k], counted || ring >= 16 ? common.left.spread[k] : none.left.spread[k])
+            << "bin " << k;
+        ++(counted ? even_bins : odd);
+    }
+    EXPECT_GT(odd, 10u);
+    EXPECT_GT(even_bins, 10u);
+    listed.profile.beam_sigmas_deg = {0.01, -0.01};
+    try {
+        rp::Estimator{listed};
+        ADD_FAILURE() << "a negative σ was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("profile.beam_sigmas_deg[1]"), std::string::npos) << e.what();
+    }
+}

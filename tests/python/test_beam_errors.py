@@ -66,6 +66,42 @@ def test_beam_errors_cpp_against_reference(fusion):
             assert c.roughness.reason == r.roughness.reason
 
 
+@pytest.mark.parametrize("fusion", ["none", "kalman"])
+def test_each_beams_own_sigma_cpp_against_reference(fusion):
+    """profile.beam_sigmas_deg: beams 0–19 with their own σ (some 0), the rest beam_sigma_deg, a tenth of the
+    points of no known beam (−1): both implementations count the same errors and groups."""
+    rng = np.random.default_rng(4)
+    points, beams = ringed_road(rng.uniform(-0.1, 0.1, RINGS))
+    beams[rng.random(len(beams)) < 0.1] = -1
+    own = np.where(rng.random(20) < 0.3, 0.0, rng.uniform(0.005, 0.05, 20))
+    cfg = rp.Config(sensor_height=1.7, ground={"method": "pca"}, obstacles={"enabled": False},
+                    profile={"beam_sigma_deg": 0.01, "beam_sigmas_deg": own.tolist()}, fusion={"method": fusion})
+    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    for k in range(3 if fusion == "kalman" else 1):
+        shifted = points.copy()
+        shifted[:, 0] -= 0.5 * k
+        cpp = est.process(shifted, 5.0, 0.0, timestamp=0.1 * k, beams=beams)
+        ref = (rp.reference.process_fused(state, shifted, 5.0, 0.0, timestamp=0.1 * k, beams=beams)
+               if fusion == "kalman" else rp.reference.process(shifted, 5.0, 0.0, cfg, beams=beams))
+        for c, r in ((cpp.left, ref.left), (cpp.right, ref.right)):
+            np.testing.assert_allclose(c.z, r.z, atol=1e-4, equal_nan=True)
+            np.testing.assert_allclose(c.spread, r.spread, rtol=1e-3, atol=1e-6, equal_nan=True)
+            assert c.roughness.reason == r.roughness.reason
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.floats(0.001, 0.2), st.integers(0, 2 ** 32 - 1))
+def test_every_beam_listed_at_one_sigma_is_that_sigma_for_all(sigma, seed):
+    points, beams = ringed_road(np.random.default_rng(seed).uniform(-0.1, 0.1, RINGS))
+    common = rp.Estimator(config(sigma)).process(points, 5.0, 0.0, beams=beams).to_dict()
+    listed = rp.Estimator(rp.Config(sensor_height=1.7, ground={"method": "pca"}, obstacles={"enabled": False},
+                                    profile={"beam_sigmas_deg": [sigma] * RINGS})).process(
+        points, 5.0, 0.0, beams=beams).to_dict()
+    for line in (common, listed):
+        line.pop("timing_ms")
+    assert listed == common
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.floats(0.0, 0.2), st.floats(0.0, 0.2), st.integers(0, 2 ** 32 - 1))
 def test_more_beam_sigma_never_states_less_noise_and_moves_no_height(a, b, seed):
@@ -105,6 +141,11 @@ def test_bad_beams_are_clear_errors():
     for bad in (-0.1, float("nan"), 11.0):
         with pytest.raises(ValueError, match="profile.beam_sigma_deg must be"):
             rp.Estimator(config(bad))
+    for bad in ([0.01, -0.1], [11.0]):
+        with pytest.raises(ValueError, match=r"profile.beam_sigmas_deg\[\d\] must be in \[0, 10\]"):
+            rp.Estimator(rp.Config(profile={"beam_sigmas_deg": bad}))
+    with pytest.raises(ValueError, match="profile.beam_sigmas_deg may list at most 4096 beams, got 4097"):
+        rp.Estimator(rp.Config(profile={"beam_sigmas_deg": [0.0] * 4097}))
 
 
 def test_a_recordings_decoded_beams_are_counted_through_run_and_the_cli(tmp_path):

@@ -135,6 +135,33 @@ def test_cli_applies_the_beams_file(os1_beams, tmp_path):
     assert outs[0]["ground"]["plane"] != outs[1]["ground"]["plane"]  # the corrected points fit another plane
 
 
+def test_cli_counts_each_calibrated_beams_stated_sigma(os1_beams, tmp_path):
+    """--beam-sigmas-from-calibration: each determined beam's stated σ, --beam-sigma-deg for the others — the
+    profiles' bins state more noise than uncounted, and the same as the Python API given the file's sigmas."""
+    cal = rp.read_beam_calibration(os1_beams)
+    sigmas = cal.beam_sigmas_deg(0.02)
+    assert len(sigmas) == 128
+    determined = np.asarray(cal.determined)
+    np.testing.assert_array_equal(np.asarray(sigmas)[~determined], 0.02)
+    np.testing.assert_array_equal(np.asarray(sigmas)[determined], np.asarray(cal.elevation_sigma_deg)[determined])
+    lines = []
+    for extra in ((), ("--beam-sigma-deg", 0.02, "--beam-sigmas-from-calibration")):
+        out = tmp_path / f"run{len(lines)}.jsonl"
+        r = run_cli("run", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5, "--frames", "0:1",
+                    "--beam-calibration", os1_beams, "-o", out, "-q", *extra)
+        assert r.returncode == 0, r.stderr
+        lines.append(json.loads(out.read_text().splitlines()[0]))
+    plain, counted = (np.array(line["profiles"]["left"]["spread"], dtype=float) for line in lines)
+    backed = np.isfinite(plain) & np.isfinite(counted)
+    assert backed.sum() > 50
+    assert (counted[backed] >= plain[backed] * (1 - 1e-9)).all() and (counted[backed] > plain[backed]).any()
+    cfg = rp.Config(sensor_height=OS1_128_HEIGHT, profile={"beam_sigma_deg": 0.02, "beam_sigmas_deg": sigmas})
+    api = next(iter(rp.run(OS1_128_PCAP, cfg, speed=2.5, frames=(0, 1), beam_calibration=os1_beams)))
+    np.testing.assert_allclose(np.asarray(api.left.spread, dtype=float), counted, rtol=1e-6, equal_nan=True)
+    r = run_cli("run", OS1_128_PCAP, "--speed", 2.5, "--beam-sigmas-from-calibration")
+    assert r.returncode != 0 and "--beam-calibration" in r.stderr
+
+
 def test_cli_rejects_a_beams_file_for_another_sensor(os1_beams, tmp_path):
     other = tmp_path / "other.yaml"
     other.write_text(os1_beams.read_text().replace('serial: "122201000998"', 'serial: "999"'))

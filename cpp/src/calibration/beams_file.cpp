@@ -237,6 +237,13 @@ void write_beam_calibration(const BeamCalibration& c, const std::string& path) {
     if (!out) throw std::runtime_error(path + ": cannot write the beams file");
 }
 
+std::vector<double> calibrated_beam_sigmas_deg(const BeamCalibration& c, double others_deg) {
+    std::vector<double> sigmas;
+    for (const BeamOffsets& b : c.beams)
+        sigmas.push_back(b.determined && std::isfinite(b.elevation_sigma_deg) ? b.elevation_sigma_deg : others_deg);
+    return sigmas;
+}
+
 void check_beam_calibration(const BeamCalibration& c, int beam_count, const std::string& sensor_model,
                             const std::string& serial) {
     const std::string name = c.source.empty() ? std::string("beam calibration") : c.source;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "roadpreview/core/config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -23,7 +24,7 @@ using nlohmann::json;
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Extrinsics, x_m, y_m, z_m, roll_rad, pitch_rad, yaw_rad)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathConfig, straight_radius_m, stopped_speed_mps)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProfileConfig, preview_length_m, ds_m, max_gap_m, level, level_local,
-                                                level_band_m, beam_sigma_deg)
+                                                level_band_m, beam_sigma_deg, beam_sigmas_deg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RoughnessConfig, band_min_cpm, band_max_cpm, min_length_m,
                                                 min_cycles, min_band_points, noise_aware, min_resolved_fraction)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObstaclesConfig, enabled, voxel_m, cluster_tolerance_m,
@@ -224,6 +225,11 @@ void validate_stereo(const StereoConfig& s) {
 
 }  // namespace
 
+bool beam_errors_counted(const ProfileConfig& p) {
+    return p.beam_sigma_deg > 0.0 ||
+           std::any_of(p.beam_sigmas_deg.begin(), p.beam_sigmas_deg.end(), [](double s) { return s > 0.0; });
+}
+
 void validate(const Config& c) {
     require(!(c.sensor_height && c.extrinsics), "set sensor_height or extrinsics, not both");
     if (c.sensor_height)
@@ -266,6 +272,13 @@ void validate(const Config& c) {
     require(std::isfinite(p.level_band_m) && p.level_band_m >= 0.5, "profile.level_band_m must be >= 0.5");
     require(std::isfinite(p.beam_sigma_deg) && p.beam_sigma_deg >= 0.0 && p.beam_sigma_deg <= 10.0,
             "profile.beam_sigma_deg must be in [0, 10]");
+    require(p.beam_sigmas_deg.size() <= kMaxBeams, "profile.beam_sigmas_deg may list at most " +
+                                                      std::to_string(kMaxBeams) + " beams, got " +
+                                                      std::to_string(p.beam_sigmas_deg.size()));
+    for (std::size_t b = 0; b < p.beam_sigmas_deg.size(); ++b)
+        require(std::isfinite(p.beam_sigmas_deg[b]) && p.beam_sigmas_deg[b] >= 0.0 && p.beam_sigmas_deg[b] <= 10.0,
+                "profile.beam_sigmas_deg[" + std::to_string(b) + "] must be in [0, 10], got " +
+                    number_text(p.beam_sigmas_deg[b]));
 
     const RoughnessConfig& r = c.roughness;
     require(positive(r.band_min_cpm) && std::isfinite(r.band_max_cpm) && r.band_min_cpm < r.band_max_cpm,

@@ -134,23 +134,32 @@ void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, 
     out.cloud->height = 1;
 }
 
-void roi_point_errors(const PointErrors& errors, const RigidTransform& T, double beam_sigma_rad, RoiCloud& roi) {
-    const bool beams = errors.beams && beam_sigma_rad > 0.0;
-    const std::int32_t* groups = errors.error_groups ? errors.error_groups : beams ? errors.beams : nullptr;
+BeamErrors::BeamErrors(const ProfileConfig& p)
+    : others_(p.beam_sigma_deg * M_PI / 180.0), counted_(beam_errors_counted(p)) {
+    for (const double sigma_deg : p.beam_sigmas_deg) listed_.push_back(sigma_deg * M_PI / 180.0);
+}
+
+void roi_point_errors(const PointErrors& errors, const RigidTransform& T, const BeamErrors& beams, RoiCloud& roi) {
+    const std::int32_t* beam = beams.counted() ? errors.beams : nullptr;
     roi.error_group.clear();
-    if (groups)
-        for (const std::int32_t row : roi.input_index) roi.error_group.push_back(groups[row]);
+    if (errors.error_groups)
+        for (const std::int32_t row : roi.input_index) roi.error_group.push_back(errors.error_groups[row]);
+    else if (beam)  // a beam with an error of its own groups its points; a point of no such beam is on its own
+        for (const std::int32_t row : roi.input_index)
+            roi.error_group.push_back(beam[row] >= 0 && beams.sigma_rad(beam[row]) > 0.0 ? beam[row] : -1 - row);
     roi.height_variance.clear();
-    if (!errors.range_variances_m2 && !beams) return;
+    if (!errors.range_variances_m2 && !beam) return;
     roi.height_variance.resize(roi.input_index.size());
     for (std::size_t i = 0; i < roi.input_index.size(); ++i) {
         const auto& p = roi.cloud->points[i];
+        const std::int32_t row = roi.input_index[i];
         const double dx = p.x - T.t[0], dy = p.y - T.t[1], dz = p.z - T.t[2];
         const double horizontal = dx * dx + dy * dy, squared_range = horizontal + dz * dz;
-        double variance = beams ? horizontal * beam_sigma_rad * beam_sigma_rad : 0.0;
+        const double sigma = beam ? beams.sigma_rad(beam[row]) : 0.0;
+        double variance = horizontal * sigma * sigma;
         if (errors.range_variances_m2) {
             const double uz2 = squared_range > 0.0 ? dz * dz / squared_range : 1.0;
-            const double v = errors.range_variances_m2[roi.input_index[i]];
+            const double v = errors.range_variances_m2[row];
             variance += std::isfinite(v) && v > 0.0 ? uz2 * v : 0.0;
         }
         roi.height_variance[i] = static_cast<float>(variance);

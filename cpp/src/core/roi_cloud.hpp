@@ -108,11 +108,31 @@ struct RoiCloud {
 /// buffers. The rows are transformed on up to `threads` threads (the same answer for any number).
 void crop_roi(PointsView input, const RigidTransform& T, const GroundConfig& g, RoiCloud& out, int threads = 1);
 
+/// The LiDAR beams' elevation errors, σ in radians: ProfileConfig::beam_sigmas_deg for the beams it lists,
+/// beam_sigma_deg for the others.
+class BeamErrors {
+public:
+    BeamErrors() = default;
+    explicit BeamErrors(const ProfileConfig& p);
+    /// Whether any beam's error is counted (some σ > 0).
+    bool counted() const { return counted_; }
+    double sigma_rad(std::int32_t beam) const {
+        return beam >= 0 && static_cast<std::size_t>(beam) < listed_.size() ? listed_[static_cast<std::size_t>(beam)]
+                                                                             : others_;
+    }
+
+private:
+    double others_ = 0.0;
+    std::vector<double> listed_;
+    bool counted_ = false;
+};
+
 /// Each ROI point's height variance (none: cleared): from its input row's range variance, an error along the line of
 /// sight from the sensor (at T's origin) moving the point by u_z per metre, u the ray's direction; plus, with its
-/// beam known and beam_sigma_rad > 0, its beam's elevation error, which moves it by its horizontal distance d from
-/// the sensor per radian (d²·σ²). And its error group (none: cleared): its input row's, else its beam while that
-/// error is counted.
-void roi_point_errors(const PointErrors& errors, const RigidTransform& T, double beam_sigma_rad, RoiCloud& roi);
+/// beam known and its beam's error counted, that beam's elevation error, which moves it by its horizontal distance d
+/// from the sensor per radian (d²·σ²). And its error group (none: cleared): its input row's, else, while the beams'
+/// errors are counted, its beam if that beam's σ > 0 (−1 − its input row, a group of its own, if not, or if its beam
+/// is unknown: < 0).
+void roi_point_errors(const PointErrors& errors, const RigidTransform& T, const BeamErrors& beams, RoiCloud& roi);
 
 }  // namespace roadpreview

@@ -180,11 +180,11 @@ std::optional<DriveStep> DriveRunner::next() {
 
 // Notes the first frame whose points carry no beams while the beams' errors are to be counted: they are not.
 void DriveRunner::check_beams_of(const Frame& f) {
-    if (frames_.config().profile.beam_sigma_deg <= 0.0 || !f.beams.empty() || beamless_noted_ || !on_note_) return;
+    if (!beam_errors_counted(frames_.config().profile) || !f.beams.empty() || beamless_noted_ || !on_note_) return;
     beamless_noted_ = true;
     on_note_(true, frame_label(f) + ": its points carry no beam numbers, so the beams' errors (profile.beam_sigma_deg, "
-                   "--beam-sigma-deg) are not counted; KITTI .bin files get them from a beams file with beam_index "
-                   "scan_order (--beam-calibration)");
+                   "beam_sigmas_deg, --beam-sigma-deg) are not counted; KITTI .bin files get them from a beams file "
+                   "with beam_index scan_order (--beam-calibration)");
 }
 
 // Notes the first frame whose fitted ground disagrees with the given mounting; counts them all.

@@ -91,6 +91,7 @@ struct Estimator::Impl {
     int threads = 1;  // cfg.threads, at most the cores the process may use
     RigidTransform sensor_to_base;
     GroundConfig roi_ahead, roi_behind;  // the region of interest driving forward and reversing
+    BeamErrors beam_errors;  // the LiDAR beams' elevation σ, where counted
     RoiCloud roi;  // reused across frames
     std::int64_t frames = 0;
     std::size_t bins = 0;  // of a profile: its largest stretch
@@ -123,6 +124,7 @@ Estimator::Estimator(const Config& cfg) : impl_(std::make_unique<Impl>()) {
     impl_->sensor_to_base = to_rigid_transform(effective_extrinsics(cfg));
     impl_->roi_ahead = roi_facing(cfg.ground, 1.0);
     impl_->roi_behind = roi_facing(cfg.ground, -1.0);
+    impl_->beam_errors = BeamErrors(cfg.profile);
     impl_->bins = bin_count(cfg.profile) + static_cast<std::size_t>(std::ceil(cfg.fusion.behind_m / cfg.profile.ds_m));
     impl_->roughness_scratch.plan_ffts(impl_->bins);
     if (cfg.fusion.method != FusionMethod::None) impl_->fusion.emplace(cfg);
@@ -167,7 +169,7 @@ void Estimator::Impl::start_frame(double speed_mps, double yaw_rate_rps, const s
 
 void Estimator::Impl::find_ground(PointsView points, const PointErrors& errors, Result& r) {
     crop_roi(points, sensor_to_base, r.path.direction < 0.0 ? roi_behind : roi_ahead, roi, threads);  // or reversing
-    roi_point_errors(errors, sensor_to_base, cfg.profile.beam_sigma_deg * M_PI / 180.0, roi);
+    roi_point_errors(errors, sensor_to_base, beam_errors, roi);
     fit_ground(roi, cfg.ground, ground_scratch, ground, threads);
     r.points = {points.rows(), roi.finite, roi.size(), ground.count};
     r.plane = ground.plane;

@@ -70,7 +70,7 @@ def process(points, speed, yaw_rate, cfg: Config | None = None, range_variances=
     """Road profiles and roughness of one frame. Bad input raises ValueError; an empty scene, no ground
     or a stopped vehicle give a result with the reason (checked in that order). ``range_variances`` (m², one per
     point: a stereo frame's) and ``error_groups`` (one per point) raise the profile bins' spreads (method.md §12),
-    and so do ``beams`` (one per point) with ``cfg.profile.beam_sigma_deg`` > 0 (§3)."""
+    and so do ``beams`` (one per point) with ``cfg.profile.beam_sigma_deg`` or ``beam_sigmas_deg`` > 0 (§3)."""
     cfg = cfg or Config()
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)

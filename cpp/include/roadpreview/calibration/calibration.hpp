@@ -77,6 +77,10 @@ std::string beam_calibration_to_yaml(const BeamCalibration& c);
 void check_beam_calibration(const BeamCalibration& c, int beam_count, const std::string& sensor_model,
                             const std::string& serial);
 
+/// Each beam's elevation σ as the calibration states it, for ProfileConfig::beam_sigmas_deg: what is left of the
+/// beam's error once its offset is applied; `others_deg` for the beams the drive could not determine.
+std::vector<double> calibrated_beam_sigmas_deg(const BeamCalibration& c, double others_deg);
+
 /// How to find the beams of frames from a sensor that does not number its points. Scan order when every frame
 /// lists exactly beam_count rings, one turn each from azimuth 0, from the top beam down (KITTI .bin); else the
 /// beam centres for index-by-elevation: the peaks of the histogram of the points' elevations (front half, beyond

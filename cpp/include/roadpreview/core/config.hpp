@@ -64,6 +64,9 @@ struct ProfileConfig {
     /// σ (degrees) of each LiDAR beam's elevation angle: an error all of a beam's points share (method.md §3), counted
     /// in the bins' and the map's noise for points whose beam is known; 0: not counted
     double beam_sigma_deg = 0.0;
+    /// σ (degrees) of beam b's elevation angle at [b], in place of beam_sigma_deg for the beams it lists (e.g. each
+    /// calibrated beam's stated uncertainty, BeamOffsets::elevation_sigma_deg); empty: beam_sigma_deg for every beam
+    std::vector<double> beam_sigmas_deg;
 };
 
 struct RoughnessConfig {
@@ -158,11 +161,17 @@ struct Config {
     StereoConfig stereo;
 };
 
+/// Whether the LiDAR beams' elevation errors are counted: some beam's σ (beam_sigma_deg, beam_sigmas_deg) is > 0.
+bool beam_errors_counted(const ProfileConfig& p);
+
 /// Most threads a frame may use (Config::threads).
 constexpr int kMaxThreads = 64;
 
 /// Highest sensor_height accepted, m: a mast, not a vehicle, is higher.
 constexpr double kMaxSensorHeightM = 10.0;
+
+/// Most beams ProfileConfig::beam_sigmas_deg may list (LiDARs have up to a few hundred).
+constexpr std::size_t kMaxBeams = 4096;
 
 /// Throws std::invalid_argument naming the first offending field.
 void validate(const Config& cfg);
