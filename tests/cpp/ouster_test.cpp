@@ -428,6 +428,28 @@ TEST(OusterRoiColumns, TheWindowSpansTheColumnsWhoseBeamsCrossTheRegion) {
     EXPECT_EQ(ahead.metadata().column_window, (std::array<int, 2>{0, 511}));
 }
 
+// Destaggering, known answer: row u's pixel of staggered column v lands at column (v + shift[u]) mod W of the
+// row-major image, for shifts of either sign.
+TEST(Ouster, DestaggeringPutsEachPixelAtItsColumnPlusItsRowsShift) {
+    rp::OusterMetadata meta = tiny_metadata();
+    meta.pixel_shift_by_row = {511, 2, -3, -511};
+    rp::OusterDecoder d(meta);
+    std::optional<rp::Frame> f;
+    for (std::uint16_t v = 0; v < 512; ++v) {  // column v's range (1000 + v) mm tells it in the output
+        const auto p = tiny_packet(1, v, 1000u + v);
+        if (auto got = d.add_packet(p.data(), p.size(), 0.0)) f = std::move(got);
+    }
+    ASSERT_TRUE(f);
+    ASSERT_EQ(f->points.rows(), 4 * 512);
+    for (int u = 0; u < 4; ++u)
+        for (int vd = 0; vd < 512; ++vd) {
+            const Eigen::Index i = u * 512 + vd;
+            const long v = std::lround(1000.0 * f->points.row(i).head<3>().cast<double>().norm()) - 1000;
+            ASSERT_EQ((v + meta.pixel_shift_by_row[static_cast<std::size_t>(u)] + 512) % 512, vd) << "row " << u;
+            ASSERT_EQ(f->beams[static_cast<std::size_t>(i)], u);
+        }
+}
+
 // A window across column 0, on beams shifted both ways by the destaggering: in some beams' rows the window's
 // destaggered columns pass the row's end. The frame holds the window's points of the whole rotation, in its order.
 TEST(OusterRoiColumns, AWindowAcrossColumnZeroKeepsTheWholeRotationsOrder) {

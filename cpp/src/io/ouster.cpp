@@ -272,6 +272,7 @@ ImuSample decode_ouster_imu(const std::uint8_t* data, std::size_t size, double c
 OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
     validate(meta_);
     const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
+    for (const int shift : meta_.pixel_shift_by_row) row_shift_.push_back(shift < 0 ? shift + W : shift);  // |shift| < W
     const std::size_t pixels = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
     lut_.direction.resize(3 * pixels);
     lut_.offset.resize(3 * pixels);
@@ -447,12 +448,6 @@ void OusterDecoder::forget_column(int column) {
 std::size_t OusterDecoder::lut_pixel(int u, int column) const {
     return static_cast<std::size_t>(column) * static_cast<std::size_t>(meta_.pixels_per_column) +
            static_cast<std::size_t>(u);
-}
-
-int OusterDecoder::destaggered(int u, int column) const {
-    const int W = meta_.columns_per_frame;
-    const int vd = (column + meta_.pixel_shift_by_row[static_cast<std::size_t>(u)]) % W;
-    return vd < 0 ? vd + W : vd;
 }
 
 bool OusterDecoder::in_window(int column) const {

@@ -100,13 +100,18 @@ private:
     void forget_column(int column);
     /// The lookup table's pixel of beam u in staggered column `column`.
     std::size_t lut_pixel(int u, int column) const;
-    /// The destaggered column of row u's pixel of staggered column `column`: column + shift[u] (mod W).
-    int destaggered(int u, int column) const;
+    /// The destaggered column of row u's pixel of staggered column `column` (0 ≤ column < W): column + shift[u]
+    /// (mod W), without a division per pixel.
+    int destaggered(int u, int column) const {
+        const int vd = column + row_shift_[static_cast<std::size_t>(u)];
+        return vd >= meta_.columns_per_frame ? vd - meta_.columns_per_frame : vd;
+    }
     Frame build_frame();
     bool in_window(int column) const;
 
     OusterMetadata meta_;
     Lut lut_;
+    std::vector<int> row_shift_;  // pixel_shift_by_row taken into [0, W)
     bool open_ = false;
     bool spacing_checked_ = false;
     std::int64_t frame_id_ = -1;
