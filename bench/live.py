@@ -6,8 +6,10 @@ For each replay rate it starts the live run, replays the capture ``--loops`` tim
 jump back at each loop, as after a sensor restart) and reads the run's summary line: the latency of every frame
 from the kernel's receive time of the datagram that completed it to its output line written (p50, p99, max), the
 pipeline's time per frame (``timing_ms.total`` of the output lines: median and p99, so that a latency tail can be
-told from the pipeline's own), datagrams received and dropped by the full receive queue,
-frames affected by lost packets. Beside it the 1-min load average before and after (the machine is shared).
+told from the pipeline's own), the medians of the parts outside it (the frame complete after its last datagram's
+arrival: the queue, that datagram's decode, the frame's build; the output line written after the result),
+datagrams received and dropped by the full receive queue, frames affected by lost packets. Beside it the 1-min
+load average before and after (the machine is shared).
 Each rate runs twice: frames of the whole rotation, and with ``--roi-columns`` frames of the columns that can see
 the region of interest, which end at the region's last column; "after the rotation's end" moves the latter's
 latency to the rotation's last packet (negative: the result came before it).
@@ -103,12 +105,15 @@ def run_live(rate: str, loops: int, roi_columns: bool, threads: int, output: Pat
     if not summary or not live:
         raise RuntimeError("no summary in the run's stderr:\n" + err[-2000:])
     # With --roi-columns a frame ends at the region's last column: the rotation's later columns still take time.
+    outside = re.search(r"frame complete ([\d.]+) ms after its last packet, output line ([\d.]+) ms", err)
     window = re.search(r"columns \d+–(\d+) decoded, \d+ of the (\d+)", err)
     before_end_ms = (int(window[2]) - 1 - int(window[1])) / int(window[2]) * ROTATION_MS if window else 0.0
     return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "frames": int(summary[1]),
             "expected": 3 * loops,
             "pipeline_ms": float(summary[2]), "received": int(live[1]), "dropped": int(live[2]),
             "affected": int(live[3]), "p50": float(live[5]), "p99": float(live[6]), "max": float(live[7]),
+            "completing": float(outside[1]) if outside else float("nan"),
+            "output": float(outside[2]) if outside else float("nan"),
             "before_end_ms": before_end_ms, "load": (load_before, os.getloadavg()[0])}
 
 
@@ -130,16 +135,16 @@ def main() -> None:
     print(f"Live latency, {PCAP.name} ({META.name}), default pipeline, sensor height {HEIGHT_M} m, "
           f"{os.cpu_count()} cores\n")
     print("| rate | threads | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
-          "| pipeline median ms | pipeline p99 ms | datagrams | dropped by the queue | frames affected "
-          "| 1-min load before / after | p99 ≤ 5 ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| pipeline median ms | pipeline p99 ms | frame complete after ms | output line ms | datagrams "
+          "| dropped by the queue | frames affected | 1-min load before / after | p99 ≤ 5 ms |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
         frame = "region's columns" if r["roi_columns"] else "whole rotation"
         print(f"| {r['rate']}× | {r['threads']} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} "
               f"| {r['p99']:.2f} "
               f"| {r['max']:.2f} | {r['p50'] - r['before_end_ms']:.2f} | {r['pipeline_ms']:.2f} "
-              f"| {r['pipeline_p99_ms']:.2f} | {r['received']} "
+              f"| {r['pipeline_p99_ms']:.2f} | {r['completing']:.2f} | {r['output']:.2f} | {r['received']} "
               f"| {r['dropped']} | {r['affected']} | {r['load'][0]:.1f} / {r['load'][1]:.1f} "
               f"| {met if r['rate'] == '1' else '–'} |")
 

@@ -22,15 +22,18 @@ struct LiveRunOptions {
 };
 void add_live_options(CLI::App* run, LiveRunOptions& o);
 
-/// Per-frame latency (the arrival of the datagram that completed the frame → its output line written) and the
-/// packet counts of a live run, for the summary.
+/// Per-frame latency (the arrival of the datagram that completed the frame → its output line written), the
+/// parts of it outside the pipeline, and the packet counts of a live run, for the summary.
 class LiveStats {
 public:
-    void add(const roadpreview::Frame& f);  ///< call once the frame's output line is written
+    /// Call once the frame's output line is written; `result_s`: steady-clock time its result was ready.
+    void add(const roadpreview::Frame& f, double result_s);
     void print(const roadpreview::SourceInfo& info) const;
     static std::string describe(const roadpreview::FrameDiagnostics& d);  ///< ", 3 packets lost, ..." or empty
 
 private:
     BoundedSample latency_ms_;
+    BoundedSample completing_ms_;  // the datagram's arrival → the frame complete (queue, decode, frame built)
+    BoundedSample output_ms_;      // the result ready → its output line written
     std::int64_t frames_ = 0, affected_ = 0, lost_ = 0, late_ = 0, duplicate_ = 0, missing_columns_ = 0;
 };

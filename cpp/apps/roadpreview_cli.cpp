@@ -400,6 +400,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     while (std::optional<rp::DriveStep> step = runner.next()) {
         const rp::DriveFrame& in = step->input;
         const rp::Result& r = step->result;
+        const double result_s = rp::steady_now_s();
         if (summary.ms.empty()) {
             if (!o.quiet) report_source(runner.info());
             if (wants_route(o)) route.emplace(runner.config());
@@ -419,7 +420,7 @@ int run(const RunOptions& o, const CLI::App& app) {
         out << rp::result_to_json(r, line) << '\n';
         out.flush();  // a live consumer reads each line as it comes
         if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
-        live_stats.add(in.frame);
+        live_stats.add(in.frame, result_s);
         summary.add(r);
         if (!o.quiet) report_frame(static_cast<std::size_t>(in.index), total, in.frame, r);
     }

@@ -189,6 +189,9 @@ void bind_io(py::module_& m) {
         })
         .def_readonly("arrival_s", &rp::Frame::arrival_s,
                       "live: steady-clock time (s, rp.io.steady_now_s) its last datagram arrived; 0 otherwise")
+        .def_readonly("completed_s", &rp::Frame::completed_s,
+                      "live: steady-clock time (s) the decoder had completed it (its last datagram decoded, the "
+                      "frame built); 0 otherwise")
         .def("__repr__", [](const rp::Frame& f) {
             return "<roadpreview.Frame " + std::to_string(f.frame_id) + " of " + f.source + ": " +
                    std::to_string(f.points.rows()) + " points>";

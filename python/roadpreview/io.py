@@ -98,7 +98,8 @@ def open_live(url: str, meta: Optional[PathLike] = None, *, sensor_model: Option
     No datagram within ``timeout_s`` raises RuntimeError naming the address; a silence that long after datagrams
     ends the iteration (the frame being assembled comes last), and so does ``duration_s`` > 0 (s from opening).
     A port in use, a datagram of the wrong size or from another sensor raise RuntimeError naming the address.
-    Each frame's ``.arrival_s`` is the :func:`steady_now_s` time of the datagram that completed it, and
+    Each frame's ``.arrival_s`` is the :func:`steady_now_s` time of the datagram that completed it,
+    ``.completed_s`` the time the decoder had it complete (that datagram decoded, the frame built), and
     ``.diagnostics`` counts lost, late and duplicate packets and missing columns; ``.info`` counts the datagrams
     received and dropped by the full receive queue. ``roi_columns`` and ``roi_direction`` as in :func:`open`:
     a frame completes when the last column that can see the region of interest arrives.

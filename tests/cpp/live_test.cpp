@@ -131,6 +131,9 @@ void expect_same_frames(const std::vector<rp::Frame>& got, const std::vector<rp:
         if (k + 1 < want.size()) {
             EXPECT_GT(got[k].arrival_s, 0.0);
         }
+        // Decoded and built after that datagram came; neither time for a frame the end of the stream completes.
+        EXPECT_EQ(got[k].completed_s == 0.0, got[k].arrival_s == 0.0);
+        EXPECT_GE(got[k].completed_s, got[k].arrival_s);
     }
 }
 

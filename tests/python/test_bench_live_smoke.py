@@ -11,7 +11,8 @@ def test_live_bench_prints_the_rows_at_recorded_speed():
     out = run_bench("live.py", "--quick")
     rows = {}
     for row in re.finditer(r"\| 1× \| 1 \| (whole rotation|region's columns) \| (\d+) \((\d+)\) \| ([\d.]+) \| ([\d.]+) "
-                           r"\| ([\d.]+) \| (-?[\d.]+) \| ([\d.]+) \| ([\d.]+) \| (\d+) \| (\d+) \| (\d+) "
+                           r"\| ([\d.]+) \| (-?[\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) "
+                           r"\| (\d+) \| (\d+) \| (\d+) "
                            r"\| [\d.]+ / [\d.]+ "
                            r"\| (yes|no) \|", out):
         rows[row[1]] = row
@@ -22,7 +23,8 @@ def test_live_bench_prints_the_rows_at_recorded_speed():
         assert frames == sent == 15  # 5 loops of the 3-frame capture: none lost at 1×
         assert 0 < p50 <= p99 <= worst
         assert 0 < float(row[8]) <= float(row[9])  # the pipeline's median and p99 from the output lines
-        assert int(row[11]) == 0  # nothing dropped by the receive queue
+        assert 0 <= float(row[10]) < p50 and 0 <= float(row[11]) < p50  # frame complete after, output line
+        assert int(row[13]) == 0  # nothing dropped by the receive queue
     assert float(rows["whole rotation"][7]) == float(rows["whole rotation"][4])
     # Columns 764–1023 come 25.4 ms after the region's last: the result is that much earlier against the rotation.
     region = rows["region's columns"]

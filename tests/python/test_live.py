@@ -52,6 +52,7 @@ def test_open_live_yields_the_offline_frames_of_a_velodyne_capture():
     for got, want in zip(frames, offline):
         np.testing.assert_array_equal(got.points, want.points)
     assert frames[0].arrival_s > 0 and frames[0].arrival_s <= rp.io.steady_now_s()
+    assert frames[0].arrival_s <= frames[0].completed_s <= rp.io.steady_now_s()
 
 
 def test_open_live_flags_the_frames_that_lost_packets():
@@ -106,6 +107,12 @@ def test_cli_live_run_writes_every_frame_and_the_latency_summary():
     assert "ouster udp, OS-1-128" in err
     assert "222 datagrams received, 0 dropped by a full queue; 0 of 3 frames affected" in err
     assert "latency last packet → result p50" in err and "p99" in err
+    # The parts outside the pipeline: each a median of non-negative times, together within the p50's magnitude.
+    outside = re.search(r"p50 ([\d.]+) ms, p99 [\d.]+ ms, max [\d.]+ ms \(outside the pipeline, medians: frame "
+                        r"complete ([\d.]+) ms after its last packet, output line ([\d.]+) ms\)", err)
+    assert outside, err
+    p50, completing, output = map(float, outside.groups())
+    assert 0 <= completing < p50 and 0 <= output < p50
 
 
 def test_cli_live_run_reports_the_packets_lost():

@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 
+#include "roadpreview/io/live.hpp"
 #include "roadpreview/io/velodyne.hpp"
 
 namespace roadpreview {
@@ -82,7 +83,11 @@ void PcapSource::read_until_frame() {
             on_lidar(datagram_, ready_);
             ++decoded_;
             // The frames this datagram completed: their latency counts from its arrival.
-            for (std::size_t k = before; k < ready_.size(); ++k) ready_[k].arrival_s = datagram_.arrival_s;
+            const double completed_s = datagram_.arrival_s > 0.0 && ready_.size() > before ? steady_now_s() : 0.0;
+            for (std::size_t k = before; k < ready_.size(); ++k) {
+                ready_[k].arrival_s = datagram_.arrival_s;
+                ready_[k].completed_s = completed_s;
+            }
         } catch (const std::invalid_argument& e) {
             const std::string problem = input_->unit() + (" " + std::to_string(datagram_.record)) + " (UDP port " +
                                         std::to_string(datagram_.dst_port) + "): " + e.what();

@@ -52,6 +52,9 @@ struct Frame {
     /// live: steady-clock time (s) the datagram that completed the frame arrived; 0 from files, and for a frame
     /// that the end of the stream completed
     double arrival_s = 0.0;
+    /// live: steady-clock time (s) the decoder had completed the frame (that datagram decoded, the frame built);
+    /// 0 whenever arrival_s is
+    double completed_s = 0.0;
 };
 
 /// What a reader knows about its input (`roadpreview info`).
