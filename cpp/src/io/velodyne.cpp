@@ -204,6 +204,10 @@ VelodyneDecoder::VelodyneDecoder(VelodyneModel model, VelodyneCalibration calibr
                                     " lasers, but a " + to_string(model) + " has " + std::to_string(lasers));
     if (!std::isfinite(cut_angle_deg) || cut_angle_deg < 0.0 || cut_angle_deg >= 360.0)
         throw std::invalid_argument("cut angle must be in [0, 360) degrees, got " + number_text(cut_angle_deg));
+    for (const VelodyneLaser& L : calibration_.lasers) {
+        cos_elevation_.push_back(std::cos(L.vert_correction));
+        sin_elevation_.push_back(std::sin(L.vert_correction));
+    }
 }
 
 void VelodyneDecoder::add_packet(const std::uint8_t* data, std::size_t size, double capture_time,
@@ -293,11 +297,12 @@ void VelodyneDecoder::add_firing(const Firing& f, std::vector<Frame>& done) {
         const std::uint8_t* ch = f.channels + 3 * k;
         const std::uint16_t raw = read_le<std::uint16_t>(ch);
         if (raw == 0) continue;  // no return
-        const VelodyneLaser& L = calibration_.lasers[static_cast<std::size_t>(f.first_laser + k)];
+        const auto laser = static_cast<std::size_t>(f.first_laser + k);
+        const VelodyneLaser& L = calibration_.lasers[laser];
         const double fire_us = (k / f.lasers_per_slot) * f.laser_us;
         const double azimuth = deg(f.azimuth_deg + f.azimuth_rate * fire_us) - L.rot_correction;
         const double distance = raw * calibration_.distance_resolution_m + L.dist_correction;
-        const double cos_v = std::cos(L.vert_correction), sin_v = std::sin(L.vert_correction);
+        const double cos_v = cos_elevation_[laser], sin_v = sin_elevation_[laser];
         const double cos_a = std::cos(azimuth), sin_a = std::sin(azimuth);
         const double xy = distance * cos_v - L.vert_offset_correction * sin_v;
         // The manual's frame: y forward, x right; azimuth clockwise from y seen from above.

@@ -91,6 +91,7 @@ private:
 
     VelodyneModel model_;
     VelodyneCalibration calibration_;
+    std::vector<double> cos_elevation_, sin_elevation_;  // of each laser's vert_correction, made once
     double cut_angle_deg_;
     double previous_relative_deg_ = -1.0;
     std::int64_t sweeps_ = 0;
