@@ -272,7 +272,8 @@ ImuSample decode_ouster_imu(const std::uint8_t* data, std::size_t size, double c
 OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
     validate(meta_);
     const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
-    for (const int shift : meta_.pixel_shift_by_row) row_shift_.push_back(shift < 0 ? shift + W : shift);  // |shift| < W
+    // validate() holds every shift within ±(W − 1).
+    for (const int shift : meta_.pixel_shift_by_row) row_shift_.push_back(shift < 0 ? shift + W : shift);
     const std::size_t pixels = static_cast<std::size_t>(H) * static_cast<std::size_t>(W);
     lut_.direction.resize(3 * pixels);
     lut_.offset.resize(3 * pixels);
