@@ -281,15 +281,23 @@ OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
     const Mat4& T = meta_.lidar_to_sensor;
     const double beam_x = B[3], beam_z = B[11];
     const double beam_dist = beam_z != 0.0 ? std::hypot(beam_x, beam_z) : beam_x;
+    // Each column's encoder angle and each beam's altitude: their cosines and sines once, not at every pixel.
+    std::vector<double> encoder(static_cast<std::size_t>(W)), cos_encoder(encoder.size()), sin_encoder(encoder.size());
+    for (std::size_t v = 0; v < encoder.size(); ++v) {
+        encoder[v] = 2.0 * kPi * (1.0 - static_cast<double>(v) / W);
+        cos_encoder[v] = std::cos(encoder[v]);
+        sin_encoder[v] = std::sin(encoder[v]);
+    }
     for (int u = 0; u < H; ++u) {
         const double azimuth = -meta_.beam_azimuth_deg[static_cast<std::size_t>(u)] * kPi / 180.0;
         const double altitude = meta_.beam_altitude_deg[static_cast<std::size_t>(u)] * kPi / 180.0;
+        const double cos_altitude = std::cos(altitude), sin_altitude = std::sin(altitude);
         for (int v = 0; v < W; ++v) {
-            const double encoder = 2.0 * kPi * (1.0 - static_cast<double>(v) / W);
-            const double d[3] = {std::cos(encoder + azimuth) * std::cos(altitude),
-                                 std::sin(encoder + azimuth) * std::cos(altitude), std::sin(altitude)};
-            const double o[3] = {std::cos(encoder) * beam_x - d[0] * beam_dist,
-                                 std::sin(encoder) * beam_x - d[1] * beam_dist, -d[2] * beam_dist + beam_z};
+            const auto c = static_cast<std::size_t>(v);
+            const double d[3] = {std::cos(encoder[c] + azimuth) * cos_altitude,
+                                 std::sin(encoder[c] + azimuth) * cos_altitude, sin_altitude};
+            const double o[3] = {cos_encoder[c] * beam_x - d[0] * beam_dist,
+                                 sin_encoder[c] * beam_x - d[1] * beam_dist, -d[2] * beam_dist + beam_z};
             const std::size_t i = 3 * lut_pixel(u, v);
             const double range_offset_mm = meta_.beam_range_offset_m.empty()
                                                ? 0.0 : 1e3 * meta_.beam_range_offset_m[static_cast<std::size_t>(u)];
