@@ -88,7 +88,9 @@ LiveRun live(const std::string& pcap, const std::string& meta, rp::ReplayOptions
     rp::LiveOptions o;
     o.source.meta = meta;
     o.source.roi_columns = roi_columns;
-    o.timeout_s = 0.5;
+    // The silence that ends the stream, and the wait for its first datagram: ctest runs another test beside this
+    // one (a max-rate replay fills both cores), and once the sender's first datagram came 0.5 s late.
+    o.timeout_s = 1.0;
     o.duration_s = 30.0;  // a bound, never reached when all goes well
     auto source = rp::open_live(url(port), o);
     auto sender = std::async(std::launch::async, [&] {
