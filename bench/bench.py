@@ -220,7 +220,7 @@ def reference_wheel_bins(ground_xyz, plane, path: dict, wheel: str, speed: float
     if cfg.profile.level:
         xyz = ref_profile.level_points(xyz, plane)
         if cfg.profile.level_local:
-            xyz[:, 2] = ref_profile.local_ground_heights(ground_xyz, plane, cfg, path)
+            xyz[:, 2] = ref_profile.local_ground_heights(ground_xyz, plane, cfg, path, math.copysign(1.0, speed))
     s, in_corridor = ref_profile.arc_length(xyz[:, :2], path, wheel, speed, yaw_rate, cfg)
     median, count, spread = ref_profile.bin_statistics(s[in_corridor], xyz[in_corridor, 2], cfg)
     return ref_profile.fill_gaps(median, cfg.profile.ds_m, cfg.profile.max_gap_m), count, spread

@@ -271,6 +271,50 @@ TEST(Fusion, NoneKeepsTheSingleFramePipeline) {
     EXPECT_EQ(rp::result_to_json(r).find("\"fusion\":null") != std::string::npos, true);
 }
 
+// A level road that starts rising 3 % at odometry x = 25 m, seen from (x_v, 0, 0): base-frame points every 0.1 m over
+// 1 ≤ x < 40, |y| < 3 m.
+scenes::Cloud grade_frame(double x_v) {
+    std::vector<Eigen::Vector3f> pts;
+    for (double x = 1.0; x < 40.0; x += 0.1)
+        for (double y = -3.0; y < 3.0; y += 0.1)
+            pts.emplace_back(float(x), float(y), float(0.03 * std::max(x_v + x - 25.0, 0.0)));
+    scenes::Cloud cloud(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+    return cloud;
+}
+
+TEST(Fusion, ProfilesAreReadAboveTheLocalGroundSoAGradeChangeIsNotRelief) {
+    // As a single frame's (method.md §3): the kink, 15.5 m ahead in the last frame, lies mid-band, and the band's plane
+    // leaves ±Δg·L/8 = ±3.75 cm of it; one plane, decimetres. Behind the wheels, on the road driven (seen by the
+    // earlier frames), the nearest band's plane alone: the band beyond it lies ahead, over the kink.
+    for (const bool local : {true, false}) {
+        rp::Config cfg;
+        cfg.fusion.method = rp::FusionMethod::Kalman;
+        cfg.fusion.behind_m = 8.0;
+        cfg.obstacles.enabled = false;
+        cfg.profile.level_local = local;
+        rp::Estimator est(cfg);
+        rp::Result r;
+        for (int f = 0; f < 20; ++f)
+            r = est.process(grade_frame(0.5 * f), 5.0, 0.0, "", rp::FrameMotion{0.1 * f, std::nullopt});
+        double lo = INFINITY, hi = -INFINITY, behind = 0.0;
+        int behind_bins = 0;
+        for (std::size_t k = 0; k < r.left.z.size(); ++k) {
+            if (!std::isfinite(r.left.z[k])) continue;
+            if (r.left.s[k] < 0.0) behind = std::max(behind, std::abs(r.left.z[k])), ++behind_bins;
+            else lo = std::min(lo, r.left.z[k]), hi = std::max(hi, r.left.z[k]);
+        }
+        ASSERT_LT(lo, hi);
+        ASSERT_EQ(behind_bins, 80);
+        if (local) {
+            EXPECT_LT(hi - lo, 0.03 * 10.0 / 4 + 0.005);
+            EXPECT_LT(behind, 0.002);  // the road behind is level, as is the nearest band
+        } else {
+            EXPECT_GT(hi - lo, 0.2);
+        }
+    }
+}
+
 TEST(Fusion, AlignmentRemovesEachFramesHeaveAndTilt) {
     // Every frame carries its own height offset and pitch (what a per-frame plane fit leaves on long waves).
     for (const bool align : {true, false}) {

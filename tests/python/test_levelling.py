@@ -108,6 +108,37 @@ def test_a_grade_change_is_not_relief():
         assert np.ptp(z[np.isfinite(z)]) > 0.2
 
 
+def fused_grade_drive(level_local, process):
+    """A level road rising 3 % from odometry x = 25 m, driven at 5 m/s for 20 frames of 10 Hz with the map fusing
+    (Kalman); returns the last frame's left profile (s, z), the last frame 15.5 m before the kink."""
+    cfg = Config(profile={"level_local": level_local}, obstacles={"enabled": False},
+                 fusion={"method": "kalman", "behind_m": 8.0})
+    x, y = np.meshgrid(np.arange(1.0, 40.0, 0.1), np.arange(-3.0, 3.0, 0.1))
+    x, y = x.ravel(), y.ravel()
+    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    for f in range(20):
+        points = np.column_stack([x, y, 0.03 * np.maximum(0.5 * f + x - 25.0, 0.0)]).astype(np.float32)
+        if process == "native":
+            result = est.process(points, 5.0, 0.0, timestamp=0.1 * f)
+        else:
+            result = rp.reference.process_fused(state, points, 5.0, 0.0, timestamp=0.1 * f)
+    return result.left.s, result.left.z
+
+
+@pytest.mark.parametrize("process", ["native", "reference"])
+def test_a_grade_change_is_not_relief_in_a_fused_map_either(process):
+    """The map keeps the road's heights; its profiles are read above the last frame's local ground (method.md §7),
+    as a single frame's are: the kink leaves ±3.75 cm. Read as the map's heights (one plane), decimetres — as
+    KITTI's fused profiles fell 20–35 cm by 40 m ahead where each frame alone read ±2 cm. Behind the wheels the
+    nearest band's plane alone reads the level road driven (the band beyond it, blended in, lay 7 cm off)."""
+    s, z = fused_grade_drive(True, process)
+    ahead, behind = (s >= 0) & np.isfinite(z), (s < 0) & np.isfinite(z)
+    assert np.ptp(z[ahead]) < 0.03 * 10.0 / 4 + 0.005
+    assert behind.sum() == 80 and np.abs(z[behind]).max() < 0.002
+    s, z = fused_grade_drive(False, process)
+    assert np.ptp(z[(s >= 0) & np.isfinite(z)]) > 0.2
+
+
 def spurious_returns_frame():
     """A level road (0.2 m grid) with four returns 6.7 m below it 20–21 m ahead, beside the wheel tracks: multipath
     as on a KITTI street, where they tilted the 20–30 m band's plane by 3.9 % (method.md §3)."""

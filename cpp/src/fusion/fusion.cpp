@@ -184,6 +184,7 @@ void TemporalFusion::reset() {
     fused_ = 0;
     started_ = false;
     map_has_excess_ = false;
+    readout_.set = false;
 }
 
 void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameMotion& motion, FusionStatus& status) {
@@ -237,7 +238,7 @@ void TemporalFusion::link(std::int64_t slot, std::size_t i) {
 
 void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
                           const std::vector<float>* height_variances,
-                          const std::vector<std::int32_t>* error_groups) {
+                          const std::vector<std::int32_t>* error_groups, const LocalGround* ground) {
     if (height_variances && height_variances->size() != mask.size())
         throw std::invalid_argument("fuse: height_variances and mask differ in length");
     if (error_groups && error_groups->size() != mask.size())
@@ -308,7 +309,15 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         const double n = measurements_[c], of_median = n >= 3 ? kMedianVarianceFactor / n : 1.0 / n;  // 1, 2: mean
         variances_[c] = std::max(of_median * own, kMinVariance);
     }
+    readout_.alignment.setZero();
     if (cfg_.fusion.align) align(touched, variances_, medians);
+    readout_.set = ground != nullptr;
+    if (ground) {
+        readout_.model = *ground;  // reuses the model's buffers
+        readout_.pose = pose_;
+        readout_.cos_yaw = cos_yaw, readout_.sin_yaw = sin_yaw;
+        readout_.L = L;
+    }
     for (std::size_t c = 0; c < cells; ++c)
         fuse_cell(map_.cell(touched[c]), medians[c], variances_[c], offsets_[c][0], offsets_[c][1], counts_[c], frame_,
                   cfg_.fusion);
@@ -360,6 +369,7 @@ void TemporalFusion::align(const std::vector<std::int64_t>& slots, std::vector<d
     if (shared_.size() < kMinAlignCells) return;
     mark_disagreeing_cells();
     const Eigen::Vector3d plane = fit_alignment_plane();
+    readout_.alignment = plane;
     for (const SharedCell& s : shared_)
         if (!s.inlier) variances[s.index] += std::pow(s.difference - plane.dot(v[s.index]), 2);
     double excess = excess_disagreement(plane);
@@ -471,9 +481,11 @@ void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<
                 const double phi = paths.rotation * s / r_w, u = (y_w - paths.icr_y) / r_w, r = r_w + offset;
                 x = -std::sin(phi) * u * r, y = paths.icr_y + std::cos(phi) * u * r;
             }
-            const MapCell* cell = map_.at(pose_.x_m + c * x - sn * y, pose_.y_m + sn * x + c * y);
+            const double x_o = pose_.x_m + c * x - sn * y, y_o = pose_.y_m + sn * x + c * y;
+            const MapCell* cell = map_.at(x_o, y_o);
             if (!cell || cell->observations == 0) continue;
-            sum += cell->height, variance += cell->variance, ++valid;
+            sum += readout_.set ? above_local_ground(x_o, y_o, cell->height) : cell->height;
+            variance += cell->variance, ++valid;
             p.count[k] += cell->points;
             now = now || cell->last_update == frame_;
         }
@@ -484,6 +496,18 @@ void TemporalFusion::sample(const WheelPaths& paths, Wheel w, const std::vector<
         p.spread[k] = spread_for_variance(variance / (valid * valid), p.count[k]);
     }
     fill_gaps(p.z, pc.ds_m, pc.max_gap_m, &p.blocked);
+}
+
+// Into the frame the model was fitted in: its datum (its alignment took its heights to the map's), its vehicle
+// axes, its base frame (Lᵀ, L a rotation); then the height above its model, as a single frame's point's.
+double TemporalFusion::above_local_ground(double x, double y, double height) const {
+    const ReadoutGround& g = readout_;
+    const double dx = x - g.pose.x_m, dy = y - g.pose.y_m;
+    const double u = g.cos_yaw * dx + g.sin_yaw * dy, v = -g.sin_yaw * dx + g.cos_yaw * dy;
+    const double z = height + g.alignment.dot(Eigen::Vector3d(1.0, dx, dy));
+    const auto& R = g.L.R;
+    return g.model.height(R[0][0] * u + R[1][0] * v + R[2][0] * z, R[0][1] * u + R[1][1] * v + R[2][1] * z,
+                          R[0][2] * u + R[1][2] * v + R[2][2] * z);
 }
 
 void TemporalFusion::profiles(const WheelPaths& paths, const BlockedBins* blocked, FusionStatus& status,

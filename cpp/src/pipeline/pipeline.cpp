@@ -113,6 +113,8 @@ struct Estimator::Impl {
     void find_obstacles_in(Result& r);
     void collect_corridors(const Result& r, const Levelling& L, const std::vector<float>* height_variances,
                            const std::vector<std::int32_t>* error_groups);
+    void fuse_frame(const Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                    const std::vector<std::int32_t>* error_groups);
     void build_wheel_profiles(Result& r);
     void rate(Result& r);
 };
@@ -197,6 +199,14 @@ void Estimator::Impl::collect_corridors(const Result& r, const Levelling& L, con
                          error_groups, profile_scratch);
 }
 
+// The ground points into the map, with the local ground model the map's profiles are read above (method.md §7).
+void Estimator::Impl::fuse_frame(const Result& r, const Levelling& L, const std::vector<float>* height_variances,
+                                 const std::vector<std::int32_t>* error_groups) {
+    const bool local = cfg.profile.level && cfg.profile.level_local;
+    if (local) fit_local_ground(roi.view(), ground.mask, *r.plane, cfg.profile.level_band_m, r.path, profile_scratch);
+    fusion->fuse(roi.view(), ground.mask, L, height_variances, error_groups, local ? &profile_scratch.ground : nullptr);
+}
+
 // The second half: the profiles from the map, or from the corridor points, outside the bins obstacles block.
 void Estimator::Impl::build_wheel_profiles(Result& r) {
     const bool crossed = cfg.obstacles.enabled && r.plane;  // without a plane (profiles from the map): none
@@ -272,7 +282,7 @@ void Estimator::Impl::run(PointsView points, double speed_mps, double yaw_rate_r
         r.timing_ms.obstacles = ms_since(started);
     }, [&] {
         auto started = Clock::now();
-        if (fusion && r.plane && moving) fusion->fuse(roi.view(), ground.mask, L, height_variances, error_groups);
+        if (fusion && r.plane && moving) fuse_frame(r, L, height_variances, error_groups);
         if (!fusion && r.plane && moving) collect_corridors(r, L, height_variances, error_groups);
         ground_side_ms = ms_since(started);
     });

@@ -110,7 +110,7 @@ std::pair<double, double> keep_window(PointsView points, std::size_t k, ProfileS
     s.offsets.clear();
     for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
         const Eigen::Index i = s.corridor[j];
-        const double h = height_above(s.plane[k], points(i, 0), points(i, 1), points(i, 2));
+        const double h = height_above(s.ground.plane[k], points(i, 0), points(i, 1), points(i, 2));
         if (std::abs(h) <= kLevelKeepM) s.offsets.push_back(h);
     }
     if (s.offsets.empty()) return {0.0, kLevelKeepMinM};
@@ -129,14 +129,14 @@ bool fit_band_plane(PointsView points, std::size_t k, ProfileScratch& s) {
         for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
             const Eigen::Index i = s.corridor[j];
             if (fit > 0) {
-                const double h = height_above(s.plane[k], points(i, 0), points(i, 1), points(i, 2));
+                const double h = height_above(s.ground.plane[k], points(i, 0), points(i, 1), points(i, 2));
                 if (std::abs(h) > kLevelKeepM || std::abs(h - centre) > half_width) continue;
             }
             m.add(points.row(i).cast<double>().transpose());
         }
         const auto f = plane_fit(m);
         if (!f) return fit > 0;  // a failed refit keeps the last fit
-        s.plane[k] = f->plane;
+        s.ground.plane[k] = f->plane;
     }
     return true;
 }
@@ -145,7 +145,7 @@ bool fit_band_plane(PointsView points, std::size_t k, ProfileScratch& s) {
 // those bands, the others keep the frame plane for now.
 void fit_band_planes(PointsView points, const Plane& frame, double band_m, ProfileScratch& s) {
     const std::size_t bands = s.nearest.size();
-    s.plane.assign(bands, frame);
+    s.ground.plane.assign(bands, frame);
     s.fitted.assign(bands, 0);
     for (std::size_t k = 0; k < bands; ++k)
         if (s.farthest[k] - s.nearest[k] >= kLevelMinSpan * band_m) s.fitted[k] = fit_band_plane(points, k, s);
@@ -155,8 +155,8 @@ void fit_band_planes(PointsView points, const Plane& frame, double band_m, Profi
 const Plane* nearest_fitted(std::size_t k, const ProfileScratch& s) {
     const std::size_t bands = s.fitted.size();
     for (std::size_t d = 1; d < bands; ++d) {
-        if (k >= d && s.fitted[k - d]) return &s.plane[k - d];
-        if (k + d < bands && s.fitted[k + d]) return &s.plane[k + d];
+        if (k >= d && s.fitted[k - d]) return &s.ground.plane[k - d];
+        if (k + d < bands && s.fitted[k + d]) return &s.ground.plane[k + d];
     }
     return nullptr;
 }
@@ -174,12 +174,8 @@ void place_short_bands(PointsView points, const Plane& frame, ProfileScratch& s)
             const Eigen::Index i = s.corridor[j];
             s.offsets.push_back(n[0] * points(i, 0) + n[1] * points(i, 1) + n[2] * points(i, 2));
         }
-        s.plane[k] = Plane{n[0], n[1], n[2], -median(s.offsets.begin(), s.offsets.end())};
+        s.ground.plane[k] = Plane{n[0], n[1], n[2], -median(s.offsets.begin(), s.offsets.end())};
     }
-}
-
-bool has_corridor_points(std::size_t k, const ProfileScratch& s) {
-    return k < s.plane.size() && s.band_start[k] != s.band_start[k + 1];
 }
 
 }  // namespace
@@ -189,25 +185,29 @@ void fit_local_ground(PointsView points, const std::vector<std::uint8_t>& mask, 
     assign_bands(points, mask, band_m, paths, s);
     fit_band_planes(points, frame, band_m, s);
     place_short_bands(points, frame, s);
-    s.frame = frame;
-    s.band_m = band_m;
+    LocalGround& g = s.ground;
+    g.has_points.resize(g.plane.size());
+    for (std::size_t k = 0; k < g.plane.size(); ++k) g.has_points[k] = s.band_start[k] != s.band_start[k + 1];
+    g.frame = frame;
+    g.band_m = band_m;
+    g.direction = paths.direction < 0.0 ? -1.0 : 1.0;
 }
 
 // Blended between band centres: t bands from its own band's centre (|t| ≤ ½), a point takes |t| of its height above
 // the neighbour band it lies towards when that band has corridor points (a plane of its own) — so the levelled
 // heights are continuous where two bands meet. Bands beyond the last corridor point keep the frame plane.
-double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s) {
-    const double x = points(i, 0), y = points(i, 1), z = points(i, 2);
+double LocalGround::height(double x, double y, double z) const {
+    if (x * direction < 0.0) return height_above(plane.empty() ? frame : plane.front(), x, y, z);
     const double range = std::sqrt(x * x + y * y);
-    const auto k = static_cast<std::size_t>(band_of(range, s.band_m));
-    const double own = height_above(k < s.plane.size() ? s.plane[k] : s.frame, x, y, z);
-    const double t = range / s.band_m - static_cast<double>(k) - 0.5;
+    const auto k = static_cast<std::size_t>(band_of(range, band_m));
+    const double own = height_above(k < plane.size() ? plane[k] : frame, x, y, z);
+    const double t = range / band_m - static_cast<double>(k) - 0.5;
     const bool inward = t < 0.0;
     if (inward && k == 0) return own;
     const std::size_t j = inward ? k - 1 : k + 1;
-    if (!has_corridor_points(j, s)) return own;  // the frame plane stands in there
+    if (j >= plane.size() || !has_points[j]) return own;  // the frame plane stands in there
     const double w = std::abs(t);
-    return (1.0 - w) * own + w * height_above(s.plane[j], x, y, z);
+    return (1.0 - w) * own + w * height_above(plane[j], x, y, z);
 }
 
 Levelling levelling_for(const Plane* plane) {

@@ -38,9 +38,7 @@ struct ProfileScratch {
     std::vector<std::size_t> band_start, band_next;
     std::vector<std::uint8_t> fitted;
     std::vector<double> nearest, farthest, offsets;
-    std::vector<Plane> plane;  // of each band out to the farthest corridor point
-    Plane frame{0.0, 0.0, 1.0, 0.0};
-    double band_m = 0.0;
+    LocalGround ground;  // the model fitted
 };
 
 /// The local ground model of local_ground_heights (docs/method.md §3) fitted into `s`.
@@ -48,7 +46,9 @@ void fit_local_ground(PointsView points, const std::vector<std::uint8_t>& mask, 
                       const WheelPaths& paths, ProfileScratch& s);
 
 /// Ground point i's height above the local ground model last fitted into `s`: local_ground_heights' value for it.
-double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s);
+inline double local_height(PointsView points, Eigen::Index i, const ProfileScratch& s) {
+    return s.ground.height(points(i, 0), points(i, 1), points(i, 2));
+}
 
 /// The first half of build_profiles (what does not depend on the obstacles): each wheel's corridor points into
 /// `s.hits`, with `level_local` at their heights above the local ground model last fitted into `s`.

@@ -19,7 +19,7 @@ from .ground import NO_GROUND, ground_model, roi_facing
 from .iri import vehicle_iri, wheel_iri
 from .path import check_motion, plan_path, wheel_y
 from .point_errors import point_errors
-from .profile import Profile, bin_count, fill_gaps, level_points
+from .profile import Profile, bin_count, fill_gaps, level_points, levelling_rotation, local_ground_model
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
 from .stereo import groups_per_bin
 from .support import pooled_variances
@@ -101,10 +101,15 @@ class FusedMap:
     fused: int = 0
     started: bool = False
     map_has_excess: bool = False  #: the map's variances carry an excess disagreement (an alignment has run)
+    #: The last fused frame's local ground model and what takes a map height into that frame: (model, the frame's
+    #: pose, its alignment plane (offset, x slope, y slope about the vehicle), its levelling rotation); None: the
+    #: profiles read the map's heights.
+    readout_ground: Optional[tuple] = None
 
     def reset(self):
         self.cells, self.pose, self.last_time, self.fused, self.started = {}, (0.0, 0.0, 0.0), None, 0, False
         self.map_has_excess = False
+        self.readout_ground = None
 
     def advance(self, speed, yaw_rate, timestamp=None, pose=None) -> Optional[str]:
         """Moves to this frame's pose; returns why the map was reset, if it was."""
@@ -134,10 +139,12 @@ class FusedMap:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x0 + c * xy[:, 0] - s * xy[:, 1], y0 + s * xy[:, 0] + c * xy[:, 1]])
 
-    def fuse(self, levelled_ground: np.ndarray, variances=None, error_groups=None):
+    def fuse(self, levelled_ground: np.ndarray, variances=None, error_groups=None, ground=None, rotation=None):
         """Median per cell of the frame's levelled ground points, fused into the map. The points' height
         ``variances`` (m²), when given, raise each cell's spread to the root of their mean, and with their
-        ``error_groups`` a cell's median counts as one measurement per distinct group (method.md §12)."""
+        ``error_groups`` a cell's median counts as one measurement per distinct group (method.md §12). With
+        ``ground``, the frame's LocalGround, and ``rotation``, the levelling that took the points to levelled, the
+        profiles are read as heights above that model (method.md §7) until a frame is fused without one."""
         cell = self.cfg.fusion.cell_m
         ij = np.floor(self.to_odometry(levelled_ground[:, :2]) / cell).astype(np.int64)
         keys, inverse, counts = np.unique(ij, axis=0, return_inverse=True, return_counts=True)
@@ -159,20 +166,23 @@ class FusedMap:
         point = np.where(counts >= 2, np.fmax(pooled, spreads ** 2), pooled)
         variances = np.where(measurements >= 3, _MEDIAN_VARIANCE_FACTOR / measurements, 1 / measurements) * point
         variances = np.maximum(variances, _MIN_VARIANCE)
+        alignment = np.zeros(3)
         if self.cfg.fusion.align:
-            medians, variances = self.align(keys, medians, variances)
+            medians, variances, alignment = self.align(keys, medians, variances)
+        self.readout_ground = None if ground is None else (ground, self.pose, alignment, rotation)
         for key, z, m, r in zip(map(tuple, keys), groups, medians, variances):
             self.cells[key] = fuse_cell(self.cells.get(key), float(m), float(r), len(z), self.frame, self.cfg)
         self.fused += 1
 
-    def align(self, keys: np.ndarray, medians: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The frame's cell medians minus the plane of their differences to the map's heights, and their
-        variances plus the disagreement the variances missed (docs/method.md §7, step 3)."""
+    def align(self, keys: np.ndarray, medians: np.ndarray, variances: np.ndarray):
+        """The frame's cell medians minus the plane of their differences to the map's heights, their variances
+        plus the disagreement the variances missed (docs/method.md §7, step 3), and that plane (offset, x slope,
+        y slope about the vehicle; zeros when too few cells are shared)."""
         offsets = (keys + 0.5) * self.cfg.fusion.cell_m - np.array(self.pose[:2])
         regressors = np.column_stack([np.ones(len(keys)), offsets])
         shared = np.flatnonzero([tuple(k) in self.cells for k in keys])
         if len(shared) < _MIN_ALIGN_CELLS:
-            return medians, variances
+            return medians, variances, np.zeros(3)
         cells = [self.cells[tuple(k)] for k in keys[shared]]
         v = regressors[shared]
         difference = medians[shared] - np.array([c.height for c in cells])
@@ -209,7 +219,7 @@ class FusedMap:
             for cell in self.cells.values():
                 cell.variance += excess
             self.map_has_excess = True
-        return medians - regressors @ plane, variances + excess
+        return medians - regressors @ plane, variances + excess, plane
 
     def profile(self, path: dict, wheel: str, speed: float, yaw_rate: float, blocked=None) -> tuple[Profile, int, int]:
         """(profile, bins ahead with data, of them bins seen this frame) sampled from the map (method.md §7)."""
@@ -228,7 +238,9 @@ class FusedMap:
         ahead = ahead_now = 0
         for k in range(bins):
             found = [self._cell_at(path, wheel, s[k], o, speed, yaw_rate) for o in offsets]
-            found = [c for c in found if c is not None]
+            found = [(odom, c) for odom, c in found if c is not None]
+            heights = [self._height(odom, c.height) for odom, c in found]
+            found = [c for _, c in found]
             if not found:
                 continue
             count[k] = sum(c.points for c in found)
@@ -237,19 +249,31 @@ class FusedMap:
                 ahead_now += any(c.last_update == self.frame for c in found)
             if flags[k]:
                 continue
-            z[k] = sum(c.height for c in found) / len(found)
+            z[k] = sum(heights) / len(found)
             spread[k] = spread_for_variance(sum(c.variance for c in found) / len(found) ** 2, count[k])
         z = fill_gaps(z, ds, cfg.profile.max_gap_m, flags)
         roughness = analyze_roughness(z, ds, cfg, count=count, spread=spread)
         roughness.iri = wheel_iri(z, count, ds, roughness.iso_class, cfg, spread)
         return Profile(s=s, z=z, count=count, spread=spread, roughness=roughness, blocked=flags), ahead, ahead_now
 
-    def _cell_at(self, path, wheel, s, offset, speed, yaw_rate) -> Optional[Cell]:
+    def _cell_at(self, path, wheel, s, offset, speed, yaw_rate) -> tuple:
+        """(odometry (x, y), the cell there or None)."""
         xy = path_point(path, wheel, s, offset, speed, yaw_rate, self.cfg)
         if xy is None:
-            return None
+            return None, None
         odom = self.to_odometry(np.array([xy]))[0]
-        return self.cells.get(tuple(np.floor(odom / self.cfg.fusion.cell_m).astype(np.int64)))
+        return odom, self.cells.get(tuple(np.floor(odom / self.cfg.fusion.cell_m).astype(np.int64)))
+
+    def _height(self, odom, height: float) -> float:
+        """A map height at odometry (x, y) as the profile reads it: above the last fused frame's local ground
+        model, taken into that frame's datum (undoing its alignment), vehicle axes and base frame (method.md §7)."""
+        if self.readout_ground is None:
+            return height
+        model, (x0, y0, yaw), alignment, rotation = self.readout_ground
+        dx, dy = odom[0] - x0, odom[1] - y0
+        c, s = math.cos(yaw), math.sin(yaw)
+        levelled = np.array([c * dx + s * dy, -s * dx + c * dy, height + alignment @ [1.0, dx, dy]])
+        return float(model.heights((levelled @ rotation)[None, :])[0])  # base frame: Lᵀ·levelled
 
 
 @dataclass
@@ -279,8 +303,11 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     ground, plane = (model.mask, model.plane) if model else (None, None)
     if plane is not None and path["status"] != "stopped":
         xyz = base_xyz[ground]
+        local = cfg.profile.level and cfg.profile.level_local
+        local_model = local_ground_model(xyz, plane, cfg, path, math.copysign(1.0, speed)) if local else None
         state.fuse(level_points(xyz, plane) if cfg.profile.level else xyz,
-                   None if variances is None else variances[ground], None if groups is None else groups[ground])
+                   None if variances is None else variances[ground], None if groups is None else groups[ground],
+                   local_model, levelling_rotation(plane) if local else None)
     status["frames"] = state.fused
     # A map that holds data stands in for a frame without ground: the profiles are read from it.
     reason = "no finite points" if len(base_xyz) == 0 and not state.fused else \

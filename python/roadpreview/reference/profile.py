@@ -31,16 +31,19 @@ class Profile:
     obstacles: Optional[Any] = None  #: obstacles.PathObstacles in this wheel's path; None: clustering is off
 
 
-def level_points(xyz, plane) -> np.ndarray:
-    """Rotate the points about the origin so the plane normal n goes onto ẑ along the shortest arc (z' = n·p)."""
-    xyz = np.asarray(xyz, dtype=np.float64)
+def levelling_rotation(plane) -> np.ndarray:
+    """The rotation about the origin that takes the plane normal n onto ẑ along the shortest arc."""
     normal = np.asarray(plane[:3], dtype=np.float64)
     normal = normal / np.linalg.norm(normal)
     # Rodrigues for a onto b: R = I + [v]× + [v]×² / (1 + a·b), v = a × b; identity when n = ẑ.
     vx, vy, vz = np.cross(normal, [0.0, 0.0, 1.0])
     skew = np.array([[0, -vz, vy], [vz, 0, -vx], [-vy, vx, 0]])
-    rotation = np.eye(3) + skew + skew @ skew / (1 + normal[2])
-    return xyz @ rotation.T
+    return np.eye(3) + skew + skew @ skew / (1 + normal[2])
+
+
+def level_points(xyz, plane) -> np.ndarray:
+    """Rotate the points about the origin so the plane normal n goes onto ẑ along the shortest arc (z' = n·p)."""
+    return np.asarray(xyz, dtype=np.float64) @ levelling_rotation(plane).T
 
 
 def arc_length(xy: np.ndarray, path: dict, wheel: str, speed: float, yaw_rate: float, cfg: Config):
@@ -156,15 +159,52 @@ def _band_plane(xyz: np.ndarray) -> np.ndarray:
     return plane
 
 
-def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None) -> np.ndarray:
-    """Each ground point's height above its band's plane (method.md §3). Bands are ⌊r / level_band_m⌋ of
+@dataclass
+class LocalGround:
+    """One frame's local ground model (method.md §3): a plane per band ⌊r / band_m⌋ of horizontal range that has
+    corridor points, the frame plane elsewhere; ``direction`` is the side of the base origin the corridor lies on."""
+
+    planes: dict
+    frame: np.ndarray
+    band_m: float
+    direction: float = 1.0
+
+    def heights(self, xyz) -> np.ndarray:
+        """Heights of base-frame points above the model, blended between band centres: a point t bands from its
+        band's centre (|t| ≤ ½) takes |t| of its height above the neighbour band it lies towards, when that band
+        has a plane of its own — continuous where bands meet. A point on the other side of the base origin (road
+        already driven) takes the nearest band's plane alone: the farther bands lie ahead."""
+        from .ground import height_above
+
+        xyz = np.asarray(xyz, dtype=np.float64)[:, :3]
+        r = np.hypot(xyz[:, 0], xyz[:, 1])
+        band = np.floor(r / self.band_m)
+        position = r / self.band_m - band - 0.5
+        behind = xyz[:, 0] * self.direction < 0
+        band[behind], position[behind] = 0, 0.0
+        neighbour = band + np.where(position < 0, -1, 1)
+        z = np.empty(len(xyz))
+        for k in np.unique(band):
+            mine = band == k
+            z[mine] = height_above(xyz[mine], self.planes.get(k, self.frame))
+            for j in (k - 1, k + 1):
+                towards = mine & (neighbour == j) & ~behind
+                if j in self.planes and towards.any():
+                    w = np.abs(position[towards])
+                    z[towards] = (1 - w) * z[towards] + w * height_above(xyz[towards], self.planes[j])
+        return z
+
+
+def local_ground_model(ground_xyz, plane, cfg: Config, path: dict | None = None,
+                       direction: float = 1.0) -> LocalGround:
+    """The local ground model of a frame's ground points (method.md §3). Bands are ⌊r / level_band_m⌋ of
     horizontal distance r; a band's plane is fitted to its ground points within 1.5 m of the vehicle's path
     (straight ahead without ``path``) when they span at least half the band in range, and refitted twice to
     those within 0.2 m of the last fit and 3 robust standard deviations of their median height above it; a band
     whose points span less (or whose fit is degenerate) gets the normal of the nearest fitted band (the frame
     plane's if there is none) through the median of its points; a band without corridor points, the frame
     plane."""
-    from .ground import DegenerateFit, height_above  # the profile builds on the ground stage's fit
+    from .ground import DegenerateFit  # the profile builds on the ground stage's fit
 
     xyz = np.asarray(ground_xyz, dtype=np.float64)[:, :3]
     frame = np.asarray(plane, dtype=np.float64)
@@ -185,20 +225,14 @@ def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = Non
     for k, corridor in short.items():
         normal = planes[min(fitted, key=lambda j: (abs(j - k), j))][:3] if fitted else frame[:3]
         planes[k] = np.append(normal, -np.median(corridor @ normal))
-    # Blended between band centres: a point t bands from its band's centre (|t| ≤ ½) takes |t| of its height above
-    # the neighbour band it lies towards, when that band has a plane of its own — continuous where bands meet.
-    position = np.hypot(xyz[:, 0], xyz[:, 1]) / cfg.profile.level_band_m - band - 0.5
-    neighbour = band + np.where(position < 0, -1, 1)
-    z = np.empty(len(xyz))
-    for k in np.unique(band):
-        mine = band == k
-        z[mine] = height_above(xyz[mine], planes.get(k, frame))
-        for j in (k - 1, k + 1):
-            towards = mine & (neighbour == j)
-            if j in planes and towards.any():
-                w = np.abs(position[towards])
-                z[towards] = (1 - w) * z[towards] + w * height_above(xyz[towards], planes[j])
-    return z
+    return LocalGround(planes, frame, cfg.profile.level_band_m, direction)
+
+
+def local_ground_heights(ground_xyz, plane, cfg: Config, path: dict | None = None,
+                         direction: float = 1.0) -> np.ndarray:
+    """Each ground point's height above the local ground model of the points (:func:`local_ground_model`), the
+    vehicle driving forward (``direction`` 1) or reversing (−1)."""
+    return local_ground_model(ground_xyz, plane, cfg, path, direction).heights(ground_xyz)
 
 
 def empty_profile(reason: str) -> Profile:
@@ -219,7 +253,7 @@ def wheel_profile(ground_xyz, plane, path: dict, wheel: str, speed, yaw_rate,
     if cfg.profile.level and plane is not None:
         xyz = level_points(xyz, plane)
         if cfg.profile.level_local:
-            xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg, path)
+            xyz[:, 2] = local_ground_heights(ground_xyz, plane, cfg, path, math.copysign(1.0, speed))
     s, in_corridor = arc_length(xyz[:, :2], path, wheel, float(speed), float(yaw_rate), cfg)
     variances = None if height_variances is None else np.asarray(height_variances, float)[in_corridor]
     groups = None if error_groups is None else np.asarray(error_groups)[in_corridor]

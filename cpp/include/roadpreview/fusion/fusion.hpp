@@ -122,9 +122,11 @@ public:
     /// Fuses the ground points (`mask`) of a base-frame cloud, levelled by L, into the map. With
     /// `height_variances` (m² per point) a cell's spread is at least the root of its points' mean (noise_spread),
     /// and with `error_groups` (one per point, see PointErrors) its median counts as one measurement per group.
+    /// With `ground`, the frame's local ground model (fit to the same points, docs/method.md §3), the profiles are
+    /// read as heights above it (§7) until a frame is fused without one; without, as the map's heights.
     void fuse(PointsView points, const std::vector<std::uint8_t>& mask, const Levelling& L,
               const std::vector<float>* height_variances = nullptr,
-              const std::vector<std::int32_t>* error_groups = nullptr);
+              const std::vector<std::int32_t>* error_groups = nullptr, const LocalGround* ground = nullptr);
     /// Fuses height samples into the map: per cell the inverse-variance mean of its samples and that mean's
     /// variance, fused like a frame's cell (not aligned: the samples carry their own datum). Samples outside the
     /// window are skipped; returns the cells updated.
@@ -153,6 +155,19 @@ private:
     void link(std::int64_t slot, std::size_t i);
     void sample(const WheelPaths& paths, Wheel w, const std::vector<std::uint8_t>* blocked, std::size_t& ahead,
                 std::size_t& ahead_now, Profile& p) const;
+    double above_local_ground(double x, double y, double height) const;  // a map height at odometry (x, y)
+
+    // The last fused frame's local ground model and what takes a map height into that frame: the frame's pose
+    // (and its yaw's cosine and sine), its alignment plane (offset, x slope, y slope about the vehicle: its heights
+    // minus that plane are the map's) and its levelling.
+    struct ReadoutGround {
+        bool set = false;  // false: the profiles read the map's heights
+        LocalGround model;
+        Pose2 pose;
+        double cos_yaw = 1.0, sin_yaw = 0.0;
+        Eigen::Vector3d alignment = Eigen::Vector3d::Zero();
+        Levelling L{};
+    };
 
     struct SharedCell {  // a cell of the frame that the map holds too: what align fits
         std::size_t index;
@@ -168,6 +183,7 @@ private:
     std::int64_t fused_ = 0;
     bool started_ = false;
     bool map_has_excess_ = false;  // the map's variances carry an excess disagreement (an alignment has run)
+    ReadoutGround readout_;
     std::vector<std::int32_t> head_, next_;  // per-slot lists of this frame's points (reused)
     std::vector<double> z_;
     std::vector<float> variance_;  // this frame's point height variances, by point (reused)

@@ -63,6 +63,21 @@ constexpr int kLevelRefits = 2;
 /// distance from its circle about the ICR on an arc.
 double distance_from_path(const WheelPaths& paths, double x, double y);
 
+/// One frame's local ground model (docs/method.md §3): a plane per band k = ⌊r / band_m⌋ of horizontal range r,
+/// blended between band centres, the frame plane beyond the last band with corridor points. The single frame's
+/// profiles take their heights above it, and a fused map's profiles are read above the last fused frame's (§7).
+struct LocalGround {
+    std::vector<Plane> plane;              ///< of each band out to the farthest corridor point
+    std::vector<std::uint8_t> has_points;  ///< of each band: it has corridor points (a plane of its own)
+    Plane frame{0.0, 0.0, 1.0, 0.0};       ///< the frame's ground plane
+    double band_m = 0.0;
+    double direction = 1.0;  ///< the side of the base origin the corridor lies on (x·direction > 0; −1 reversing)
+
+    /// Height of the base-frame point (x, y, z) above the model; a point on the other side of the base origin
+    /// (the road already driven) takes the nearest band's plane, unblended: the farther bands lie ahead.
+    double height(double x, double y, double z) const;
+};
+
 /// Levelling by the local ground model (docs/method.md §3): each ground point's height above its band's plane.
 /// Bands are k = ⌊r / band_m⌋ of horizontal distance r = √(x² + y²). A band's plane is the PCA plane of its ground
 /// points within kLevelCorridorHalfWidthM of the vehicle's path, refitted to those near it (kLevelKeepM,
