@@ -548,6 +548,7 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
     std::int64_t frames = 0, complete = 0, imu = 0, missing = 0, skipped = 0, first_id = -1, last_id = -1;
     std::vector<Eigen::Index> points;
     std::optional<double> t0, t1;
+    double last_span = 0.0;  // s from the last frame's timestamp to its last point
     while (std::optional<rp::Frame> f = source->next()) {
         ++frames;
         complete += f->diagnostics.complete;
@@ -560,6 +561,7 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
         if (f->timestamp) {
             if (!t0) t0 = f->timestamp;
             t1 = f->timestamp;
+            last_span = f->point_times.empty() ? 0.0 : *std::max_element(f->point_times.begin(), f->point_times.end());
         }
     }
     const rp::SourceInfo s = source->info();
@@ -576,9 +578,9 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
         std::printf("points per frame: min %lld, median %lld, max %lld\n", static_cast<long long>(points.front()),
                     static_cast<long long>(points[points.size() / 2]), static_cast<long long>(points.back()));
     }
-    if (t0) {
-        const double period = s.frame_rate_hz > 0 ? 1.0 / s.frame_rate_hz : 0.0;
-        std::printf("duration: %.3f s (first frame at %.6f s, UNIX time)\n", *t1 - *t0 + period, *t0);
+    if (t0) {  // to the end of the last frame: its period when the rate is known, else its last point's time
+        const double last = s.frame_rate_hz > 0 ? 1.0 / s.frame_rate_hz : last_span;
+        std::printf("duration: %.3f s (first frame at %.6f s, UNIX time)\n", *t1 - *t0 + last, *t0);
     }
     if (missing) std::printf("missing columns: %lld\n", static_cast<long long>(missing));
     if (skipped) std::printf("skipped packets: %lld\n", static_cast<long long>(skipped));

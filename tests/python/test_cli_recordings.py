@@ -1,12 +1,14 @@
 """`roadpreview run` and `roadpreview info` on pcap recordings, as a user runs them."""
 
 import json
+import re
 
 import numpy as np
 import pytest
 
 import roadpreview as rp
 from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, VELODYNE
+from pcaps import records
 from test_cli import lines, one_line_error, run
 
 OS1 = ("--sensor-height", OS1_128_HEIGHT)
@@ -75,6 +77,15 @@ def test_info_describes_the_recording():
     assert "sensor model: VLP-16" in out and "packet profile: strongest" in out and "decoded as VLP-16" in out
     out = run("info", VELODYNE / "velodyne_vlp16.pcap", "--sensor-model", "HDL-32E").stdout
     assert "sensor model: HDL-32E" in out
+
+
+@pytest.mark.parametrize("name", ["velodyne_example", "velodyne_vlp16", "velodyne_vlp32", "hdl32_example"])
+def test_info_gives_a_velodyne_capture_its_whole_duration(name):
+    # A Velodyne pcap tells no rotation rate: the last frame counts to its last point, not to its first (which gave
+    # 0.032 s for a capture of 0.110 s). Within the last packet's own 1.3 ms of the capture's first to last record.
+    recs = records(VELODYNE / f"{name}.pcap")
+    duration = float(re.search(r"duration: ([0-9.]+) s", run("info", VELODYNE / f"{name}.pcap").stdout).group(1))
+    assert duration == pytest.approx(recs[-1][0] - recs[0][0], abs=0.002)
 
 
 def test_velodyne_run_and_legacy_ouster_with_meta():
