@@ -429,8 +429,8 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (is_live(o)) live_stats.print(runner.info());
     if (runner.mounting_disagreements())
         std::fprintf(stderr,
-                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given mounting "
-                     "(mounting.disagrees in the output)\n",
+                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given or estimated "
+                     "mounting (mounting.disagrees in the output)\n",
                      static_cast<long long>(runner.mounting_disagreements()));
     if (route) write_route(o, *route);
     return 0;

@@ -88,6 +88,30 @@ def test_info_gives_a_velodyne_capture_its_whole_duration(name):
     assert duration == pytest.approx(recs[-1][0] - recs[0][0], abs=0.002)
 
 
+def test_an_obstacle_across_both_paths_at_the_regions_start_is_noted(tmp_path):
+    # The capture's roof sensor sees the vehicle's bonnet 1.0-2.1 m ahead: the run says how to start the region past
+    # it, and with the region from 2.2 m only the obstacle 15.4 m ahead is left (README, "Obstacles").
+    pcap = OUSTER / "OS-0-128-U1_v2.3.0_1024x10.pcap"
+    note = "stands in both wheels' paths from the start of the region of interest (1.00 m ahead)"
+    assert run("run", pcap, "--speed", 5, "-q").stderr.count(note) == 1
+    config = tmp_path / "past_the_bonnet.yaml"
+    config.write_text("ground:\n  roi_x_min_m: 2.2\n")
+    proc = run("run", pcap, "--speed", 5, "--config", config, "-q")
+    assert "region of interest" not in proc.stderr
+    out = lines(proc.stdout)[0]["profiles"]
+    assert [round(o["s_start"]) for w in ("left", "right") for o in out[w]["obstacles"]] == [15, 15]
+
+
+def test_a_ground_that_disagrees_with_the_estimated_mounting_is_noted():
+    # The mounting comes from frame 0's ground; the capture's last frame, a part of a rotation, fits a ground 10.5°
+    # off it. Before, only a given mounting was checked, and an estimate read off something else went unsaid.
+    proc = run("run", VELODYNE / "hdl32_example.pcap", "--speed", 5, "-q")
+    assert "#6: the fitted ground is 0.31 m below the base origin and tilted 10.5°: the sensor is about 2.49 m up, " \
+           "not 2.17 m as estimated from an earlier frame's ground" in proc.stderr
+    assert "1 frame(s) fitted a ground that disagrees with the given or estimated mounting" in proc.stderr
+    assert [o["mounting"]["disagrees"] for o in lines(proc.stdout)] == [False] * 6 + [True]
+
+
 def test_velodyne_run_and_legacy_ouster_with_meta():
     out = lines(run("run", VELODYNE / "hdl32_example.pcap", "--speed", 5, "--sensor-height", 1.8, "-q").stdout)
     assert len(out) == 7 and all(o["path"]["yaw_rate_source"] == "default" for o in out)

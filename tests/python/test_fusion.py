@@ -253,6 +253,23 @@ def test_a_kitti_street_fused_reads_as_levelled_as_its_frame():
             assert bands[1] == pytest.approx(bands[0], abs=0.02), (wheel, start)
 
 
+def test_poses_that_do_not_move_with_the_speed_are_noted(tmp_path):
+    """Poses of another frame than the sensor's (KITTI's 00.txt is the left camera's: forward is its z) read as
+    (t_x, t_y, yaw) hardly move, and the map is built wrong: the run says so once, naming the file, and goes on."""
+    def poses(name, step):
+        path = tmp_path / name
+        path.write_text("".join(f"1 0 0 {step * i} 0 1 0 0 0 0 1 0\n" for i in range(3)))
+        return path
+
+    base = ("run", *KITTI_FRAMES[:3], "--speed", 8.3, "--frame-rate", 10, "--fusion", "kalman",
+            "--sensor-height", KITTI_SENSOR_HEIGHT, "-q")
+    proc = run_cli(*base, "--poses", poses("still.txt", 0.05))
+    assert proc.stderr.count("still.txt: the poses of frames 0 and 1 lie 0.050 m apart where the speed drove "
+                             "0.830 m in 0.100 s") == 1, proc.stderr
+    assert len(proc.stdout.splitlines()) == 3
+    assert "the poses of frames" not in run_cli(*base, "--poses", poses("moving.txt", 0.83)).stderr
+
+
 def road_with_verges(frame, speed=10.0, n=60000, seed=3):
     """Base-frame points of a flat road 1.8 m below the sensor, the vehicle at x = speed/10 · frame: the lane
     (|y| ≤ 2.5 m) with 3 mm of point noise; the verges (2.5 < |y| ≤ 6 m) like low vegetation, every 0.1 m cell

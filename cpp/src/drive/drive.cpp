@@ -136,9 +136,32 @@ std::optional<DriveFrame> DriveFrames::next() {
             throw std::runtime_error(poses_name_ + ": no pose for frame " + std::to_string(d.index) + " (it has " +
                                      std::to_string(poses_->size()) + ")");
         d.at.pose = (*poses_)[static_cast<std::size_t>(d.index)];
+        check_pose_step(d);
     }
     d.frame = std::move(*frame);
     return d;
+}
+
+// Notes, once, two consecutive frames whose poses moved less than half or more than twice what the speed drove
+// between their timestamps (when that is over 0.1 m): poses of another frame than the sensor's — KITTI's 00.txt is
+// the left camera's, whose forward axis is z — read as (t_x, t_y, yaw) hardly move, and the map is built wrong.
+void DriveFrames::check_pose_step(const DriveFrame& d) {
+    constexpr double kMinDrivenM = 0.1, kMaxRatio = 2.0;
+    const Place here{d.index, d.at.timestamp_s, *d.at.pose, d.motion.speed_mps};
+    const std::optional<Place> before = std::exchange(previous_, here);
+    if (!before || pose_step_noted_ || !here.timestamp_s || !before->timestamp_s || here.index != before->index + 1)
+        return;
+    const double dt = *here.timestamp_s - *before->timestamp_s;
+    const double driven = std::abs(0.5 * (here.speed_mps + before->speed_mps)) * dt;
+    const double moved = std::hypot(here.pose.x_m - before->pose.x_m, here.pose.y_m - before->pose.y_m);
+    if (!(driven > kMinDrivenM) || (moved * kMaxRatio >= driven && moved <= kMaxRatio * driven)) return;
+    pose_step_noted_ = true;
+    char text[200];
+    std::snprintf(text, sizeof text, ": the poses of frames %lld and %lld lie %.3f m apart where the speed drove %.3f m "
+                  "in %.3f s", static_cast<long long>(before->index), static_cast<long long>(here.index), moved, driven,
+                  dt);
+    note(true, poses_name_ + text + ": are they the sensor's poses in its own axes (x forward, y left)? KITTI's "
+                                    "poses are the left camera's (README, \"Fusion on real recordings\")");
 }
 
 // A poses file is there to move the fusion map (--poses); poses in memory may also just place the frames
@@ -175,7 +198,30 @@ std::optional<DriveStep> DriveRunner::next() {
     if (!frames_.mounting_source().empty()) r.mounting_source = frames_.mounting_source();
     check_mounting_of(r, in.frame);
     check_beams_of(in.frame);
+    check_body_of(r, in.frame);
     return step;
+}
+
+// Notes, once, one obstacle in both wheels' paths from the very start of the region of interest: a sensor on the
+// roof may see the vehicle's own bonnet there (the bundled OS-0-128 capture: a sheet 1.0–2.1 m ahead across both
+// paths), which no profile can pass and every frame would report.
+void DriveRunner::check_body_of(const Result& r, const Frame& f) {
+    constexpr double kAtStartM = 0.25;  // s of its nearest point within this of the region's start
+    if (body_noted_ || !on_note_ || !r.left.obstacles || !r.right.obstacles) return;
+    const double start = frames_.config().ground.roi_x_min_m;
+    for (const PathObstacle& left : *r.left.obstacles) {
+        if (left.s_start > start + kAtStartM) continue;
+        for (const PathObstacle& right : *r.right.obstacles) {
+            if (right.id != left.id || right.s_start > start + kAtStartM) continue;
+            body_noted_ = true;
+            char text[200];
+            std::snprintf(text, sizeof text, ": an obstacle %.2f m high stands in both wheels' paths from the start of "
+                          "the region of interest (%.2f m ahead)", left.height, start);
+            on_note_(true, frame_label(f) + text + ": if it is the vehicle's own body, start the region past it "
+                                                   "(ground.roi_x_min_m in --config)");
+            return;
+        }
+    }
 }
 
 // Notes the first frame whose points carry no beams while the beams' errors are to be counted: they are not.
@@ -187,17 +233,20 @@ void DriveRunner::check_beams_of(const Frame& f) {
                    "with beam_index scan_order (--beam-calibration)");
 }
 
-// Notes the first frame whose fitted ground disagrees with the given mounting; counts them all.
+// Notes the first frame whose fitted ground disagrees with the given or estimated mounting; counts them all. An
+// estimate that the frames' ground does not bear out was read off something else (a wall, a car's roof, the
+// vehicle's own bonnet, undergrowth) and every height is off by it.
 void DriveRunner::check_mounting_of(const Result& r, const Frame& f) {
-    if (!r.plane || r.mounting_source != "given") return;
+    const bool estimated = r.mounting_source == "estimated";
+    if (!r.plane || (r.mounting_source != "given" && !estimated)) return;
     const MountingCheck c = check_mounting(*r.plane);
     if (!c.disagrees || disagreeing_++ > 0 || !on_note_) return;
-    char text[200];
+    char text[240];
     std::snprintf(text, sizeof text,
                   ": the fitted ground is %.2f m %s the base origin and tilted %.1f°: the sensor is about %.2f m up, "
-                  "not %.2f m; check --sensor-height / --extrinsics",
+                  "not %.2f m%s; check --sensor-height / --extrinsics",
                   std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg, r.extrinsics.z_m + c.offset_m,
-                  r.extrinsics.z_m);
+                  r.extrinsics.z_m, estimated ? " as estimated from an earlier frame's ground" : "");
     on_note_(true, frame_label(f) + text);
 }
 

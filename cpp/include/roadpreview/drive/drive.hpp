@@ -72,6 +72,7 @@ public:
 
 private:
     bool estimate_mounting_from(const Frame& f);
+    void check_pose_step(const DriveFrame& d);
     void note(bool warning, const std::string& text) const;
 
     std::unique_ptr<FrameSource> source_;
@@ -85,6 +86,14 @@ private:
     bool started_ = false;
     bool mounting_settled_ = false;  // estimated, or the cloud is in a base frame already
     bool mounting_warned_ = false;   // a frame without a plausible mounting was noted
+    struct Place {  // of the last frame with a pose
+        std::int64_t index;
+        std::optional<double> timestamp_s;
+        Pose2 pose;
+        double speed_mps;
+    };
+    std::optional<Place> previous_;
+    bool pose_step_noted_ = false;  // poses that disagree with the speed were noted
 };
 
 /// One processed frame of a drive.
@@ -105,12 +114,13 @@ public:
     const Config& config() const { return frames_.config(); }
     SourceInfo info() const { return frames_.info(); }
     std::int64_t frames_read() const { return frames_.frames_read(); }
-    /// Frames whose fitted ground disagreed with the given mounting (the first one is noted).
+    /// Frames whose fitted ground disagreed with the given or estimated mounting (the first one is noted).
     std::int64_t mounting_disagreements() const { return disagreeing_; }
 
 private:
     void check_mounting_of(const Result& r, const Frame& f);
     void check_beams_of(const Frame& f);
+    void check_body_of(const Result& r, const Frame& f);
 
     std::function<void(bool, const std::string&)> on_note_;
     bool has_poses_file_;
@@ -118,6 +128,7 @@ private:
     std::optional<Estimator> estimator_;  // made at the first frame, again when a later one gives the mounting
     std::int64_t disagreeing_ = 0;
     bool beamless_noted_ = false;
+    bool body_noted_ = false;  // an obstacle across both paths at the region's start was noted
     std::int64_t processed_ = 0;
 };
 
