@@ -53,6 +53,10 @@ int replay(const ReplayArgs& a) {
                  static_cast<long long>(s.sent), 1e-6 * static_cast<double>(s.bytes), s.seconds, a.loops,
                  s.capture_seconds, s.lidar_port, to.port, static_cast<long long>(s.dropped),
                  static_cast<long long>(s.reordered));
+    if (s.clock_jumps)
+        std::fprintf(stderr, "roadpreview: warning: %s: its clock jumped by more than %g s %lld time(s) between two "
+                             "records; those were sent one after the other\n",
+                     a.capture.c_str(), rp::kMaxReplayGapS, static_cast<long long>(s.clock_jumps / a.loops));
     return 0;
 }
 

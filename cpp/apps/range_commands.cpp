@@ -136,6 +136,8 @@ int run_readings(const RangeOptions& o, bool with_motion) {
                          cls(w.left.roughness).c_str(), cls(w.right.roughness).c_str());
         }
     });
+    out.flush();  // a full disk shows here
+    if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "%s: %lld readings, %lld windows in %.2f s (%.0f readings/s)\n", o.readings.c_str(),
                  static_cast<long long>(readings), static_cast<long long>(windows), s, readings / std::max(s, 1e-9));

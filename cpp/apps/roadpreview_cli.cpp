@@ -255,6 +255,12 @@ std::ofstream open_for_writing(const std::string& path) {
     return f;
 }
 
+// A full disk shows when the buffer is written out, not in the destructor, which would let it pass unsaid.
+void finish_writing(std::ofstream& f, const std::string& path) {
+    f.flush();
+    if (!f) throw std::runtime_error(path + ": write failed");
+}
+
 void write_segments(const RunOptions& o, const rp::RouteBuilder& route) {
     std::vector<rp::RouteSegment> segments;
     for (double length_m : o.segment_lengths_m) {
@@ -264,6 +270,7 @@ void write_segments(const RunOptions& o, const rp::RouteBuilder& route) {
     const std::string path = segments_path(o);
     std::ofstream f = open_for_writing(path);
     rp::write_segments_csv(f, segments);
+    finish_writing(f, path);
     if (!o.quiet)
         std::fprintf(stderr, "roadpreview: %zu segment rows over %.1f m of stitched road -> %s\n", segments.size(),
                      segments.empty() ? 0.0 : segments.back().end_m, path.c_str());
@@ -276,8 +283,10 @@ void export_profiles(const RunOptions& o, const rp::RouteBuilder& route) {
         const auto base = std::filesystem::path(o.profile_dir) / wheel;
         std::ofstream csv = open_for_writing(base.string() + ".csv");
         rp::write_profile_csv(csv, profile);
+        finish_writing(csv, base.string() + ".csv");
         std::ofstream erd = open_for_writing(base.string() + ".erd");
         rp::write_profile_erd(erd, profile, wheel, title);
+        finish_writing(erd, base.string() + ".erd");
     }
     if (!o.quiet)
         std::fprintf(stderr, "roadpreview: stitched profiles over %.1f m driven -> %s/{left,right}.{csv,erd}\n",
@@ -429,8 +438,8 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (is_live(o)) live_stats.print(runner.info());
     if (runner.mounting_disagreements())
         std::fprintf(stderr,
-                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the given or estimated "
-                     "mounting (mounting.disagrees in the output)\n",
+                     "roadpreview: warning: %lld frame(s) fitted a ground that disagrees with the mounting "
+                     "(mounting.disagrees in the output)\n",
                      static_cast<long long>(runner.mounting_disagreements()));
     if (route) write_route(o, *route);
     return 0;

@@ -212,10 +212,14 @@ int run(const RoadsideOptions& o) {
     };
     for (const auto& s : scans) emit(processor.push(s));
     emit(processor.finish());
+    out.flush();  // a full disk shows here
+    if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
     if (!o.geojson.empty()) {
         std::ofstream g(o.geojson);
         if (!g) throw std::runtime_error(o.geojson + ": cannot write");
         g << rs::cycles_to_geojson(kept) << '\n';
+        g.flush();
+        if (!g) throw std::runtime_error(o.geojson + ": write failed");
     }
     if (cycles == 0) throw std::runtime_error("no cycle written: the inputs end within the background learning time");
     std::fprintf(stderr, "%lld scans, %lld cycles, %lld object reports, %lld scanner dropouts; cycle processing "

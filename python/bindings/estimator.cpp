@@ -2,6 +2,23 @@
 // rp.Estimator: the pipeline, one frame per process() call; the GIL is released while it runs.
 #include "common.hpp"
 
+#include <unordered_set>
+
+namespace {
+std::unordered_set<const rp::Estimator*>& estimators_in_use() {
+    static std::unordered_set<const rp::Estimator*> in_use;
+    return in_use;
+}
+}  // namespace
+
+EstimatorInUse::EstimatorInUse(const rp::Estimator& est) : est_(&est) {
+    if (!estimators_in_use().insert(est_).second)
+        throw std::runtime_error("this Estimator is in use by another thread: an Estimator is not thread-safe, give "
+                                 "each thread its own");
+}
+
+EstimatorInUse::~EstimatorInUse() { estimators_in_use().erase(est_); }
+
 void bind_estimator(py::module_& m) {
     py::class_<rp::Estimator>(m, "Estimator")
         .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
@@ -44,6 +61,7 @@ void bind_estimator(py::module_& m) {
             }
             rp::Result r;
             {
+                const EstimatorInUse in_use(est);
                 py::gil_scoped_release release;
                 r = est.process(view, speed, yaw_rate, source, motion, errors);
             }
@@ -52,5 +70,8 @@ void bind_estimator(py::module_& m) {
         }, py::arg("points"), py::arg("speed"), py::arg("yaw_rate"), py::arg("source") = "", py::arg("timestamp") = py::none(),
            py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none(),
            py::arg("error_groups") = py::none(), py::arg("beams") = py::none())
-        .def("reset", &rp::Estimator::reset, "Forgets the fused map, the pose and the clock");
+        .def("reset", [](rp::Estimator& est) {
+            const EstimatorInUse in_use(est);
+            est.reset();
+        }, "Forgets the fused map, the pose and the clock");
 }

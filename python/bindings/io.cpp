@@ -263,6 +263,7 @@ void bind_io(py::module_& m) {
         d["lidar_port"] = s.lidar_port;
         d["seconds"] = s.seconds;
         d["capture_seconds"] = s.capture_seconds;
+        d["clock_jumps"] = s.clock_jumps;
         return d;
     });
     m.def("steady_now_s", &rp::steady_now_s);

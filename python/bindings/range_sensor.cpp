@@ -2,18 +2,9 @@
 // Bindings of the range sensor module (roadpreview.range_sensor wraps them): calibration, samples, windows.
 #include <limits>
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
-#include "roadpreview/roadpreview.hpp"
-
-namespace py = pybind11;
-namespace rp = roadpreview;
+#include "common.hpp"
 
 namespace {
-
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 std::vector<double> to_vector(const DoubleArray& a) { return {a.data(), a.data() + a.size()}; }
 
@@ -195,6 +186,7 @@ void bind_range_sensor(py::module_& m) {
         return lines;
     });
     m.def("fusion_map_cells", [](const rp::Estimator& est, DoubleArray x, DoubleArray y) {
+        const EstimatorInUse in_use(est);
         const rp::TemporalFusion* fusion = est.fusion();
         if (!fusion) throw std::invalid_argument("the estimator has no fusion map (fusion.method is \"none\")");
         if (x.size() != y.size()) throw std::invalid_argument("x and y must have the same length");
@@ -217,6 +209,7 @@ void bind_range_sensor(py::module_& m) {
        "fused points' offset) and the height, m; NaN rows where empty");
     m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z,
         DoubleArray variance) {
+        const EstimatorInUse in_use(est);
         if (x.size() != y.size() || x.size() != z.size() || x.size() != variance.size())
             throw std::invalid_argument("x, y, z and variance must have the same length");
         std::vector<rp::MapSample> samples(static_cast<std::size_t>(x.size()));

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Bindings of the roadside library (roadpreview.roadside wraps them): scan readers, telegram decoding, the
 // stages (labelling, L-shape, assignment) for cross-checks, and the cycle processor (JSON lines out).
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -65,7 +69,11 @@ rs::LaserScan scan_from_dict(const py::dict& d) {
 std::vector<rs::Point2> points_from(const DoubleArray& xy) {
     if (xy.ndim() != 2 || xy.shape(1) != 2) throw std::invalid_argument("points must be an (N, 2) array of x, y");
     std::vector<rs::Point2> pts(static_cast<std::size_t>(xy.shape(0)));
-    for (std::size_t i = 0; i < pts.size(); ++i) pts[i] = {xy.data()[2 * i], xy.data()[2 * i + 1], 0};
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        pts[i] = {xy.data()[2 * i], xy.data()[2 * i + 1], 0};
+        if (!std::isfinite(pts[i].x_m) || !std::isfinite(pts[i].y_m))
+            throw std::invalid_argument("points must be finite: row " + std::to_string(i) + " is not");
+    }
     return pts;
 }
 

@@ -213,6 +213,8 @@ class Config:
     def from_file(cls, path: str | Path) -> "Config":
         """Read a JSON or YAML file holding (a subset of) the fields of :meth:`to_dict`."""
         path = Path(path)
+        if path.exists() and not path.is_file():  # a directory; a device never ends, a pipe blocks
+            raise ValueError(f"{path}: cannot read config file: not a regular file")
         try:
             text = path.read_text()
         except OSError as err:
@@ -226,6 +228,9 @@ class Config:
                 data = json.loads(text)
         except Exception as err:  # parser errors differ between json and yaml
             raise ValueError(f"{path}: not a valid config file: {err}") from None
+        if _values_beyond(data, _MAX_CONFIG_VALUES):
+            raise ValueError(f"{path}: not a config: more than {_MAX_CONFIG_VALUES} values (aliases repeating a node "
+                             f"over and over?)")
         return cls.from_dict(data or {}, source=str(path))
 
     def to_dict(self) -> dict[str, Any]:
@@ -235,6 +240,26 @@ class Config:
         data = self.to_dict()
         _require_finite(data, "Config")
         return json.dumps(data)
+
+
+# A config holds a few hundred values; YAML aliases may repeat a node, and aliases of aliases double it at every
+# level: ten levels of "billion laughs" are a billion values from a few lines.
+_MAX_CONFIG_VALUES = 100_000
+
+
+def _values_beyond(data: Any, limit: int) -> bool:
+    """Whether ``data`` holds more than ``limit`` values, a node reached twice counted twice (stops at the limit)."""
+    seen, stack = 0, [data]
+    while stack:
+        seen += 1
+        if seen > limit:
+            return True
+        item = stack.pop()
+        if isinstance(item, dict):
+            stack.extend(item.values())
+        elif isinstance(item, (list, tuple)):
+            stack.extend(item)
+    return False
 
 
 def _require_finite(data: Any, where: str) -> None:

@@ -18,7 +18,7 @@ class Drive:
     ``.notes``: what the run told the user so far (e.g. the mounting estimated from the first frame with ground;
     warnings are also issued as RuntimeWarning). ``.config``: the config in force (with an estimated mounting once
     a frame gave it). ``.frame``: the frame of the last result. ``.mounting_disagreements``: frames whose ground
-    disagreed with the given or estimated mounting.
+    disagreed with the mounting (given, estimated, or none: base-frame points).
     """
 
     def __init__(self, source, runner):

@@ -11,7 +11,8 @@ from .config import Config
 
 
 class Estimator:
-    """Runs the C++ pipeline frame by frame; keeps its work buffers between calls (not thread-safe).
+    """Runs the C++ pipeline frame by frame; keeps its work buffers between calls (not thread-safe: a call while
+    another thread's call on the same estimator runs raises RuntimeError; give each thread its own).
 
     ``Estimator(cfg)`` raises ValueError for an invalid config, naming the field.
     """

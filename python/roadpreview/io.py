@@ -116,7 +116,8 @@ def replay(capture: PathLike, to: str = "127.0.0.1:7502", *, rate: Union[float, 
     (``roadpreview replay``): ``rate`` times the recorded speed or "max"; ``loops`` times through the capture.
     The capture's busiest port goes to PORT, other ports keep their distance from it. ``drop`` and ``reorder``
     (test hooks): fractions of the datagrams left out and sent one place late. Returns the counts sent, dropped,
-    reordered. Blocks until done (the GIL is released: run it on a thread beside :func:`open_live`).
+    reordered, and ``clock_jumps``: steps of the capture's clock over 5 s between two records (sent one after the
+    other, not after the gap). Blocks until done (the GIL is released: run it on a thread beside :func:`open_live`).
     """
     factor = 0.0 if rate == "max" else float(rate)
     if rate != "max" and not factor > 0.0:

@@ -162,12 +162,17 @@ TEST(Drive, AFrameWithoutGroundLeavesTheMountingToTheFirstFrameThatHasIt) {
     EXPECT_EQ(results[1].fusion->reset, "mounting estimated");
     EXPECT_EQ(results[2].fusion->frames, 2);
     for (std::size_t k = 0; k < results.size(); ++k) EXPECT_EQ(results[k].frame, static_cast<std::int64_t>(k));
-    ASSERT_EQ(notes.size(), 2u);
+    ASSERT_EQ(notes.size(), 3u);
     EXPECT_TRUE(notes[0].first);
     EXPECT_NE(notes[0].second.find("no ground in f0.bin"), std::string::npos) << notes[0].second;
-    EXPECT_FALSE(notes[1].first);
-    EXPECT_NE(notes[1].second.find("mounting estimated from the ground in f1.bin"), std::string::npos);
-    EXPECT_NE(notes[1].second.find("the frames before it were taken as base-frame points"), std::string::npos);
+    // Taken as base-frame points, the sky frame's "ground" lies 3 m up: the run says they are not.
+    EXPECT_TRUE(notes[1].first);
+    EXPECT_NE(notes[1].second.find("f0.bin: the fitted ground is 3.00 m above the base origin and tilted 0.0°: the "
+                                   "points are not base-frame points"), std::string::npos) << notes[1].second;
+    EXPECT_EQ(runner.mounting_disagreements(), 1);
+    EXPECT_FALSE(notes[2].first);
+    EXPECT_NE(notes[2].second.find("mounting estimated from the ground in f1.bin"), std::string::npos);
+    EXPECT_NE(notes[2].second.find("the frames before it were taken as base-frame points"), std::string::npos);
 }
 
 // A cloud whose origin sits on its ground is in a base frame already: later frames are not asked again.

@@ -51,7 +51,10 @@ TEST(Motion, BadCsvNamesTheFileAndLine) {
     EXPECT_NE(error_of(write("s.csv", "t,speed,yaw_rate\n0,1,0\n")).find("two rows"), std::string::npos);
     EXPECT_NE(error_of(write("k.csv", "t,speed,yaw_rate\n0,1,0\n1,3600,0\n")).find("k.csv:3: speed must be within"),
               std::string::npos);  // km/h for m/s: refused where it is read, not by the estimator frames later
-    EXPECT_NE(error_of(testing::TempDir() + "absent.csv").find("cannot open"), std::string::npos);
+    EXPECT_NE(error_of(testing::TempDir() + "absent.csv").find("absent.csv: cannot read the motion file: no such file"),
+              std::string::npos);
+    EXPECT_NE(error_of(testing::TempDir()).find("cannot read the motion file: a directory, not a file"), std::string::npos);
+    EXPECT_NE(error_of("/dev/zero").find("/dev/zero: cannot read the motion file: not a regular file"), std::string::npos);
 }
 
 TEST(Motion, SamplesInMemoryAreCheckedLikeAFileAndLookedUpTheSameWay) {

@@ -114,7 +114,7 @@ def test_garbage_and_missing_files_are_clear_errors(tmp_path):
     lonely.write_bytes(OS1_128_PCAP.read_bytes())
     with pytest.raises(RuntimeError, match=r"lonely\.pcap: .*no Ouster metadata JSON was found.*--meta"):
         rp.io.open(lonely)
-    with pytest.raises(RuntimeError, match=r"absent\.json: cannot open Ouster metadata"):
+    with pytest.raises(RuntimeError, match=r"absent\.json: cannot read the Ouster metadata file: no such file"):
         rp.io.open(lonely, meta=tmp_path / "absent.json")
 
 

@@ -11,13 +11,17 @@
 
 #include "roadpreview/calibration/calibration.hpp"
 
+#include "core/input_file.hpp"
 #include "core/median.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr const char* kFormat = "roadpreview beam calibration 1";
+constexpr double kMaxElevationOffsetDeg = 5.0;  // a calibration corrects tenths of a degree
+constexpr double kMaxRangeOffsetM = 1.0;        // and centimetres
 
 double deg(double rad) { return rad * 180.0 / kPi; }
 double rad(double deg) { return deg * kPi / 180.0; }
@@ -43,8 +47,15 @@ BeamOffsets read_beam(const YAML::Node& n) {
     b.range_sigma_m = read_number(n["range_sigma_m"], nan);
     b.observations = n["observations"] ? n["observations"].as<std::int64_t>() : 0;
     b.elevation_deg = read_number(n["elevation_deg"], nan);
-    if (!std::isfinite(b.elevation_offset_deg) || !std::isfinite(b.range_offset_m))
-        throw std::runtime_error("an offset is not a finite number");
+    // A beam off by more than a few degrees or a metre is another sensor's beam, not a calibration's correction.
+    if (!(std::abs(b.elevation_offset_deg) <= kMaxElevationOffsetDeg))
+        throw std::runtime_error("elevation_offset_deg must lie within ±" + number_text(kMaxElevationOffsetDeg) +
+                                 "°, got " + number_text(b.elevation_offset_deg));
+    if (!(std::abs(b.range_offset_m) <= kMaxRangeOffsetM))
+        throw std::runtime_error("range_offset_m must lie within ±" + number_text(kMaxRangeOffsetM) + " m, got " +
+                                 number_text(b.range_offset_m));
+    for (const double sigma : {b.elevation_sigma_deg, b.range_sigma_m})
+        if (sigma < 0.0 || std::isinf(sigma)) throw std::runtime_error("a sigma must be finite and >= 0 (or null)");
     return b;
 }
 
@@ -146,12 +157,17 @@ bool in_scan_order(PointsView points, int beams, std::vector<std::int32_t>& ring
 }  // namespace
 
 BeamCalibration read_beam_calibration(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "beams file");
     BeamCalibration c;
     c.source = path;
     try {
         const YAML::Node root = YAML::LoadFile(path);
         if (!root["format"] || root["format"].as<std::string>() != kFormat)
             throw std::runtime_error(std::string("not a beams file (`format: ") + kFormat + "` missing)");
+        const YAML::Node units = root["units"];  // written by roadpreview calibrate: degrees and metres
+        if (units && ((units["angles"] && units["angles"].as<std::string>() != "deg") ||
+                      (units["ranges"] && units["ranges"].as<std::string>() != "m")))
+            throw std::runtime_error("units must be {angles: deg, ranges: m}");
         c.sensor_model = root["sensor_model"] ? root["sensor_model"].as<std::string>() : "";
         c.serial = root["serial"] ? root["serial"].as<std::string>() : "";
         c.beam_count = root["beam_count"].as<int>();
@@ -234,6 +250,7 @@ std::string beam_calibration_to_yaml(const BeamCalibration& c) {
 void write_beam_calibration(const BeamCalibration& c, const std::string& path) {
     std::ofstream out(path);
     out << beam_calibration_to_yaml(c);
+    out.flush();  // a full disk shows here, not in the destructor
     if (!out) throw std::runtime_error(path + ": cannot write the beams file");
 }
 

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 
 namespace roadpreview {
@@ -236,10 +237,14 @@ void validate(const Config& c) {
         require(std::isfinite(*c.sensor_height) && *c.sensor_height > 0.0 && *c.sensor_height <= kMaxSensorHeightM,
                 "sensor_height must be above 0 and at most " + std::to_string(static_cast<int>(kMaxSensorHeightM)) +
                     " m (the sensor's height above the ground), got " + number_text(*c.sensor_height));
-    if (c.extrinsics) {
+    if (c.extrinsics) {  // a sensor on a vehicle: metres from its base origin, angles of a turn at most
         const Extrinsics& e = *c.extrinsics;
-        for (double v : {e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad})
-            require(std::isfinite(v), "extrinsics must be finite");
+        for (double v : {e.x_m, e.y_m, e.z_m})
+            require(std::abs(v) <= kMaxMountingOffsetM, "extrinsics: x, y and z must be within ±" +
+                                                            number_text(kMaxMountingOffsetM) + " m, got " + number_text(v));
+        for (double v : {e.roll_rad, e.pitch_rad, e.yaw_rad})
+            require(std::abs(v) <= 2.0 * M_PI, "extrinsics: roll, pitch and yaw must be within ±2π rad, got " +
+                                                   number_text(v));
     }
     require(positive(c.track_width), "track_width must be > 0 m");
     require(positive(c.tire_width), "tire_width must be > 0 m");
@@ -251,12 +256,14 @@ void validate(const Config& c) {
     require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
             "ground.roi_x_min_m must be < ground.roi_x_max_m");
     require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
-    require(g.pca_iterations >= 1, "ground.pca_iterations must be >= 1");
+    require(g.pca_iterations >= 1 && g.pca_iterations <= kMaxFitIterations,
+            "ground.pca_iterations must be in [1, " + std::to_string(kMaxFitIterations) + "]");
     require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
     require(positive(g.max_depth_m), "ground.max_depth_m must be > 0");
     require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
     require(positive(g.max_tilt_deg) && g.max_tilt_deg < 90.0, "ground.max_tilt_deg must be in (0, 90)");
-    require(g.ransac_max_iterations >= 1, "ground.ransac_max_iterations must be >= 1");
+    require(g.ransac_max_iterations >= 1 && g.ransac_max_iterations <= kMaxRansacIterations,
+            "ground.ransac_max_iterations must be in [1, " + std::to_string(kMaxRansacIterations) + "]");
     validate_zones(g);
 
     require(positive(c.path.straight_radius_m), "path.straight_radius_m must be > 0");
@@ -351,17 +358,25 @@ std::string config_to_json(const Config& cfg) { return json(cfg).dump(); }
 
 namespace {
 
-// YAML scalars carry no type; read them as JSON would (bool, integer, number), quoted ones as strings.
-json yaml_to_json(const YAML::Node& node) {
+// A config holds a few hundred values; aliases may repeat a node, and aliases of aliases double it at every level:
+// ten levels of "billion laughs" are a billion values from a few lines. Beyond this many, the file is refused.
+constexpr std::size_t kMaxYamlValues = 100'000;
+
+// YAML scalars carry no type; read them as JSON would (bool, integer, number), quoted ones as strings. `budget`:
+// the values still allowed.
+json yaml_to_json(const YAML::Node& node, std::size_t& budget) {
+    if (budget-- == 0)
+        throw std::invalid_argument("more than " + std::to_string(kMaxYamlValues) +
+                                    " values (aliases repeating a node over and over?)");
     switch (node.Type()) {
         case YAML::NodeType::Sequence: {
             json out = json::array();
-            for (const auto& item : node) out.push_back(yaml_to_json(item));
+            for (const auto& item : node) out.push_back(yaml_to_json(item, budget));
             return out;
         }
         case YAML::NodeType::Map: {
             json out = json::object();
-            for (const auto& kv : node) out[kv.first.as<std::string>()] = yaml_to_json(kv.second);
+            for (const auto& kv : node) out[kv.first.as<std::string>()] = yaml_to_json(kv.second, budget);
             return out;
         }
         case YAML::NodeType::Scalar: {
@@ -388,6 +403,7 @@ bool is_yaml(const std::string& path) {
 }  // namespace
 
 Config config_from_file(const std::string& path) {
+    require_input_file<std::invalid_argument>(path, "config file");
     std::ifstream in(path);
     if (!in) throw std::invalid_argument(path + ": cannot open config file");
     std::stringstream text;
@@ -395,7 +411,10 @@ Config config_from_file(const std::string& path) {
     if (!is_yaml(path)) return config_from_json(text.str(), path);
     std::string json_text;
     try {
-        json_text = yaml_to_json(YAML::Load(text.str())).dump();
+        std::size_t budget = kMaxYamlValues;
+        json_text = yaml_to_json(YAML::Load(text.str()), budget).dump();
+    } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(path + ": not a config: " + e.what());
     } catch (const YAML::Exception& e) {
         throw std::invalid_argument(path + ": not valid YAML: " + e.what());
     } catch (const nlohmann::json::type_error&) {  // dump() meets a string that is not UTF-8

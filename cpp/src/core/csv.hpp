@@ -23,6 +23,7 @@ inline std::vector<std::string> split(const std::string& line) {
         const auto last = cell.find_last_not_of(" \t\r");
         cells.push_back(first == std::string::npos ? "" : cell.substr(first, last - first + 1));
     }
+    if (!line.empty() && line.back() == ',') cells.emplace_back();  // getline drops a last, empty cell
     return cells;
 }
 

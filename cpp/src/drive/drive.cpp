@@ -233,21 +233,26 @@ void DriveRunner::check_beams_of(const Frame& f) {
                    "with beam_index scan_order (--beam-calibration)");
 }
 
-// Notes the first frame whose fitted ground disagrees with the given or estimated mounting; counts them all. An
-// estimate that the frames' ground does not bear out was read off something else (a wall, a car's roof, the
-// vehicle's own bonnet, undergrowth) and every height is off by it.
+// Notes the first frame whose fitted ground disagrees with the mounting — given, estimated, or none (the points
+// taken as base-frame points); counts them all. An estimate the frames' ground does not bear out was read off
+// something else (a wall, a car's roof, the vehicle's own bonnet, undergrowth), and every height is off by it.
 void DriveRunner::check_mounting_of(const Result& r, const Frame& f) {
-    const bool estimated = r.mounting_source == "estimated";
-    if (!r.plane || (r.mounting_source != "given" && !estimated)) return;
+    if (!r.plane) return;
     const MountingCheck c = check_mounting(*r.plane);
     if (!c.disagrees || disagreeing_++ > 0 || !on_note_) return;
     char text[240];
-    std::snprintf(text, sizeof text,
-                  ": the fitted ground is %.2f m %s the base origin and tilted %.1f°: the sensor is about %.2f m up, "
-                  "not %.2f m%s; check --sensor-height / --extrinsics",
-                  std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg, r.extrinsics.z_m + c.offset_m,
-                  r.extrinsics.z_m, estimated ? " as estimated from an earlier frame's ground" : "");
-    on_note_(true, frame_label(f) + text);
+    std::snprintf(text, sizeof text, ": the fitted ground is %.2f m %s the base origin and tilted %.1f°: ",
+                  std::abs(c.offset_m), c.offset_m >= 0 ? "below" : "above", c.tilt_deg);
+    std::string why = text;
+    if (r.mounting_source == "none") {
+        why += "the points are not base-frame points, as they were taken to be; give --sensor-height / --extrinsics";
+    } else {
+        std::snprintf(text, sizeof text, "the sensor is about %.2f m up, not %.2f m%s; check --sensor-height / "
+                      "--extrinsics", r.extrinsics.z_m + c.offset_m, r.extrinsics.z_m,
+                      r.mounting_source == "estimated" ? " as estimated from an earlier frame's ground" : "");
+        why += text;
+    }
+    on_note_(true, frame_label(f) + why);
 }
 
 }  // namespace roadpreview

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/input_file.hpp"
 #include "core/median.hpp"
 #include "roadpreview/roughness/support.hpp"
 #include "roughness/roughness_scratch.hpp"
@@ -91,6 +92,7 @@ Pose2 integrate_motion(const Pose2& p, double v, double w, double dt) {
 Pose2 pose_from_matrix(const double (&m)[12]) { return {m[3], m[7], std::atan2(m[4], m[0])}; }
 
 std::vector<Pose2> read_kitti_poses(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "poses file");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open poses file");
     std::vector<Pose2> poses;
@@ -164,10 +166,10 @@ Status check_frame_motion(const FrameMotion& motion) noexcept {
         return Status::error(StatusCode::InvalidArgument, "timestamp must be finite, got %g", *motion.timestamp_s);
     if (!motion.pose) return {};
     const Pose2& p = *motion.pose;
-    if (!(std::abs(p.x_m) <= kMaxPoseM && std::abs(p.y_m) <= kMaxPoseM && std::isfinite(p.yaw_rad)))
+    if (!(std::abs(p.x_m) <= kMaxPoseM && std::abs(p.y_m) <= kMaxPoseM && std::abs(p.yaw_rad) <= kMaxPoseYawRad))
         return Status::error(StatusCode::InvalidArgument,
                              "pose (%g m, %g m, %g rad) must be finite and within ±%g m of the odometry frame's origin "
-                             "(poses in metres?)", p.x_m, p.y_m, p.yaw_rad, kMaxPoseM);
+                             "(poses in metres?) and ±%g rad", p.x_m, p.y_m, p.yaw_rad, kMaxPoseM, kMaxPoseYawRad);
     return {};
 }
 

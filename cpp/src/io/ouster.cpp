@@ -13,9 +13,13 @@
 #include <type_traits>
 #include <utility>
 
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <nlohmann/json.hpp>
 
 #include "bytes.hpp"
+#include "core/input_file.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview {
 namespace {
@@ -24,6 +28,7 @@ using json = nlohmann::json;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kStandardGravity = 9.80665;  // m/s² per g
+constexpr int kMaxOusterRows = 512;            // beams: Ouster's largest sensors have 128
 
 struct Layout {
     std::size_t packet_header, column_header, pixel, column_footer, packet_footer;
@@ -151,10 +156,35 @@ std::pair<int, double> parse_lidar_mode(const std::string& mode, const std::stri
     throw std::runtime_error(source + ": lidar_mode \"" + mode + "\" is not of the form COLUMNSxHZ (e.g. 1024x10)");
 }
 
+// A rigid transform in millimetres: finite, a rotation (orthonormal within 1e-3, not a reflection) and a translation
+// within a metre (Ouster's own lie within centimetres).
+bool rigid_mm(const Mat4& t) {
+    const Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> m(t.data());
+    if (!m.allFinite() || std::abs(m(3, 0)) + std::abs(m(3, 1)) + std::abs(m(3, 2)) > 0.0 || m(3, 3) != 1.0) return false;
+    const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+    return (r * r.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 && r.determinant() > 0.0 &&
+           m.topRightCorner<3, 1>().cwiseAbs().maxCoeff() <= 1000.0;
+}
+
 void validate(const OusterMetadata& m) {
     const auto bad = [&](const std::string& what) { throw std::runtime_error(m.source + ": " + what); };
     const int H = m.pixels_per_column;
-    if (H <= 0 || H > 512) bad("pixels_per_column must be 1..512, got " + std::to_string(H));
+    if (H <= 0 || H > kMaxOusterRows)
+        bad("pixels_per_column must be 1.." + std::to_string(kMaxOusterRows) + ", got " + std::to_string(H));
+    if (!(m.frame_rate_hz > 0.0 && m.frame_rate_hz <= 100.0))
+        bad("lidar_mode \"" + m.lidar_mode + "\" gives a frame rate of " + number_text(m.frame_rate_hz) + " Hz");
+    for (const auto& [name, angles] : {std::pair{"beam_altitude_angles", &m.beam_altitude_deg},
+                                       std::pair{"beam_azimuth_angles", &m.beam_azimuth_deg}})
+        for (const double a : *angles)
+            if (!(std::abs(a) <= 180.0)) bad(std::string(name) + " must lie within ±180°, got " + number_text(a));
+    for (const auto& [name, t] : {std::pair{"beam_to_lidar_transform", &m.beam_to_lidar},
+                                  std::pair{"lidar_to_sensor_transform", &m.lidar_to_sensor},
+                                  std::pair{"imu_to_sensor_transform", &m.imu_to_sensor}})
+        if (!rigid_mm(*t))
+            bad(std::string(name) + " must be a rigid transform in mm (a rotation, a translation within 1 m, last "
+                                    "row 0 0 0 1)");
+    for (const auto& [name, port] : {std::pair{"udp_port_lidar", m.udp_port_lidar}, std::pair{"udp_port_imu", m.udp_port_imu}})
+        if (port < 0 || port > 65535) bad(std::string(name) + " must be 0..65535, got " + std::to_string(port));
     const int W = m.columns_per_frame;
     if (W != 512 && W != 1024 && W != 2048 && W != 4096)
         bad("columns_per_frame must be 512, 1024, 2048 or 4096, got " + std::to_string(W));
@@ -227,8 +257,11 @@ OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::st
                                                      {0, m.columns_per_frame - 1});
         if (window.size() != 2) throw std::runtime_error(source + ": column_window must hold 2 numbers");
         m.column_window = {window[0], window[1]};
-        m.pixel_shift_by_row = get_or<std::vector<int>>(j, "lidar_data_format", "data_format", "pixel_shift_by_row",
-                                                        std::vector<int>(static_cast<std::size_t>(m.pixels_per_column), 0));
+        // The default sized by pixels_per_column only once that is known to be sane (validate says why not).
+        const bool sane_rows = m.pixels_per_column > 0 && m.pixels_per_column <= kMaxOusterRows;
+        m.pixel_shift_by_row = get_or<std::vector<int>>(
+            j, "lidar_data_format", "data_format", "pixel_shift_by_row",
+            std::vector<int>(sane_rows ? static_cast<std::size_t>(m.pixels_per_column) : 0, 0));
         Mat4 beam = identity4();
         beam[3] = get_or<double>(j, "beam_intrinsics", nullptr, "lidar_origin_to_beam_origin_mm",
                                  default_beam_origin_mm(m.prod_line));
@@ -247,6 +280,7 @@ OusterMetadata parse_ouster_metadata(const std::string& json_text, const std::st
 }
 
 OusterMetadata read_ouster_metadata(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "Ouster metadata file");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open Ouster metadata file");
     std::stringstream text;

@@ -93,7 +93,12 @@ PcdHeader scan_header(const std::string& path) {
             fail_file(path, "PCD header: unknown line '" + line.substr(0, 80) + "' before DATA");
         // PCL adds a second FIELDS line's fields to the first's and reads past its offsets (found by fuzzing).
         if (!seen.insert(w[0]).second) fail_file(path, "PCD header: a second " + w[0] + " line (each keyword once)");
-        if (w[0] == "FIELDS" || w[0] == "COLUMNS") fields = w.size() - 1;
+        if (w[0] == "FIELDS" || w[0] == "COLUMNS") {
+            fields = w.size() - 1;
+            // PCL reads the first field of a name twice and leaves the second unread: y came from z's column.
+            const std::set<std::string> names(w.begin() + 1, w.end());
+            if (names.size() != fields) fail_file(path, "PCD header: a field named twice in '" + line.substr(0, 80) + "'");
+        }
         if (w[0] == "SIZE") read_sizes(path, w, sizes);
         if (w[0] == "COUNT") read_sizes(path, w, counts);
         if (w[0] == "TYPE") types.assign(w.begin() + 1, w.end()), has_types = true;

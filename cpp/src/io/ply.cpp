@@ -4,10 +4,12 @@
 // with assertions as Debian ships it, aborts on a vertex that does not fit its buffer (fuzz findings).
 #include "io/cloud_files.hpp"
 
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <set>
+#include <sstream>
 #include <vector>
 
 #include <pcl/io/ply_io.h>
@@ -173,10 +175,30 @@ void check_against_file(const std::string& path, const PlyHeader& h) {
                             (grid ? " and " + std::to_string(grid->count) + " range_grid entries" : ""));
 }
 
+// PCL reads a word that is no number in an ASCII body as NaN, and the cloud loses the point unsaid (an ASCII PCD's
+// reader refuses it): every word of the body must be a number.
+void check_ascii_numbers(const std::string& path, const PlyHeader& h) {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(h.data_start));
+    std::string line, word;
+    for (std::uint64_t number = 1; std::getline(in, line); ++number) {
+        std::istringstream words(line);
+        while (words >> word) {
+            char* end = nullptr;
+            std::strtod(word.c_str(), &end);
+            if (end == word.c_str() || *end != '\0')
+                fail_file(path, "PLY data: '" + word.substr(0, 40) + "' on data line " + std::to_string(number) +
+                                    " is not a number");
+        }
+    }
+}
+
 }  // namespace
 
 Frame read_ply(const std::string& path) {
-    check_against_file(path, scan_header(path));
+    const PlyHeader header = scan_header(path);
+    check_against_file(path, header);
+    if (header.format == "ascii") check_ascii_numbers(path, header);
     return read_cloud(path, "PLY", [&](pcl::PCLPointCloud2& blob) { return pcl::PLYReader().read(path, blob); });
 }
 

@@ -85,11 +85,19 @@ struct Pass {
         UdpDatagram d;
         std::optional<UdpDatagram> held;  // sent after the next one (reordered)
         std::optional<double> first_s;
+        double closed_s = 0.0, last_s = 0.0;  // the clock's jumps closed so far; the last record's offset
         std::uniform_real_distribution<double> uniform(0.0, 1.0);
         while (reader.next(d)) {
             if (!first_s) first_s = d.timestamp;
-            stats.capture_seconds = std::max(stats.capture_seconds, d.timestamp - *first_s);
-            wait_until(d.timestamp - *first_s);
+            double offset_s = d.timestamp - *first_s - closed_s;
+            if (std::abs(offset_s - last_s) > kMaxReplayGapS) {  // a jump of the clock, not a silence: close it
+                closed_s += offset_s - last_s;
+                offset_s = last_s;
+                ++stats.clock_jumps;
+            }
+            last_s = offset_s;
+            stats.capture_seconds = std::max(stats.capture_seconds, offset_s);
+            wait_until(offset_s);
             const double u = uniform(random);
             if (u < options.drop_fraction) {
                 ++stats.dropped;

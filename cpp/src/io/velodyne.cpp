@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bytes.hpp"
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 
 namespace roadpreview {
@@ -22,6 +23,7 @@ constexpr int kBlocks = 12;
 constexpr std::size_t kBlockBytes = 100;
 constexpr int kChannelsPerBlock = 32;
 constexpr double kHourUs = 3600e6;
+constexpr double kMaxCorrectionM = 5.0;  // a laser's distance and offset corrections: centimetres in real files
 constexpr std::size_t kMaxSweepPoints = 4'000'000;  // far beyond any real sweep: a sensor that stops turning
 
 // How a model fires: lasers per firing sequence, sequences per 32-channel block, timing in µs.
@@ -115,6 +117,7 @@ VelodyneCalibration default_velodyne_calibration(VelodyneModel m) {
 }
 
 VelodyneCalibration read_velodyne_calibration(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "Velodyne calibration");
     VelodyneCalibration c;
     c.source = path;
     try {
@@ -124,20 +127,33 @@ VelodyneCalibration read_velodyne_calibration(const std::string& path) {
         if (!lasers || !lasers.IsSequence() || lasers.size() == 0)
             throw std::runtime_error(path + ": Velodyne calibration has no `lasers` list");
         c.lasers.resize(lasers.size());
+        std::vector<bool> seen(lasers.size(), false);
         for (const auto& node : lasers) {
             const int id = node["laser_id"].as<int>();
             if (id < 0 || id >= static_cast<int>(lasers.size()))
                 throw std::runtime_error(path + ": laser_id " + std::to_string(id) + " outside 0.." +
                                          std::to_string(lasers.size() - 1));
-            const auto opt = [&](const char* key) { return node[key] ? node[key].as<double>() : 0.0; };
-            c.lasers[static_cast<std::size_t>(id)] = {node["vert_correction"].as<double>(), opt("rot_correction"),
-                                                      opt("dist_correction"), opt("vert_offset_correction"),
-                                                      opt("horiz_offset_correction")};
+            if (seen[static_cast<std::size_t>(id)])  // and another laser would be left all zeros
+                throw std::runtime_error(path + ": laser_id " + std::to_string(id) + " listed twice");
+            seen[static_cast<std::size_t>(id)] = true;
+            // Angles in radians within a turn, corrections in metres within a few: a sensor's, not garbage.
+            const auto field = [&](const char* key, double limit, bool required) {
+                const double v = required || node[key] ? node[key].as<double>() : 0.0;
+                if (!(std::abs(v) <= limit))
+                    throw std::runtime_error(path + ": laser " + std::to_string(id) + ": " + key + " must lie within ±" +
+                                             number_text(limit) + ", got " + number_text(v));
+                return v;
+            };
+            c.lasers[static_cast<std::size_t>(id)] = {
+                field("vert_correction", kPi / 2, true), field("rot_correction", 2 * kPi, false),
+                field("dist_correction", kMaxCorrectionM, false), field("vert_offset_correction", kMaxCorrectionM, false),
+                field("horiz_offset_correction", kMaxCorrectionM, false)};
         }
     } catch (const YAML::Exception& e) {
         throw std::runtime_error(path + ": not a readable Velodyne calibration YAML (" + e.what() + ")");
     }
-    if (!(c.distance_resolution_m > 0.0)) throw std::runtime_error(path + ": distance_resolution must be > 0");
+    if (!(c.distance_resolution_m > 0.0 && c.distance_resolution_m <= 0.1))
+        throw std::runtime_error(path + ": distance_resolution must be > 0 and at most 0.1 m");
     return c;
 }
 

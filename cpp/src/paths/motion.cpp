@@ -10,6 +10,7 @@
 #include "roadpreview/core/frames.hpp"
 #include "roadpreview/paths/path.hpp"
 #include "core/csv.hpp"
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 
 namespace roadpreview {
@@ -20,6 +21,7 @@ std::string csv_number(double v) { return number_text(v, 15); }
 }  // namespace
 
 MotionTable MotionTable::read_csv(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "motion file");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open motion file");
     const auto fail = [&](int line, const std::string& what) {

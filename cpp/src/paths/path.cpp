@@ -24,6 +24,9 @@ Status check_motion(double speed_mps, double yaw_rate_rps) noexcept {
                              "faster: a unit mixed up?), got %g m/s", kMaxSpeedMps, speed_mps);
     if (!std::isfinite(yaw_rate_rps))
         return Status::error(StatusCode::InvalidArgument, "yaw_rate must be finite, got %f", yaw_rate_rps);
+    if (std::abs(yaw_rate_rps) > kMaxYawRateRps)
+        return Status::error(StatusCode::InvalidArgument, "yaw_rate must be within ±%g rad/s (no vehicle turns "
+                             "faster: degrees for radians?), got %g rad/s", kMaxYawRateRps, yaw_rate_rps);
     return {};
 }
 

@@ -318,11 +318,21 @@ const char* to_string(FrameStatus status) noexcept {
 namespace {
 
 // What process() refuses, as a Status (try_process returns it, process() throws its message).
-Status check_input(PointsView points, double speed_mps, double yaw_rate_rps, const FrameMotion& motion) noexcept {
+Status check_input(PointsView points, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
+                   const PointErrors& errors) noexcept {
     if (points.rows() > std::numeric_limits<std::int32_t>::max())
         return Status::error(StatusCode::InvalidArgument, "too many points in one frame: %lld",
                              static_cast<long long>(points.rows()));
     if (Status s = check_motion(speed_mps, yaw_rate_rps); !s) return s;
+    // A point's stated variance weighs it: NaN, infinite or negative would make it exact (or the bin's noise NaN).
+    if (errors.range_variances_m2)
+        for (Eigen::Index i = 0; i < points.rows(); ++i) {
+            const double v = errors.range_variances_m2[i];
+            if (!(v >= 0.0 && v < std::numeric_limits<double>::infinity()) && points.row(i).allFinite())
+                return Status::error(StatusCode::InvalidArgument,
+                                     "range variance of point %lld must be finite and >= 0 m², got %g",
+                                     static_cast<long long>(i), v);
+        }
     return check_frame_motion(motion);
 }
 
@@ -410,7 +420,7 @@ void Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rp
 
 void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                         const FrameMotion& motion, const PointErrors& errors, Result& out) {
-    throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps, motion));
+    throw_unless_ok(check_input(points, speed_mps, yaw_rate_rps, motion, errors));
     impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out);
 }
 
@@ -434,7 +444,7 @@ Status Estimator::try_process(const Frame& frame, double speed_mps, double yaw_r
 
 Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                               const FrameMotion& motion, const PointErrors& errors, Result& out) noexcept {
-    Status s = check_input(points, speed_mps, yaw_rate_rps, motion);
+    Status s = check_input(points, speed_mps, yaw_rate_rps, motion, errors);
     if (!s) return s;
     return without_exceptions(
         [&] { impl_->run(points, speed_mps, yaw_rate_rps, source, motion, errors, out); });

@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 
 #include "core/csv.hpp"
+#include "core/input_file.hpp"
+#include "core/text.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
@@ -53,6 +55,14 @@ void fit_line(const std::vector<double>& c, const std::vector<double>& d, const 
 
 }  // namespace
 
+std::string implausible(const DistanceCalibration& cal) {
+    if (!(cal.a1 > 0.0) || !std::isfinite(cal.a1))
+        return "a1 must be a finite number of metres per count > 0, got " + number_text(cal.a1);
+    if (!(std::abs(cal.a2) <= kMaxRangeOffsetM))
+        return "a2 must lie within ±" + number_text(kMaxRangeOffsetM) + " m, got " + number_text(cal.a2);
+    return {};
+}
+
 DistanceCalibration calibrate_distance(const std::vector<double>& counts, const std::vector<double>& distances) {
     if (counts.size() != distances.size()) throw std::invalid_argument("counts and distances differ in length");
     std::vector<double> c, d;
@@ -86,10 +96,13 @@ DistanceCalibration calibrate_distance(const std::vector<double>& counts, const 
     }
     if (std::count(keep.begin(), keep.end(), 1) >= 3) fit_line(c, d, keep, cal);
     cal.rejected = static_cast<std::int64_t>(c.size()) - cal.used;
+    if (const std::string why = implausible(cal); !why.empty())
+        throw std::invalid_argument("the bench readings give no usable line: " + why);
     return cal;
 }
 
 void read_bench_csv(const std::string& path, std::vector<double>& counts, std::vector<double>& distances) {
+    require_input_file<std::runtime_error>(path, "bench file");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open the bench file");
     csv::Header header;

@@ -10,8 +10,13 @@
 
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
+#include "core/input_file.hpp"
+#include "core/text.hpp"
+
 namespace roadpreview {
 namespace {
+
+constexpr double kMaxSensorOffsetM = 20.0;  // a point sensor's place on the vehicle, m
 
 double finite_field(const YAML::Node& node, const char* key, const std::string& where, std::optional<double> fallback) {
     if (!node[key]) {
@@ -46,7 +51,12 @@ RangeSensor sensor_from(const YAML::Node& node, const std::string& where) {
     s.min_count = finite_field(node, "min_count", at, 0.0);
     s.max_count = finite_field(node, "max_count", at, s.max_count);
     s.max_distance_m = finite_field(node, "max_distance_m", at, s.max_distance_m);
-    if (!(s.height_m > 0)) throw std::runtime_error(at + ": height_m must be > 0");
+    // Ahead of a wheel on a vehicle: metres, not kilometres (a sensor 1e6 m ahead wrote a window per reading).
+    if (!(std::abs(s.x_m) <= kMaxSensorOffsetM && std::abs(s.y_m) <= kMaxSensorOffsetM))
+        throw std::runtime_error(at + ": x_m and y_m must lie within ±" + number_text(kMaxSensorOffsetM) + " m");
+    if (!(s.height_m > 0 && s.height_m <= kMaxSensorOffsetM))
+        throw std::runtime_error(at + ": height_m must be > 0 and at most " + number_text(kMaxSensorOffsetM) + " m");
+    if (!(s.max_distance_m > 0)) throw std::runtime_error(at + ": max_distance_m must be > 0");
     if (!(std::abs(s.pitch_deg) < 60)) throw std::runtime_error(at + ": pitch_deg must lie within ±60°");
     if (!(s.beam_half_angle_deg >= 0 && s.beam_half_angle_deg < 45))
         throw std::runtime_error(at + ": beam_half_angle_deg must lie in [0, 45)");
@@ -79,6 +89,7 @@ DistanceCalibration distance_from(const YAML::Node& n, const std::string& where)
     d.rejected = static_cast<std::int64_t>(finite_field(n, "rejected", where, 0.0));
     d.a1_sigma = finite_field(n, "a1_sigma", where, 0.0);
     d.a2_sigma = finite_field(n, "a2_sigma", where, 0.0);
+    if (const std::string why = implausible(d); !why.empty()) throw std::runtime_error(where + ": " + why);
     return d;
 }
 
@@ -133,6 +144,7 @@ OffsetCalibration offset_from(const YAML::Node& n, const std::string& where) {
 double speed_of_sound_mps(double temperature_c) { return 331.3 * std::sqrt(1.0 + temperature_c / 273.15); }
 
 std::vector<RangeSensor> read_range_layout(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "sensor layout");
     std::vector<RangeSensor> layout;
     try {
         const YAML::Node root = YAML::LoadFile(path);
@@ -168,6 +180,7 @@ const OffsetCalibration* RangeCalibration::offset_for(const std::string& id) con
 }
 
 RangeCalibration read_range_calibration(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "calibration");
     RangeCalibration cal;
     try {
         const YAML::Node root = YAML::LoadFile(path);
@@ -207,6 +220,7 @@ void write_range_calibration(const RangeCalibration& cal, const std::string& pat
     if (!out) throw std::runtime_error(path + ": cannot write the calibration file");
     out << "# roadpreview range sensor calibration: d = a1*c + a2 (m), sample x = b1*v + b2 (m ahead of the axle)\n"
         << range_calibration_to_yaml(cal);
+    out.flush();  // a full disk shows here, not in the destructor
     if (!out) throw std::runtime_error(path + ": write failed");
 }
 

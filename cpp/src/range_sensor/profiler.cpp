@@ -5,7 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
+#include "core/text.hpp"
 #include "pipeline/output_json.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
@@ -14,6 +17,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kQuietSensorMargin_m = 5.0;  // beyond any layout's spread of sample positions
+constexpr int kMaxWindowBins = 1'000'000;     // 100 km at 0.1 m: a window is a stretch of road, not a drive
 
 double median_in_place(std::vector<double>& v) {
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -73,6 +77,10 @@ RangeProfiler::RangeProfiler(std::vector<RangeSensor> layout, RangeCalibration c
     if (layout_.empty()) throw std::invalid_argument("the sensor layout is empty");
     if (!(cfg_.frame_length_m > 0 && cfg_.ds_m > 0 && cfg_.frame_length_m >= 2 * cfg_.ds_m))
         throw std::invalid_argument("frame_length_m and ds_m must be > 0 with at least two bins per window");
+    if (!(cfg_.frame_length_m / cfg_.ds_m <= kMaxWindowBins))  // a window's bins are allocated
+        throw std::invalid_argument("frame_length_m / ds_m must be at most " + std::to_string(kMaxWindowBins) +
+                                    " bins per window, got " + number_text(cfg_.frame_length_m) + " m / " +
+                                    number_text(cfg_.ds_m) + " m");
     latest_.assign(layout_.size(), -std::numeric_limits<double>::infinity());
 }
 

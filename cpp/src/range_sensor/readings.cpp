@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "core/csv.hpp"
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 #include "roadpreview/paths/path.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
@@ -53,6 +54,7 @@ bool parse_double(std::string_view s, double& v) {
 
 RangeReadingReader::RangeReadingReader(const std::string& path, const std::vector<RangeSensor>& layout)
     : path_(path), layout_(layout), buffer_(kBufferBytes) {
+    require_input_file<std::runtime_error>(path, "readings file");
     file_.reset(std::fopen(path.c_str(), "rb"));
     if (!file_) throw std::runtime_error(path + ": cannot open the readings file");
     const char *b = nullptr, *e = nullptr;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <utility>
 
@@ -147,6 +148,10 @@ struct Component {
 }  // namespace
 
 GridLabels label_points(const std::vector<Point2>& points, double cell_m, int dilation_cells) {
+    if (!(cell_m > 0.0) || !std::isfinite(cell_m))
+        throw std::invalid_argument("label_points: the cell must be a finite size > 0 m, got " + std::to_string(cell_m));
+    if (dilation_cells < 0)
+        throw std::invalid_argument("label_points: the dilation must be >= 0 cells, got " + std::to_string(dilation_cells));
     GridLabels g;
     g.cell_m = cell_m;
     g.cells.assign(1, 0);
@@ -217,6 +222,7 @@ GridLabels label_points(const std::vector<Point2>& points, double cell_m, int di
 }
 
 Box fit_l_shape(const std::vector<Point2>& points) {
+    if (points.empty()) throw std::invalid_argument("fit_l_shape: no points to fit a box to");
     if (points.size() < 3) return min_area_box(points);
     const double d0 = 0.01;  // m: closeness saturates here so that one exact point does not dominate
     double best_score = -1.0;

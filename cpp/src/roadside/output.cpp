@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/csv.hpp"
+#include "core/input_file.hpp"
 #include "roadpreview/roadside/processor.hpp"
 
 namespace roadpreview::roadside {
@@ -100,6 +101,7 @@ CameraDetection detection_from_json(const nlohmann::json& j, const std::string& 
 }  // namespace
 
 std::vector<CameraDetection> read_detections(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "detections");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open the detections");
     std::vector<CameraDetection> out;
@@ -156,6 +158,7 @@ void write_detections_csv(const std::vector<CameraDetection>& detections, const 
     for (const auto& d : detections)
         out << d.t_s << ',' << d.x_px << ',' << d.y_px << ',' << d.w_px << ',' << d.h_px << ',' << d.cls << ','
             << d.score << '\n';
+    out.flush();  // a full disk shows here, not in the destructor
     if (!out) throw std::runtime_error(path + ": cannot write the detections");
 }
 

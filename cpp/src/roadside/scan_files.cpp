@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/csv.hpp"
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 #include "roadpreview/roadside/scan.hpp"
 
@@ -53,7 +54,8 @@ void finish_scan(std::vector<CsvBeam>& beams, bool with_intensity, const std::st
 // One line of a gzip or plain text file; false at the end.
 class TextLines {
 public:
-    explicit TextLines(const std::string& path) : file_(gzopen(path.c_str(), "rb"), &gzclose) {
+    explicit TextLines(const std::string& path)
+        : file_((require_input_file<std::runtime_error>(path, "scans"), gzopen(path.c_str(), "rb")), &gzclose) {
         if (!file_) throw std::runtime_error(path + ": cannot open");
     }
     bool next(std::string& line) {
@@ -85,6 +87,7 @@ double parse_double(const std::string& token, const std::string& where, const ch
 }  // namespace
 
 std::vector<LaserScan> read_scan_csv(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "scans");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open");
     std::vector<LaserScan> out;
@@ -110,7 +113,9 @@ std::vector<LaserScan> read_scan_csv(const std::string& path) {
         b.scanner = static_cast<int>(scanner);
         b.angle_deg = csv::finite_cell(cells, header.at("angle_deg"), where, "angle_deg");
         const std::size_t rc = header.at("range_m");
-        const std::string range = rc < cells.size() ? cells[rc] : "";
+        if (rc >= cells.size())  // an empty cell is no return; a missing one, a line cut short
+            throw std::runtime_error(where + ": the row ends before its range_m column (a line cut short?)");
+        const std::string& range = cells[rc];
         const double r = range.empty() ? NAN : parse_double(range, where, "range_m");
         b.range_m = std::isfinite(r) && r > 0.0 ? static_cast<float>(r) : NAN;
         b.intensity = with_intensity ? static_cast<float>(csv::finite_cell(cells, header.at("intensity"), where, "intensity")) : 0.0f;

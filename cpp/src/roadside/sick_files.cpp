@@ -11,6 +11,8 @@
 
 #include "roadpreview/roadside/sick.hpp"
 
+#include "core/input_file.hpp"
+
 namespace roadpreview::roadside {
 namespace {
 
@@ -38,6 +40,7 @@ std::vector<std::uint8_t> colon_hex(const std::string& text, const std::string& 
 }  // namespace
 
 std::vector<TimedTelegram> read_sick_json(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "telegrams");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open");
     nlohmann::json doc;

@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/input_file.hpp"
+
 namespace roadpreview::roadside {
 namespace {
 
@@ -237,6 +239,7 @@ Site parse_site(const std::string& yaml_text, const std::string& where) {
 }
 
 Site read_site(const std::string& path) {
+    if (const std::string why = not_an_input_file(path); !why.empty()) fail(path, "cannot read the site file: " + why);
     std::ifstream in(path);
     if (!in) fail(path, "cannot open the site file");
     std::stringstream text;

@@ -25,6 +25,12 @@ def point_errors(points, base_xyz, finite, cfg: Config, range_variances=None, er
     listed = np.radians(np.asarray(cfg.profile.beam_sigmas_deg, dtype=float))
     others = math.radians(cfg.profile.beam_sigma_deg)
     counted = beams is not None and (others > 0 or bool(np.any(listed > 0)))
+    if range_variances is not None:  # a point's stated variance weighs it: NaN, ±inf or < 0 cannot
+        stated = np.asarray(range_variances[finite], dtype=float)
+        bad = ~(np.isfinite(stated) & (stated >= 0))
+        if bad.any():
+            row = int(np.flatnonzero(finite)[np.argmax(bad)])
+            raise ValueError(f"range variance of point {row} must be finite and >= 0 m², got {range_variances[row]:g}")
     variances = None if range_variances is None else height_variances(base_xyz, range_variances[finite], cfg)
     if counted:
         beam = np.asarray(beams[finite], dtype=np.int64)

@@ -173,6 +173,14 @@ constexpr double kMaxSensorHeightM = 10.0;
 /// Most beams ProfileConfig::beam_sigmas_deg may list (LiDARs have up to a few hundred).
 constexpr std::size_t kMaxBeams = 4096;
 
+/// Farthest the extrinsics may place the sensor from the base origin, m (a truck is 20 m long).
+constexpr double kMaxMountingOffsetM = 100.0;
+
+/// Most fits GroundConfig::pca_iterations may ask for (the paper's is 3; every fit is a pass over the points), and
+/// most RANSAC iterations.
+constexpr int kMaxFitIterations = 100;
+constexpr int kMaxRansacIterations = 1'000'000;
+
 /// Throws std::invalid_argument naming the first offending field.
 void validate(const Config& cfg);
 

@@ -114,7 +114,7 @@ public:
     const Config& config() const { return frames_.config(); }
     SourceInfo info() const { return frames_.info(); }
     std::int64_t frames_read() const { return frames_.frames_read(); }
-    /// Frames whose fitted ground disagreed with the given or estimated mounting (the first one is noted).
+    /// Frames whose fitted ground disagreed with the mounting, given, estimated or none (the first one is noted).
     std::int64_t mounting_disagreements() const { return disagreeing_; }
 
 private:

@@ -34,8 +34,11 @@ struct FrameMotion {
 /// A given pose further than this from the odometry frame's origin (100,000 km; poses in millimetres?) is refused:
 /// the fused map's cell indices would no longer hold it.
 constexpr double kMaxPoseM = 1e8;
+/// A given heading beyond this many radians (1,600 turns, unwrapped) is no heading: its cosine is noise.
+constexpr double kMaxPoseYawRad = 1e4;
 
-/// A timestamp that is not finite, a pose not finite or beyond ±kMaxPoseM: StatusCode::InvalidArgument.
+/// A timestamp that is not finite, a pose not finite or beyond ±kMaxPoseM (±kMaxPoseYawRad):
+/// StatusCode::InvalidArgument.
 Status check_frame_motion(const FrameMotion& motion) noexcept;
 
 /// Rigid planar motion at constant speed and yaw rate for dt seconds (an arc; a line when ω·dt = 0).

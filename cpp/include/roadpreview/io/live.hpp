@@ -69,8 +69,14 @@ struct ReplayStats {
     std::int64_t sent = 0, dropped = 0, reordered = 0, bytes = 0;
     int lidar_port = 0;          ///< the capture's port that carried the most bytes (sent to the given port)
     double seconds = 0.0;        ///< wall time
-    double capture_seconds = 0.0;  ///< the capture's span, per loop
+    double capture_seconds = 0.0;  ///< the capture's span, per loop, its clock's jumps closed
+    /// Steps of the capture's clock of more than kMaxReplayGapS between two records, per loop: sent one after the
+    /// other instead of after the gap (a clock set while capturing; a record from 1970 or 2106).
+    std::int64_t clock_jumps = 0;
 };
+
+/// Longest silence a replay keeps, s: a sensor sends every millisecond.
+constexpr double kMaxReplayGapS = 5.0;
 
 /// Sends the UDP payloads of `capture` (pcap or pcapng) to `to` with their recorded timing: the capture's busiest
 /// destination port goes to `to.port`, every other port keeps its distance from it (Ouster IMU: lidar port + 1).

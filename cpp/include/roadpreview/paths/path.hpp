@@ -34,9 +34,11 @@ struct WheelPaths {
 /// |speed| above this is no ground vehicle's (3,600 km/h): a unit or a field mixed up, refused before it places a
 /// fused map's pose beyond what its cell indices hold.
 constexpr double kMaxSpeedMps = 1000.0;
+/// |yaw rate| above this (16 turns a second) is no vehicle's either.
+constexpr double kMaxYawRateRps = 100.0;
 
-/// Non-finite yaw rate, speed not finite or beyond ±kMaxSpeedMps: StatusCode::InvalidArgument with the message
-/// plan_paths throws.
+/// Speed not finite or beyond ±kMaxSpeedMps, yaw rate not finite or beyond ±kMaxYawRateRps:
+/// StatusCode::InvalidArgument with the message plan_paths throws.
 Status check_motion(double speed_mps, double yaw_rate_rps) noexcept;
 
 /// Throws std::invalid_argument for a speed or yaw rate check_motion refuses (its message).

@@ -59,6 +59,11 @@ struct DistanceCalibration {
     double a1_sigma = 0.0, a2_sigma = 0.0;  ///< standard errors
 };
 
+/// Why a distance calibration cannot be a sensor's (a1 not a finite number of metres per count > 0 — a later echo
+/// is a farther road — or a2 not within ±kMaxRangeOffsetM), or empty when it can.
+std::string implausible(const DistanceCalibration& cal);
+constexpr double kMaxRangeOffsetM = 100.0;
+
 /// Distance of a count (temperature NaN: the bench temperature).
 double distance_of_count(const DistanceCalibration& cal, double count, double temperature_c);
 

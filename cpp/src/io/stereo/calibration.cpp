@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "roadpreview/io/stereo.hpp"
+#include "core/input_file.hpp"
 #include "core/text.hpp"
 
 namespace roadpreview {
@@ -20,6 +21,7 @@ bool ends_with(const std::string& s, const std::string& tail) {
 
 // "NAME: 12 numbers" lines of a KITTI calibration file, by name; other lines are kept out.
 std::map<std::string, std::vector<double>> kitti_matrices(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "calibration file");
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open calibration file");
     std::map<std::string, std::vector<double>> out;
@@ -60,6 +62,7 @@ double yaml_number(const YAML::Node& node, const char* key, const std::string& p
 }
 
 StereoCalibration read_yaml(const std::string& path) {
+    require_input_file<std::runtime_error>(path, "calibration file");
     YAML::Node root;
     try {
         root = YAML::LoadFile(path);

@@ -1,0 +1,219 @@
+"""Inputs that once crashed the process, ran it out of memory, hung it or passed as garbage: each now gets a clear
+error naming the input (or a note), quickly. Every CLI run is bounded by run_cli's timeout."""
+
+import json
+import math
+import os
+import shutil
+import threading
+
+import numpy as np
+import pytest
+
+import roadpreview as rp
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_META, OS1_128_PCAP, VELODYNE
+from paths import run_cli as run
+
+BILLION_LAUGHS = "a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
+    f"{chr(98 + k)}: &{chr(98 + k)} [{', '.join(['*' + chr(97 + k)] * 10)}]\n" for k in range(8))
+
+
+def fails(*args, naming):
+    """The CLI exits with an error whose last line holds `naming` (a fragment, or each of a list of them)."""
+    proc = run(*args, check=False)
+    assert proc.returncode != 0, proc.stdout[-300:]
+    last = proc.stderr.strip().splitlines()[-1]
+    for fragment in [naming] if isinstance(naming, str) else naming:
+        assert fragment in last, last
+    return last
+
+
+def test_a_box_of_no_points_or_of_nan_points_is_an_error_not_a_crash():
+    with pytest.raises(ValueError, match="no points"):
+        rp.roadside.fit_l_shape(np.zeros((0, 2)))
+    with pytest.raises(ValueError, match="must be finite: row 1"):
+        rp.roadside.fit_l_shape(np.array([[0.0, 0.0], [math.nan, 1.0], [1.0, 1.0]]))
+    with pytest.raises(ValueError, match="dilation must be >= 0"):
+        rp.roadside.label_points(np.zeros((3, 2)), 0.2, -2)
+    with pytest.raises(ValueError, match="cell must be a finite size > 0"):
+        rp.roadside.label_points(np.zeros((3, 2)), 0.0, 1)
+
+
+def test_an_estimator_used_by_two_threads_at_once_refuses_the_second():
+    points = np.tile(rp.io.read(KITTI_FRAMES[0]), (8, 1))  # a million points: a call long enough to meet
+    est = rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT))
+    errors = []
+
+    def busy():
+        for _ in range(3):
+            est.process(points, 5.0, 0.0)
+
+    worker = threading.Thread(target=busy)
+    worker.start()
+    while worker.is_alive() and not errors:
+        try:
+            est.process(points[:1000], 5.0, 0.0)
+        except RuntimeError as e:
+            errors.append(str(e))
+    worker.join()
+    assert errors and "in use by another thread" in errors[0]
+    assert est.process(points[:1000], 5.0, 0.0).points["input"] == 1000  # and it works again once free
+
+
+def test_a_yaml_config_of_aliases_repeating_aliases_is_refused(tmp_path):
+    bomb = tmp_path / "laughs.yaml"
+    bomb.write_text(BILLION_LAUGHS + "profile: {beam_sigmas_deg: *i}\n")
+    fails("run", KITTI_FRAMES[0], "--config", bomb, "--speed", 5, naming=["laughs.yaml", "more than 100000 values"])
+    with pytest.raises(ValueError, match="laughs.yaml: not a config: more than 100000 values"):
+        rp.Config.from_file(bomb)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+@pytest.mark.parametrize("option, what", [("--config", "config file"), ("--motion", "motion file"),
+                                          ("--poses", "poses file")])
+def test_a_directory_a_device_or_a_pipe_is_no_input_file(tmp_path, option, what):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)  # opened for reading, it would wait for a writer for ever
+    base = ("run", KITTI_FRAMES[0], "--sensor-height", KITTI_SENSOR_HEIGHT, "--fusion", "kalman")
+    motion = () if option == "--motion" else ("--speed", 5)
+    for path, why in ((tmp_path, "a directory, not a file"), ("/dev/zero", "not a regular file"),
+                      (fifo, "not a regular file")):
+        fails(*base, *motion, option, path, naming=[str(path), f"cannot read the {what}: {why}"])
+
+
+@pytest.mark.parametrize("rows", [2**31 - 1, -128])
+def test_an_ouster_metadata_size_is_checked_before_anything_is_sized_by_it(tmp_path, rows):
+    meta = tmp_path / "meta.json"
+    meta.write_text(OS1_128_META.read_text().replace('"pixels_per_column": 128', f'"pixels_per_column": {rows}'))
+    fails("info", OS1_128_PCAP, "--meta", meta, naming=["meta.json", f"pixels_per_column must be 1..512, got {rows}"])
+
+
+@pytest.mark.parametrize("field, value, fragment", [
+    ("lidar_to_sensor_transform", [0.0] * 16, "lidar_to_sensor_transform must be a rigid transform"),
+    ("beam_altitude_angles", None, "beam_altitude_angles must lie within ±180°"),
+])
+def test_ouster_metadata_values_are_checked(tmp_path, field, value, fragment):
+    meta = json.loads(OS1_128_META.read_text())  # the flat layout: fields at the top level
+    meta[field] = value if value is not None else [1e300] * len(meta[field])
+    path = tmp_path / "meta.json"
+    path.write_text(json.dumps(meta))
+    fails("info", OS1_128_PCAP, "--meta", path, naming=["meta.json", fragment])
+
+
+def test_config_values_that_would_run_for_hours_or_place_the_sensor_nowhere_are_refused():
+    with pytest.raises(ValueError, match=r"ground.pca_iterations must be in \[1, 100\]"):
+        rp.Estimator(rp.Config(ground={"pca_iterations": 10**9}))
+    with pytest.raises(ValueError, match="extrinsics: x, y and z must be within ±100 m"):
+        rp.Estimator(rp.Config(extrinsics={"z_m": 1e6}))
+    est = rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT))
+    points = rp.io.read(KITTI_FRAMES[0])
+    with pytest.raises(ValueError, match="yaw_rate must be within ±100 rad/s"):
+        est.process(points, 5.0, 1e30)
+    with pytest.raises(ValueError, match=r"and ±10000 rad"):
+        rp.Estimator(rp.Config(fusion={"method": "kalman"})).process(points, 5.0, 0.0, pose=(0.0, 0.0, 1e300))
+
+
+@pytest.mark.parametrize("bad", [math.inf, math.nan, -1.0])
+def test_a_range_variance_that_cannot_weigh_a_point_is_an_error_in_both_implementations(bad):
+    points = rp.io.read(KITTI_FRAMES[0])
+    variances = np.full(len(points), 1e-4, dtype=np.float32)
+    variances[7] = bad
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
+    with pytest.raises(ValueError, match="range variance of point 7 must be finite and >= 0"):
+        rp.Estimator(cfg).process(points, 5.0, 0.0, range_variances=variances)
+    with pytest.raises(ValueError, match="range variance of point 7 must be finite and >= 0"):
+        rp.reference.process(points, 5.0, 0.0, cfg, range_variances=variances)
+
+
+def test_cloud_files_whose_fields_or_words_would_be_read_wrong_are_errors(tmp_path):
+    pcd = tmp_path / "twice.pcd"
+    pcd.write_text("FIELDS x x y z\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
+                   "DATA ascii\n1 2 3 4\n")
+    fails("run", pcd, "--speed", 5, naming=["twice.pcd", "a field named twice"])
+    ply = tmp_path / "words.ply"
+    ply.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                   "end_header\n1 2 3\na b c\n")
+    fails("run", ply, "--speed", 5, naming=["words.ply", "'a' on data line 2 is not a number"])
+
+
+@pytest.fixture()
+def range_files(tmp_path):
+    motion = tmp_path / "motion.csv"
+    motion.write_text("t,speed,yaw_rate\n0,10,0\n10,10,0\n")
+    readings = tmp_path / "readings.csv"
+    readings.write_text("t,sensor,distance\n" + "".join(f"{0.001 * k:.3f},l,0.3\n" for k in range(1, 2000)))
+
+    def layout(x_m=0.5):
+        path = tmp_path / f"layout_{x_m}.yaml"
+        path.write_text(f"sensors:\n  - {{id: l, kind: laser, wheel: left, x_m: {x_m}, y_m: 0.8, height_m: 0.3}}\n")
+        return path
+
+    return tmp_path, motion, readings, layout
+
+
+def test_range_sensor_inputs_that_would_multiply_the_output_or_read_upside_down_are_errors(range_files):
+    d, motion, readings, layout = range_files
+    fails("range", "run", readings, "--sensors", layout(1e6), "--motion", motion,
+          naming=["layout_1000000.0.yaml", "x_m and y_m must lie within ±20 m"])
+    fails("range", "run", readings, "--sensors", layout(), "--motion", motion, "--frame-length-m", 1e7,
+          naming="frame_length_m / ds_m must be at most 1000000 bins per window")
+    cal = d / "upside_down.yaml"
+    cal.write_text("distance: {a1: -1, a2: 0}\n")
+    fails("range", "run", readings, "--sensors", layout(), "--motion", motion, "--calibration", cal,
+          naming=["upside_down.yaml", "a1 must be a finite number of metres per count > 0, got -1"])
+    with pytest.raises(ValueError, match="give no usable line"):
+        rp.range_sensor.calibrate_distance(np.array([1.0, 2.0, 3.0]) * 1e300, [0.1, 0.2, 0.3])
+
+
+def test_a_full_disk_is_an_error_not_a_success(tmp_path):
+    if not os.path.exists("/dev/full"):
+        pytest.skip("needs /dev/full")
+    fails("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--segments", 10,
+          "--segments-csv", "/dev/full", "-o", tmp_path / "out.jsonl", naming="/dev/full: write failed")
+    with pytest.raises(RuntimeError, match="/dev/full: write failed"):
+        rp.range_sensor.calibrate_distance([1.0, 2.0, 3.0], [0.1, 0.2, 0.3], output="/dev/full")
+
+
+def test_a_scan_row_cut_short_is_an_error_an_empty_range_no_return(tmp_path):
+    site = tmp_path / "site.yaml"
+    site.write_text("origin: {lat_deg: 0, lon_deg: 0}\nscanners: [{name: a, max_range_m: 30}]\n")
+    scans = tmp_path / "scans.csv"
+    scans.write_text("t,scanner,angle_deg,range_m\n0,0,0,5\n0,0,1,\n0,0,2\n")
+    fails("roadside", "run", "--site", site, scans, naming=["scans.csv:4", "ends before its range_m column"])
+
+
+def test_beams_and_velodyne_calibration_files_are_checked(tmp_path):
+    beams = tmp_path / "beams.yaml"
+    beams.write_text("format: roadpreview beam calibration 1\nbeam_count: 1\nunits: {angles: rad, ranges: m}\n"
+                     "beam_index: decoder\nbeams:\n  - {beam: 0, determined: true, elevation_offset_deg: 0.1}\n")
+    fails("run", OS1_128_PCAP, "--speed", 5, "--beam-calibration", beams, naming=["beams.yaml", "units must be"])
+    beams.write_text(beams.read_text().replace("rad", "deg").replace("0.1}", "1e300}"))
+    fails("run", OS1_128_PCAP, "--speed", 5, "--beam-calibration", beams,
+          naming=["beams.yaml", "elevation_offset_deg must lie within ±5°"])
+    vlp = VELODYNE / "velodyne_vlp16.pcap"
+    cal = tmp_path / "vlp.yaml"
+    lasers = "".join(f"  - {{laser_id: {min(k, 14)}, vert_correction: 0.0}}\n" for k in range(16))
+    cal.write_text("lasers:\n" + lasers)
+    fails("run", vlp, "--speed", 5, "--sensor-model", "VLP-16", "--calibration", cal,
+          naming=["vlp.yaml", "laser_id 14 listed twice"])
+
+
+def test_a_replay_closes_its_captures_clock_jumps(tmp_path):
+    from pcaps import records, write_pcap
+
+    recs = records(VELODYNE / "velodyne_vlp16.pcap")
+    recs[50] = (recs[50][0] + 3600.0, recs[50][1])  # one record an hour late: a clock set while capturing
+    capture = write_pcap(tmp_path / "jump.pcap", recs)
+    stats = rp.io.replay(capture, "127.0.0.1:17999")
+    assert stats["sent"] == len(recs) and stats["clock_jumps"] == 2 and stats["seconds"] < 5
+    proc = run("replay", capture, "--to", "127.0.0.1:17999")
+    assert "its clock jumped by more than 5 s 2 time(s)" in proc.stderr
+
+
+def test_points_taken_as_base_frame_points_whose_ground_is_far_off_are_noted(tmp_path):
+    x, y = np.meshgrid(np.arange(1.0, 40.0, 0.2), np.arange(-5.0, 5.0, 0.2))
+    sky = tmp_path / "ceiling.bin"  # a flat surface 10 m above the sensor, and no mounting given
+    np.column_stack([x.ravel(), y.ravel(), np.full(x.size, 10.0), np.zeros(x.size)]).astype(np.float32).tofile(sky)
+    proc = run("run", sky, "--speed", 5, "-q")
+    assert "the fitted ground is 10.00 m above the base origin" in proc.stderr
+    assert "the points are not base-frame points" in proc.stderr
