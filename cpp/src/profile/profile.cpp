@@ -120,20 +120,28 @@ std::pair<double, double> keep_window(PointsView points, std::size_t k, ProfileS
     return {m, std::max(kLevelKeepSigmas * 1.4826 * mad, kLevelKeepMinM)};
 }
 
-// Band k's plane from its corridor points: their PCA plane, refitted kLevelRefits times to the points within
-// kLevelKeepM of the last fit and within its keep_window. False (plane untouched) when the first fit is degenerate.
+// Band k's plane from its corridor points: their PCA plane, refitted to the points within kLevelKeepM of the last
+// fit and within its keep_window until the points kept no longer change (at most kLevelRefits times: a bump's
+// flanks leave one refit at a time). False (plane untouched) when the first fit is degenerate.
 bool fit_band_plane(PointsView points, std::size_t k, ProfileScratch& s) {
+    const std::size_t first = s.band_start[k], count = s.band_start[k + 1] - first;
+    s.kept.assign(count, 1);
     for (int fit = 0; fit <= kLevelRefits; ++fit) {
         const auto [centre, half_width] = fit > 0 ? keep_window(points, k, s) : std::pair{0.0, 0.0};
         Moments m;
-        for (std::size_t j = s.band_start[k]; j < s.band_start[k + 1]; ++j) {
-            const Eigen::Index i = s.corridor[j];
+        bool changed = fit == 0;
+        for (std::size_t j = 0; j < count; ++j) {
+            const Eigen::Index i = s.corridor[first + j];
             if (fit > 0) {
                 const double h = height_above(s.ground.plane[k], points(i, 0), points(i, 1), points(i, 2));
-                if (std::abs(h) > kLevelKeepM || std::abs(h - centre) > half_width) continue;
+                const std::uint8_t keep = std::abs(h) <= kLevelKeepM && std::abs(h - centre) <= half_width;
+                changed |= keep != s.kept[j];
+                s.kept[j] = keep;
+                if (!keep) continue;
             }
             m.add(points.row(i).cast<double>().transpose());
         }
+        if (!changed) return true;  // the same points as the last fit: it stands
         const auto f = plane_fit(m);
         if (!f) return fit > 0;  // a failed refit keeps the last fit
         s.ground.plane[k] = f->plane;

@@ -37,6 +37,7 @@ struct ProfileScratch {
     std::vector<Eigen::Index> corridor;  // corridor points grouped by band, band k's from band_start[k]
     std::vector<std::size_t> band_start, band_next;
     std::vector<std::uint8_t> fitted;
+    std::vector<std::uint8_t> kept;  // of the band being fitted: its corridor points the last refit kept
     std::vector<double> nearest, farthest, offsets;
     LocalGround ground;  // the model fitted
 };

@@ -127,7 +127,7 @@ LEVEL_MIN_SPAN = 0.5  # of the band: the corridor points must span this much ran
 LEVEL_KEEP_M = 0.2  # refits keep the corridor points this close to the last plane, either side,
 LEVEL_KEEP_SIGMAS = 3.0  # and this many robust standard deviations of their heights above it
 LEVEL_KEEP_MIN_M = 0.005  # (at least this much) from the median of those heights
-LEVEL_REFITS = 2
+LEVEL_REFITS = 8  # at most: refits stop when they keep the same points
 
 
 def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
@@ -139,12 +139,13 @@ def distance_from_path(xy: np.ndarray, path: dict) -> np.ndarray:
 
 
 def _band_plane(xyz: np.ndarray) -> np.ndarray:
-    """PCA plane of a band's corridor points, refitted to those near it: spurious returns far below the road are
-    ground to the paper's rule, which drops only points above, and a bump is relief, not the ground's grade.
-    Raises DegenerateFit."""
+    """PCA plane of a band's corridor points, refitted to those near it until they no longer change: spurious
+    returns far below the road are ground to the paper's rule, which drops only points above, and a bump is relief,
+    not the ground's grade. Raises DegenerateFit."""
     from .ground import DegenerateFit, fit_plane, height_above
 
     plane = fit_plane(xyz)
+    kept = np.ones(len(xyz), dtype=bool)
     for _ in range(LEVEL_REFITS):
         h = height_above(xyz, plane)
         near = np.abs(h) <= LEVEL_KEEP_M
@@ -152,6 +153,9 @@ def _band_plane(xyz: np.ndarray) -> np.ndarray:
             centre = np.median(h[near])
             sigma = 1.4826 * np.median(np.abs(h[near] - centre))  # robust standard deviation
             near &= np.abs(h - centre) <= max(LEVEL_KEEP_SIGMAS * sigma, LEVEL_KEEP_MIN_M)
+        if np.array_equal(near, kept):
+            break  # the same points as the last fit
+        kept = near
         try:
             plane = fit_plane(xyz[near])
         except DegenerateFit:
@@ -199,8 +203,9 @@ def local_ground_model(ground_xyz, plane, cfg: Config, path: dict | None = None,
                        direction: float = 1.0) -> LocalGround:
     """The local ground model of a frame's ground points (method.md §3). Bands are ⌊r / level_band_m⌋ of
     horizontal distance r; a band's plane is fitted to its ground points within 1.5 m of the vehicle's path
-    (straight ahead without ``path``) when they span at least half the band in range, and refitted twice to
-    those within 0.2 m of the last fit and 3 robust standard deviations of their median height above it; a band
+    (straight ahead without ``path``) when they span at least half the band in range, and refitted to those
+    within 0.2 m of the last fit and 3 robust standard deviations of their median height above it until they no
+    longer change; a band
     whose points span less (or whose fit is degenerate) gets the normal of the nearest fitted band (the frame
     plane's if there is none) through the median of its points; a band without corridor points, the frame
     plane."""

@@ -50,14 +50,14 @@ Levelling levelling_for(const Plane* plane);  ///< identity when plane is null
 constexpr double kLevelCorridorHalfWidthM = 1.5;
 /// A band's plane is fitted only when its corridor points span at least this fraction of the band in range.
 constexpr double kLevelMinSpan = 0.5;
-/// A band's plane is refitted kLevelRefits times to the corridor points within kLevelKeepM of the last fit (either
-/// side: a few spurious returns metres below the road tilted a plane by 3.9 %) and within kLevelKeepSigmas robust
-/// standard deviations (at least kLevelKeepMinM) of their median height above it (a bump is not the ground's
-/// grade) (docs/method.md §3).
+/// A band's plane is refitted to the corridor points within kLevelKeepM of the last fit (either side: a few
+/// spurious returns metres below the road tilted a plane by 3.9 %) and within kLevelKeepSigmas robust standard
+/// deviations (at least kLevelKeepMinM) of their median height above it (a bump is not the ground's grade), until
+/// the points kept no longer change, at most kLevelRefits times (docs/method.md §3).
 constexpr double kLevelKeepM = 0.2;
 constexpr double kLevelKeepSigmas = 3.0;
 constexpr double kLevelKeepMinM = 0.005;
-constexpr int kLevelRefits = 2;
+constexpr int kLevelRefits = 8;
 
 /// Distance of a base-frame point (x, y) from the path of the vehicle's centre: |y| on a straight path, the
 /// distance from its circle about the ICR on an arc.
