@@ -146,6 +146,8 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     const std::string counter = total ? std::to_string(i + 1) + "/" + std::to_string(total) : std::to_string(i + 1);
     std::string decode;
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
+    if (f.diagnostics.cut_columns)
+        decode += " (" + std::to_string(f.diagnostics.cut_columns) + " where the input began or ended within the frame)";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
     decode += LiveStats::describe(f.diagnostics);
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";
@@ -554,7 +556,7 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
 // Decodes every frame and prints what the recording holds.
 int info(const std::vector<std::string>& inputs, const rp::SourceOptions& options) {
     const auto source = rp::open_frames(inputs, options);
-    std::int64_t frames = 0, complete = 0, imu = 0, missing = 0, skipped = 0, first_id = -1, last_id = -1;
+    std::int64_t frames = 0, complete = 0, imu = 0, missing = 0, cut = 0, skipped = 0, first_id = -1, last_id = -1;
     std::vector<Eigen::Index> points;
     std::optional<double> t0, t1;
     double last_span = 0.0;  // s from the last frame's timestamp to its last point
@@ -563,6 +565,7 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
         complete += f->diagnostics.complete;
         imu += static_cast<std::int64_t>(f->imu.size());
         missing += f->diagnostics.missing_columns;
+        cut += f->diagnostics.cut_columns;
         skipped += f->diagnostics.skipped_packets;
         points.push_back(f->points.rows());
         if (first_id < 0) first_id = f->frame_id;
@@ -591,7 +594,9 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
         const double last = s.frame_rate_hz > 0 ? 1.0 / s.frame_rate_hz : last_span;
         std::printf("duration: %.3f s (first frame at %.6f s, UNIX time)\n", *t1 - *t0 + last, *t0);
     }
-    if (missing) std::printf("missing columns: %lld\n", static_cast<long long>(missing));
+    if (missing)
+        std::printf("missing columns: %lld (%lld where the capture began or ended within a frame)\n",
+                    static_cast<long long>(missing), static_cast<long long>(cut));
     if (skipped) std::printf("skipped packets: %lld\n", static_cast<long long>(skipped));
     if (imu) std::printf("IMU samples: %lld\n", static_cast<long long>(imu));
     for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());

@@ -179,6 +179,7 @@ void bind_io(py::module_& m) {
         .def_property_readonly("diagnostics", [](const rp::Frame& f) {
             py::dict d;
             d["missing_columns"] = f.diagnostics.missing_columns;
+            d["cut_columns"] = f.diagnostics.cut_columns;
             d["invalid_columns"] = f.diagnostics.invalid_columns;
             d["skipped_packets"] = f.diagnostics.skipped_packets;
             d["lost_packets"] = f.diagnostics.lost_packets;

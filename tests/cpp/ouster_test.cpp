@@ -98,6 +98,10 @@ TEST(Ouster, MissingColumnsAreCountedAndTheFrameIsStillEmitted) {
     EXPECT_EQ(frames[2].diagnostics.missing_columns, 1024 - 352);
     EXPECT_FALSE(frames[0].diagnostics.complete);
     EXPECT_TRUE(frames[1].diagnostics.complete);
+    // The capture began and ended within those frames: no packet was lost.
+    EXPECT_EQ(frames[0].diagnostics.cut_columns, 1024 - 224);
+    EXPECT_EQ(frames[2].diagnostics.cut_columns, 1024 - 352);
+    for (const auto& f : frames) EXPECT_EQ(f.diagnostics.lost_packets, 0);
 }
 
 TEST(Ouster, ImuPacketsTravelWithTheirFrame) {
@@ -296,6 +300,8 @@ TEST(Ouster, XyzFollowsTheBeamAnglesAndTheEncoderAngle) {
     }
     EXPECT_EQ(f->frame_id, 7);
     EXPECT_EQ(f->diagnostics.missing_columns, 511);
+    EXPECT_EQ(f->diagnostics.cut_columns, 511);  // the input began and ended within the frame
+    EXPECT_EQ(f->diagnostics.lost_packets, 0);
 }
 
 TEST(Ouster, InvalidColumnsAndZeroRangesAreSkippedAndFramesSplitByFrameId) {
@@ -494,6 +500,8 @@ TEST(OusterRoiColumns, LateAndMissingColumnsAreCountedInsideTheWindowOnly) {
             if (auto got = add(1, v)) f = std::move(got);
     ASSERT_TRUE(f);
     EXPECT_EQ(f->diagnostics.missing_columns, 60);
+    EXPECT_EQ(f->diagnostics.cut_columns, 0);  // lost within the frame, though it is the input's first
+    EXPECT_EQ(f->diagnostics.lost_packets, 60);  // tiny_metadata: one column per packet
     EXPECT_FALSE(add(1, 230));  // a column of the frame just returned, late
     EXPECT_FALSE(add(1, 500));  // outside the window: neither late nor missing
     for (std::uint16_t v = 134; v < 376; ++v) f = add(2, v);

@@ -79,6 +79,17 @@ def test_info_describes_the_recording():
     assert "sensor model: HDL-32E" in out
 
 
+def test_a_capture_cut_within_a_frame_loses_no_packets():
+    # This capture holds 8 packets (128 columns) of one frame: the other 896 columns were never sent to it.
+    pcap = OUSTER / "OS-1-128_767798045_1024x10_20230712_120049.pcap"
+    assert "missing columns: 896 (896 where the capture began or ended within a frame)" in run("info", pcap).stdout
+    line = run("run", pcap, "--speed", 2, "--sensor-height", 1.9).stderr
+    assert "896 columns missing (896 where the input began or ended within the frame)" in line
+    assert "packets lost" not in line
+    frame = next(iter(rp.io.open(pcap)))
+    assert frame.diagnostics["cut_columns"] == 896 and frame.diagnostics["lost_packets"] == 0
+
+
 @pytest.mark.parametrize("name", ["velodyne_example", "velodyne_vlp16", "velodyne_vlp32", "hdl32_example"])
 def test_info_gives_a_velodyne_capture_its_whole_duration(name):
     # A Velodyne pcap tells no rotation rate: the last frame counts to its last point, not to its first (which gave

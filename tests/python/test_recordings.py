@@ -46,8 +46,8 @@ def test_frames_carry_points_time_id_and_diagnostics(os1_frames):
     assert f.points.dtype == np.float32 and f.points.shape[1] == 4 and not f.points.flags.writeable
     assert np.diff([g.timestamp for g in os1_frames]) == pytest.approx([0.1, 0.1], abs=0.01)
     assert 0 <= f.point_times.min() and f.point_times.max() < 0.1  # one 10 Hz sweep
-    assert f.diagnostics == {"missing_columns": 0, "invalid_columns": 0, "skipped_packets": 0, "lost_packets": 0,
-                             "late_packets": 0, "duplicate_packets": 0, "complete": True}
+    assert f.diagnostics == {"missing_columns": 0, "cut_columns": 0, "invalid_columns": 0, "skipped_packets": 0,
+                             "lost_packets": 0, "late_packets": 0, "duplicate_packets": 0, "complete": True}
     assert f.imu_angular_velocity.shape == (len(f.imu_timestamps), 3) and len(f.imu_timestamps) == 10
     assert abs(rp.io.imu_yaw_rate(f)) < 0.05  # driving nearly straight
     r = np.linalg.norm(f.points[:, :3], axis=1)

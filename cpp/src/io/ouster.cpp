@@ -532,7 +532,18 @@ std::string OusterDecoder::keep_columns_reaching(const std::vector<SensorRoi>& r
            " the sensor sends: those that can see the region of interest (roi_columns)";
 }
 
-Frame OusterDecoder::build_frame() {
+std::int64_t OusterDecoder::missing_run(bool from_start) const {
+    const int W = meta_.columns_per_frame, n = meta_.window_columns();
+    std::int64_t run = 0;
+    for (int k = 0; k < n; ++k) {
+        const int v = (meta_.column_window[0] + (from_start ? k : n - 1 - k)) % W;
+        if (column_state_[static_cast<std::size_t>(v)] != 0) break;
+        ++run;
+    }
+    return run;
+}
+
+Frame OusterDecoder::build_frame(bool at_end) {
     const int H = meta_.pixels_per_column, W = meta_.columns_per_frame;
     Frame f;
     f.frame_id = frame_id_;
@@ -544,8 +555,12 @@ Frame OusterDecoder::build_frame() {
     for (std::uint8_t s : column_state_)
         if (s == 2) ++f.diagnostics.invalid_columns;
     f.diagnostics.complete = f.diagnostics.missing_columns == 0;
-    f.diagnostics.lost_packets =
-        (f.diagnostics.missing_columns + meta_.columns_per_packet - 1) / meta_.columns_per_packet;
+    // A capture (or a stream) begins and ends within frames: those columns were never sent to it, not lost.
+    const std::int64_t cut = (built_any_ ? 0 : missing_run(true)) + (at_end ? missing_run(false) : 0);
+    f.diagnostics.cut_columns = std::min(cut, f.diagnostics.missing_columns);
+    built_any_ = true;
+    const std::int64_t lost_columns = f.diagnostics.missing_columns - f.diagnostics.cut_columns;
+    f.diagnostics.lost_packets = (lost_columns + meta_.columns_per_packet - 1) / meta_.columns_per_packet;
     f.diagnostics.late_packets = std::exchange(late_packets_, 0);
     f.diagnostics.duplicate_packets = std::exchange(duplicate_packets_, 0);
 
@@ -596,7 +611,7 @@ Frame OusterDecoder::build_frame() {
 
 std::optional<Frame> OusterDecoder::finish() {
     if (!open_) return std::nullopt;
-    return build_frame();
+    return build_frame(true);
 }
 
 }  // namespace roadpreview

@@ -16,10 +16,13 @@ using PointMatrix = Eigen::Matrix<float, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 struct FrameDiagnostics {
     std::int64_t missing_columns = 0;  ///< Ouster: columns of the column window never received
+    std::int64_t cut_columns = 0;      ///< Ouster: of those, the ones before the input's first packet (in its first
+                                       ///< frame) or after its last (in the frame finish() returns): the input
+                                       ///< began or ended within the frame, no packet was lost
     std::int64_t invalid_columns = 0;  ///< Ouster: columns received with the status bit clear (skipped)
     std::int64_t skipped_packets = 0;  ///< lidar packets of the wrong size skipped (only with skip_bad_packets)
     std::int64_t lost_packets = 0;      ///< lidar packets of the frame that never arrived (Ouster: from its missing
-                                        ///< columns; Velodyne: from gaps in the packets' sensor time)
+                                        ///< columns but the cut ones; Velodyne: from gaps in the packets' sensor time)
     std::int64_t late_packets = 0;      ///< packets that arrived after their frame was closed, or out of time order
                                         ///< (Velodyne): dropped
     std::int64_t duplicate_packets = 0; ///< packets received twice (the copy adds nothing)

@@ -106,7 +106,11 @@ private:
         const int vd = column + row_shift_[static_cast<std::size_t>(u)];
         return vd >= meta_.columns_per_frame ? vd - meta_.columns_per_frame : vd;
     }
-    Frame build_frame();
+    /// The frame assembled; `at_end`: the input ends with it (its missing last columns were cut, not lost).
+    Frame build_frame(bool at_end = false);
+    /// Missing columns (column_state_ 0) at the start of the window (`from_start`) or at its end, up to the first
+    /// column received.
+    std::int64_t missing_run(bool from_start) const;
     bool in_window(int column) const;
 
     OusterMetadata meta_;
@@ -116,6 +120,7 @@ private:
     bool spacing_checked_ = false;
     std::int64_t frame_id_ = -1;
     std::int64_t closed_id_ = -1;  // the frame last returned
+    bool built_any_ = false;       // a frame has been returned: the next no longer began with the input
     std::int64_t late_packets_ = 0, duplicate_packets_ = 0;  // since the last frame returned
     std::int64_t outside_window_ = 0;
     double frame_time_ = 0.0;
