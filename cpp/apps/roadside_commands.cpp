@@ -115,9 +115,10 @@ std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const Road
         std::string note;
         auto scans = read_input(in, o, &counts, &note);
         if (!quiet && counts.telegrams)
-            std::fprintf(stderr, "%s: %lld telegrams, %lld scans, %lld other, %lld bad\n", in.path.c_str(),
-                         static_cast<long long>(counts.telegrams), static_cast<long long>(counts.scans),
-                         static_cast<long long>(counts.other), static_cast<long long>(counts.bad));
+            std::fprintf(stderr, "%s: %lld telegrams, %lld scans, %lld other, %lld bad, %lld repeating the scan before "
+                         "(dropped)\n", in.path.c_str(), static_cast<long long>(counts.telegrams),
+                         static_cast<long long>(counts.scans), static_cast<long long>(counts.other),
+                         static_cast<long long>(counts.bad), static_cast<long long>(counts.repeated));
         if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
         all.insert(all.end(), std::make_move_iterator(scans.begin()), std::make_move_iterator(scans.end()));
     }

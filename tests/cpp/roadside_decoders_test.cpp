@@ -37,12 +37,14 @@ std::string write_file(const std::string& name, const std::string& text) {
     return (dir / name).string();
 }
 
-// The first LMDscandata telegram of the LMS1xx dump (CoLa-B).
-std::vector<std::uint8_t> first_lms111_scan() {
+// The n-th LMDscandata telegram of the LMS1xx dump (CoLa-B), from 0.
+std::vector<std::uint8_t> lms111_scan(int n) {
     for (const auto& t : rs::read_sick_json(sick_file("20210302_lms111.pcapng.json").string()))
-        if (rs::decode_sick_telegram(t.bytes.data(), t.bytes.size(), t.where)) return t.bytes;
+        if (rs::decode_sick_telegram(t.bytes.data(), t.bytes.size(), t.where) && n-- == 0) return t.bytes;
     return {};
 }
+
+std::vector<std::uint8_t> first_lms111_scan() { return lms111_scan(0); }
 
 std::string hex(std::uint32_t v) {
     std::ostringstream s;
@@ -83,11 +85,14 @@ TEST(SickDecoder, Lms111JsonDumpMatchesTheReadme) {
     EXPECT_EQ(telegrams.size(), 277u);
     rs::SickDecodeCounts counts;
     const auto scans = rs::scans_from_telegrams(telegrams, false, &counts);
-    EXPECT_EQ(counts.scans, 175);
+    // Three scan telegrams (counters 18, 34 and 50) are their scan again, byte for byte, 3 ms later: dropped.
+    EXPECT_EQ(counts.scans, 172);
+    EXPECT_EQ(counts.repeated, 3);
     EXPECT_EQ(counts.bad, 0);
-    ASSERT_EQ(scans.size(), 175u);
+    ASSERT_EQ(scans.size(), 172u);
     EXPECT_EQ(scans.front().counter, 4);
     EXPECT_EQ(scans.back().counter, 175);
+    for (std::size_t i = 1; i < scans.size(); ++i) EXPECT_EQ(scans[i].counter, scans[i - 1].counter + 1);
     for (const auto& s : scans) {
         ASSERT_EQ(s.ranges_m.size(), 541u);
         EXPECT_TRUE(s.intensities.empty());  // DIST1 only
@@ -212,10 +217,14 @@ TEST(SickDecoder, BadTelegramsAreClearErrors) {
     const std::string ascii = "\x02sSN LMDscandata 1 1 ZZ\x03";
     expect_error({ascii.begin(), ascii.end()}, "malformed number");
     // skip_bad counts it and goes on.
-    std::vector<rs::TimedTelegram> list = {{0.0, bytes, "ok"}, {0.1, corrupt, "bad"}, {0.2, bytes, "ok2"}};
+    std::vector<rs::TimedTelegram> list = {{0.0, bytes, "ok"}, {0.1, corrupt, "bad"}, {0.2, lms111_scan(1), "ok2"}};
     rs::SickDecodeCounts counts;
     EXPECT_EQ(rs::scans_from_telegrams(list, true, &counts).size(), 2u);
     EXPECT_EQ(counts.bad, 1);
+    // The last scan once more is that scan received twice, not a new one.
+    list.push_back({0.3, lms111_scan(1), "again"});
+    EXPECT_EQ(rs::scans_from_telegrams(list, true, &counts).size(), 2u);
+    EXPECT_EQ(counts.repeated, 1);
     EXPECT_THROW(rs::scans_from_telegrams(list, false), std::runtime_error);
 }
 

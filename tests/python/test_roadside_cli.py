@@ -71,5 +71,6 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
 @pytest.mark.skipif(not (SICK / "20210302_lms111.pcapng.json").exists(), reason="shared data absent")
 def test_info_on_real_sick_files():
     proc = run_cli("roadside", "info", SICK / "20210302_lms111.pcapng.json", SICK / "test.pcapng")
-    assert "175 scans" in proc.stdout and "beams 541" in proc.stdout and "-135.0000° to 135.0000°" in proc.stdout
+    assert "172 scans, 102 other, 0 bad, 3 repeating the scan before (dropped)" in proc.stderr
+    assert "172 scans" in proc.stdout and "beams 541" in proc.stdout and "-135.0000° to 135.0000°" in proc.stdout
     assert "16 scans" in proc.stdout and "scan counter 44981 to 44996" in proc.stdout

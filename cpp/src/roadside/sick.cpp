@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 namespace roadpreview::roadside {
@@ -317,6 +319,7 @@ std::vector<LaserScan> scans_from_telegrams(const std::vector<TimedTelegram>& te
                                             SickDecodeCounts* counts) {
     SickDecodeCounts c;
     std::vector<LaserScan> scans;
+    std::optional<std::array<std::uint32_t, 3>> last;  // the last scan's serial number, counter and start time
     for (const auto& tt : telegrams) {
         ++c.telegrams;
         try {
@@ -325,6 +328,12 @@ std::vector<LaserScan> scans_from_telegrams(const std::vector<TimedTelegram>& te
                 ++c.other;
                 continue;
             }
+            const std::array<std::uint32_t, 3> scan{t->serial_number, t->scan_counter, t->time_since_startup_us};
+            if (last == scan) {
+                ++c.repeated;
+                continue;
+            }
+            last = scan;
             LaserScan s = to_laser_scan(*t, tt.where);
             // The sensor stamps the scan's start and its transmission on one clock: their difference is the
             // latency between acquisition and the capture's timestamp.

@@ -112,10 +112,13 @@ std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_po
 /// Counts of a decode, for `roadside info` and the tests.
 struct SickDecodeCounts {
     std::int64_t telegrams = 0, scans = 0, other = 0, bad = 0;
+    std::int64_t repeated = 0;  ///< scan telegrams that repeat the scan before (dropped, not in `scans`)
 };
 
 /// The LaserScans of a list of telegrams. Scan time: capture time minus the sensor's own latency (time of
-/// transmission − time since start-up). Bad telegrams are counted and, with `skip_bad`, skipped, else thrown.
+/// transmission − time since start-up). Bad telegrams are counted and, with `skip_bad`, skipped, else thrown. A
+/// scan telegram of the same device, scan counter and start time as the scan before is that scan received again
+/// (an LMS111 capture holds three, 3 ms after their first copy): it is dropped and counted as `repeated`.
 std::vector<LaserScan> scans_from_telegrams(const std::vector<TimedTelegram>& telegrams, bool skip_bad,
                                             SickDecodeCounts* counts = nullptr);
 
