@@ -59,6 +59,17 @@ TEST(CloudFiles, NegativeAndHugeWidthsAreHeaderErrors) {
     expect_error(written("mismatch.pcd", pcd_header("4", "5", "binary") + std::string(60, '\0')), "POINTS = 5");
 }
 
+TEST(CloudFiles, ZeroPlaceholdersOfACloudAreNoReturns) {
+    // An organized cloud's driver writes (0, 0, 0) where no return came back: its rows stay, as NaN. A point with
+    // one or two coordinates 0 is a point.
+    const std::string header = pcd_header("3", "3", "ascii");
+    const auto f = rp::read_frame(written("placeholders.pcd", header + "0 0 0\n0 0 1\n1 0 0\n"));
+    ASSERT_EQ(f.points.rows(), 3);
+    EXPECT_TRUE(f.points.row(0).head<3>().array().isNaN().all());
+    EXPECT_EQ(f.points(1, 2), 1.0f);
+    EXPECT_EQ(f.points(2, 0), 1.0f);
+}
+
 TEST(CloudFiles, UnknownPcdHeaderLinesAreErrorsNotPclCrashes) {
     // PCL stops at such a line and reads the data without fields (a null dereference; found by fuzzing).
     const std::string header = pcd_header("2", "2", "binary");

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
-from paths import OS1_128_META, OS1_128_PCAP, OUSTER, VELODYNE
+from paths import OS1_128_META, OS1_128_PCAP, OUSTER, PCD_FILE, VELODYNE
 from pcaps import fragment, linux_cooked, records, udp_of, write_pcap, write_pcapng
 
 REFERENCE = OUSTER / "reference"
@@ -171,3 +171,13 @@ def test_memory_stays_constant_whatever_the_length(tmp_path):
     n_long, long_kib = peak_kib(long_pcap)
     assert (n_short, n_long) == (3, 60)
     assert long_kib - short_kib < 8 * 1024, (short_kib, long_kib)  # the long file is 33 MB
+
+
+def test_a_clouds_zero_placeholders_are_no_returns():
+    # The organized 128 × 1875 Patchwork cloud writes (0, 0, 0) where no return came back (the data README: 205,898
+    # of its 240,000 points are non-zero): those rows read as NaN, the others as they are.
+    frame = next(iter(rp.io.open(PCD_FILE)))
+    assert frame.points.shape == (240000, 4)
+    missing = np.isnan(frame.points[:, :3]).all(axis=1)
+    assert missing.sum() == 240000 - 205898
+    assert not np.isnan(frame.points[~missing, :3]).any() and (frame.points[~missing, :3] != 0).any(axis=1).all()

@@ -247,9 +247,14 @@ Frame read_cloud(const std::string& path, const char* kind, const std::function<
     pcl::fromPCLPointCloud2(blob, cloud);
     const bool has_intensity = pcl::getFieldIndex(blob, "intensity") >= 0;
     f.points.resize(static_cast<Eigen::Index>(cloud.size()), 4);
+    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto& p = cloud[i];
-        f.points.row(static_cast<Eigen::Index>(i)) << p.x, p.y, p.z, has_intensity ? p.intensity : 0.0f;
+        // Exactly (0, 0, 0) is no return: drivers write it where PCL writes NaN (an organized cloud keeps every
+        // row), and no sensor measures its own origin. Read as a point, it was a ground at the sensor.
+        const bool placeholder = p.x == 0.0f && p.y == 0.0f && p.z == 0.0f;
+        f.points.row(static_cast<Eigen::Index>(i)) << (placeholder ? kNaN : p.x), (placeholder ? kNaN : p.y),
+            (placeholder ? kNaN : p.z), has_intensity ? p.intensity : 0.0f;
     }
     return f;
 }
