@@ -69,9 +69,12 @@ void read_reference(const std::string& path, std::vector<double>& x, std::vector
             continue;
         }
         try {
-            const double xv = std::stod(cells.at(static_cast<std::size_t>(xi)));
-            const double zv = std::stod(cells.at(static_cast<std::size_t>(zi)));
-            if (!std::isfinite(xv) || !std::isfinite(zv)) throw std::invalid_argument("not finite");
+            const std::string& x_cell = cells.at(static_cast<std::size_t>(xi));
+            const std::string& z_cell = cells.at(static_cast<std::size_t>(zi));
+            std::size_t x_used = 0, z_used = 0;  // a cell is all number: "1.5abc" is no 1.5
+            const double xv = std::stod(x_cell, &x_used), zv = std::stod(z_cell, &z_used);
+            if (x_used != x_cell.size() || z_used != z_cell.size() || !std::isfinite(xv) || !std::isfinite(zv))
+                throw std::invalid_argument("not finite numbers");
             if (!x.empty() && xv <= x.back()) throw std::runtime_error(path + ":" + std::to_string(number)
                 + ": x must increase");
             x.push_back(xv);

@@ -182,6 +182,19 @@ def test_a_scan_row_cut_short_is_an_error_an_empty_range_no_return(tmp_path):
     fails("roadside", "run", "--site", site, scans, naming=["scans.csv:4", "ends before its range_m column"])
 
 
+def test_numbers_in_text_inputs_are_decimal_and_whole(tmp_path):
+    # strtod took "0x10" as 16 m/s; the readers now take decimal notation only, whatever the locale.
+    motion = tmp_path / "motion.csv"
+    motion.write_text("t,speed,yaw_rate\n0,0x10,0\n1,16,0\n")
+    fails("run", KITTI_FRAMES[0], "--motion", motion, "--frame-rate", 10, "--sensor-height", KITTI_SENSOR_HEIGHT,
+          naming=["motion.csv:2", "expected a finite number"])
+    site = tmp_path / "site.yaml"
+    site.write_text("origin: {lat_deg: 0, lon_deg: 0}\nscanners: [{name: a, max_range_m: 30}]\n")
+    scans = tmp_path / "scans.csv"
+    scans.write_text("t,scanner,angle_deg,range_m\n0,0,0,5\n0,0,1,0x5\n")
+    fails("roadside", "run", "--site", site, scans, naming=["scans.csv:3", "range_m"])
+
+
 def test_beams_and_velodyne_calibration_files_are_checked(tmp_path):
     beams = tmp_path / "beams.yaml"
     beams.write_text("format: roadpreview beam calibration 1\nbeam_count: 1\nunits: {angles: rad, ranges: m}\n"

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "core/text.hpp"
+
 namespace roadpreview::csv {
 
 inline std::vector<std::string> split(const std::string& line) {
@@ -51,11 +53,9 @@ private:
 
 inline double finite_cell(const std::vector<std::string>& cells, std::size_t column, const std::string& where,
                           const char* name) {
-    char* end = nullptr;
-    const double v = column < cells.size() ? std::strtod(cells[column].c_str(), &end) : NAN;
-    if (column >= cells.size() || end == cells[column].c_str() || *end != '\0' || !std::isfinite(v))
-        throw std::runtime_error(where + ": expected a finite number in column '" + name + "'");
-    return v;
+    const std::optional<double> v = column < cells.size() ? parse_number(cells[column]) : std::nullopt;
+    if (!v || !std::isfinite(*v)) throw std::runtime_error(where + ": expected a finite number in column '" + name + "'");
+    return *v;
 }
 
 }  // namespace roadpreview::csv

@@ -149,9 +149,11 @@ Mat4 mat4_or(const json& j, const char* section, const char* key, const Mat4& fa
 // "1024x10" → (1024, 10).
 std::pair<int, double> parse_lidar_mode(const std::string& mode, const std::string& source) {
     const auto x = mode.find('x');
-    try {
-        if (x != std::string::npos) return {std::stoi(mode.substr(0, x)), std::stod(mode.substr(x + 1))};
-    } catch (const std::exception&) {
+    if (x != std::string::npos) {
+        const auto columns = parse_number(std::string_view(mode).substr(0, x));
+        const auto hz = parse_number(std::string_view(mode).substr(x + 1));
+        if (columns && hz && *columns == std::floor(*columns) && std::abs(*columns) < 1e9)
+            return {static_cast<int>(*columns), *hz};
     }
     throw std::runtime_error(source + ": lidar_mode \"" + mode + "\" is not of the form COLUMNSxHZ (e.g. 1024x10)");
 }

@@ -16,6 +16,8 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include "core/text.hpp"
+
 namespace roadpreview {
 namespace {
 
@@ -141,13 +143,7 @@ std::string declared(const PcdHeader& h) {
            " bytes";
 }
 
-bool is_number(const std::string& token) {
-    if (token == "nan" || token == "NaN") return true;
-    char* end = nullptr;
-    errno = 0;
-    std::strtod(token.c_str(), &end);
-    return end == token.c_str() + token.size() && !token.empty();
-}
+bool is_number(const std::string& token) { return parse_number(token).has_value(); }
 
 // Every data line holds exactly `values` numbers, and there is one line per declared point.
 void check_ascii(const std::string& path, const PcdHeader& h) {

@@ -14,6 +14,8 @@
 
 #include <pcl/io/ply_io.h>
 
+#include "core/text.hpp"
+
 namespace roadpreview {
 namespace {
 
@@ -184,9 +186,7 @@ void check_ascii_numbers(const std::string& path, const PlyHeader& h) {
     for (std::uint64_t number = 1; std::getline(in, line); ++number) {
         std::istringstream words(line);
         while (words >> word) {
-            char* end = nullptr;
-            std::strtod(word.c_str(), &end);
-            if (end == word.c_str() || *end != '\0')
+            if (!parse_number(word))
                 fail_file(path, "PLY data: '" + word.substr(0, 40) + "' on data line " + std::to_string(number) +
                                     " is not a number");
         }

@@ -49,10 +49,10 @@ MotionTable MotionTable::read_csv(const std::string& path) {
         double v[3];
         for (int k = 0; k < 3; ++k) {
             const auto c = static_cast<std::size_t>(column[static_cast<std::size_t>(k)]);
-            char* end = nullptr;
-            v[k] = c < cells.size() ? std::strtod(cells[c].c_str(), &end) : NAN;
-            if (c >= cells.size() || end == cells[c].c_str() || *end != '\0' || !std::isfinite(v[k]))
+            const std::optional<double> cell = c < cells.size() ? parse_number(cells[c]) : std::nullopt;
+            if (!cell || !std::isfinite(*cell))
                 fail(number, "expected a finite number in every column, got \"" + line + "\"");
+            v[k] = *cell;
         }
         if (const Status s = check_motion(v[1], v[2]); !s) fail(number, s.message());
         if (!table.t_.empty() && v[0] <= table.t_.back())

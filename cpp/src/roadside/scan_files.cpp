@@ -78,10 +78,9 @@ private:
 };
 
 double parse_double(const std::string& token, const std::string& where, const char* what) {
-    char* end = nullptr;
-    const double v = std::strtod(token.c_str(), &end);
-    if (token.empty() || *end != '\0') throw std::runtime_error(where + ": " + what + " '" + token + "' is not a number");
-    return v;
+    const std::optional<double> v = parse_number(token);
+    if (!v) throw std::runtime_error(where + ": " + what + " '" + token + "' is not a number");
+    return *v;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <tins/sniffer.h>
 #include <tins/tcp_ip/stream_follower.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 #include "roadpreview/roadside/sick.hpp"
 
 #include "core/input_file.hpp"
+#include "core/text.hpp"
 
 namespace roadpreview::roadside {
 namespace {
@@ -58,12 +60,13 @@ std::vector<TimedTelegram> read_sick_json(const std::string& path) {
             TimedTelegram t;
             t.where = where;
             t.bytes = colon_hex(tcp.at("tcp.payload").get<std::string>(), where);
-            t.time_s = std::stod(tcp.at("Timestamps").at("tcp.time_relative").get<std::string>());
+            const auto time_s = parse_number(tcp.at("Timestamps").at("tcp.time_relative").get<std::string>());
+            if (!time_s || !std::isfinite(*time_s))
+                throw std::runtime_error(where + ": tcp.time_relative is not a finite number");
+            t.time_s = *time_s;
             out.push_back(std::move(t));
         } catch (const nlohmann::json::exception& e) {
             throw std::runtime_error(where + ": entry lacks tcp.payload or tcp.time_relative (" + e.what() + ")");
-        } catch (const std::logic_error&) {
-            throw std::runtime_error(where + ": tcp.time_relative is not a number");
         }
     }
     return out;
