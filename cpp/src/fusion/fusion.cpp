@@ -9,11 +9,13 @@
 
 #include <Eigen/Cholesky>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "core/input_file.hpp"
 #include "core/median.hpp"
+#include "core/text.hpp"
 #include "roadpreview/roughness/support.hpp"
 #include "roughness/roughness_scratch.hpp"
 
@@ -102,9 +104,12 @@ std::vector<Pose2> read_kitti_poses(const std::string& path) {
         std::istringstream fields(line);
         double m[12];
         int read = 0;
-        while (read < 12 && fields >> m[read] && std::isfinite(m[read])) ++read;
-        std::string rest;
-        if (read != 12 || (fields >> rest))
+        for (std::string token; fields >> token; ++read) {
+            const std::optional<double> v = read < 12 ? parse_number(token) : std::nullopt;
+            if (!v || !std::isfinite(*v)) break;
+            m[read] = *v;
+        }
+        if (read != 12 || !fields.eof())
             throw std::runtime_error(path + ":" + std::to_string(number) + ": a pose needs 12 finite numbers (3x4 [R|t])");
         poses.push_back(pose_from_matrix(m));
         if (const Status s = check_frame_motion({std::nullopt, poses.back()}); !s)

@@ -33,9 +33,13 @@ std::map<std::string, std::vector<double>> kitti_matrices(const std::string& pat
         if (name != "P2" && name != "P3" && name != "P_rect_02" && name != "P_rect_03") continue;
         std::istringstream fields(line.substr(colon + 1));
         std::vector<double> values;
-        double v;
-        while (fields >> v) values.push_back(v);
-        if (values.size() != 12 || !fields.eof())
+        bool numbers = true;
+        for (std::string token; numbers && fields >> token;) {
+            const std::optional<double> v = parse_number(token);
+            numbers = v.has_value();
+            if (numbers) values.push_back(*v);
+        }
+        if (!numbers || values.size() != 12)
             throw std::runtime_error(path + ":" + std::to_string(number) + ": " + name + " needs 12 numbers (a 3x4 matrix)");
         for (double x : values)
             if (!std::isfinite(x)) throw std::runtime_error(path + ":" + std::to_string(number) + ": " + name + " is not finite");
