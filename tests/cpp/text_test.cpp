@@ -3,9 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <locale>
 #include <random>
+#include <vector>
 
 #include "core/text.hpp"
+#include "roadpreview/fusion/fusion.hpp"
 
 namespace rp = roadpreview;
 
@@ -33,4 +38,25 @@ TEST(ParseNumber, ReadsBackEveryNumberWrittenWith17Digits) {
         const double v = std::ldexp(mantissa(rng), exponent(rng));
         EXPECT_EQ(rp::parse_number(rp::number_text(v, 17)), v) << rp::number_text(v, 17);
     }
+}
+
+namespace {
+
+struct DecimalComma : std::numpunct<char> {
+    char do_decimal_point() const override { return ','; }
+};
+
+}  // namespace
+
+TEST(ParseNumber, PosesReadTheSameUnderADecimalCommaLocale) {
+    // A program may set a global C++ locale whose decimal point is a comma: streams made after it read "0.5" as 0.
+    const auto path = std::filesystem::temp_directory_path() / "roadpreview_text_test_poses.txt";
+    std::ofstream(path) << "1 0 0 0.5 0 1 0 0.25 0 0 1 0\n";
+    const std::locale before = std::locale::global(std::locale(std::locale::classic(), new DecimalComma));
+    std::vector<rp::Pose2> poses;
+    EXPECT_NO_THROW(poses = rp::read_kitti_poses(path.string()));
+    std::locale::global(before);
+    ASSERT_EQ(poses.size(), 1u);
+    EXPECT_EQ(poses[0].x_m, 0.5);
+    EXPECT_EQ(poses[0].y_m, 0.25);
 }
