@@ -70,11 +70,26 @@ Eigen::Vector4d Tracker::predicted(const Track& track, double t_s) const {
     return copy.x;
 }
 
+std::string shape_class(double length_m, double width_m, double speed_mps) {
+    if (length_m >= 2.6 || width_m >= 1.4) return "car";
+    if (length_m >= 1.2 || speed_mps > 2.5) return "cyclist";
+    return "pedestrian";
+}
+
+std::string extent_class(const Track& t) {
+    if (!t.camera_class.empty()) return t.camera_class;
+    return shape_class(t.length_m, t.width_m, std::hypot(t.x(2), t.x(3)));
+}
+
 std::string track_class(const Track& t) {
     if (!t.camera_class.empty()) return t.camera_class;
-    if (t.length_m >= 2.6 || t.width_m >= 1.4) return "car";
-    if (t.length_m >= 1.2 || std::hypot(t.x(2), t.x(3)) > 2.5) return "cyclist";
-    return "pedestrian";
+    std::string best;
+    int most = 0;
+    for (const char* cls : {"car", "cyclist", "pedestrian"}) {  // a tie goes to the larger class
+        const auto it = t.shape_votes.find(cls);
+        if (it != t.shape_votes.end() && it->second > most) most = it->second, best = cls;
+    }
+    return most > 0 ? best : extent_class(t);
 }
 
 // The measured box, length along the track's motion: for a moving track the extent of the points along and
@@ -109,7 +124,7 @@ Eigen::Vector2d Tracker::measured_centre(const Track& t, const Measurement& m) c
     Eigen::Vector2d centre(b.x_m, b.y_m);
     if (!correcting(t) || m.viewpoints.empty()) return centre;
     double length = t.length_m, width = t.width_m;
-    const auto prior = s_.class_extent_m.find(track_class(t));
+    const auto prior = s_.class_extent_m.find(extent_class(t));
     if (prior != s_.class_extent_m.end()) length = std::max(length, prior->second.first), width = std::max(width, prior->second.second);
     const Eigen::Vector2d u(std::cos(b.heading_rad), std::sin(b.heading_rad)), v(-u.y(), u.x());
     const Pose2* view = &m.viewpoints[0];
@@ -166,6 +181,7 @@ void Tracker::correct(Track& t, const Measurement& m) {
     if (b.length_m < kMaxExtentM && b.width_m < kMaxExtentM) {
         t.length_m = std::max(t.length_m, b.length_m);
         t.width_m = std::max(t.width_m, b.width_m);
+        ++t.shape_votes[shape_class(b.length_m, b.width_m, std::hypot(t.x(2), t.x(3)))];
     }
     t.box_heading_rad = wrap_half_turn(b.heading_rad);
     t.last_box = b;
@@ -182,7 +198,7 @@ std::vector<Measurement> Tracker::merge_splits(std::vector<Measurement> measurem
     for (const auto& t : tracks_) {
         if (!correcting(t)) continue;
         double length = t.length_m, width = t.width_m;
-        const auto prior = s_.class_extent_m.find(track_class(t));
+        const auto prior = s_.class_extent_m.find(extent_class(t));
         if (prior != s_.class_extent_m.end()) length = std::max(length, prior->second.first), width = std::max(width, prior->second.second);
         const double h = std::atan2(t.x(3), t.x(2)), c = std::cos(h), s = std::sin(h);
         std::vector<std::size_t> inside;

@@ -39,6 +39,7 @@ struct Track {
     std::string camera_class;                                     ///< from the camera, "" when none
     double camera_score = 0.0;                                    ///< its share of the camera's votes
     std::map<std::string, double> class_votes;                    ///< summed detection scores per class
+    std::map<std::string, int> shape_votes;                       ///< updates whose box and speed gave each class
     double last_camera_s = -1e300;
 };
 
@@ -55,9 +56,17 @@ struct TrackerSettings {
         {"car", {4.5, 1.8}}, {"cyclist", {1.75, 0.5}}, {"pedestrian", {0.0, 0.0}}};
 };
 
-/// The class of a track: the camera's when it has one, else by the learned extent and speed (docs/method.md
-/// §13.9): length ≥ 2.6 m or width ≥ 1.4 m is a car; length ≥ 1.2 m or faster than 2.5 m/s a cyclist; else a
-/// pedestrian.
+/// The class of a box of this length and width moving at this speed (docs/method.md §13.9): length ≥ 2.6 m or
+/// width ≥ 1.4 m is a car; length ≥ 1.2 m or faster than 2.5 m/s a cyclist; else a pedestrian.
+std::string shape_class(double length_m, double width_m, double speed_mps);
+
+/// The class of a track's size: the camera's when it has one, else the shape_class of its learned extent (the
+/// largest seen) and speed. Its class's smallest extent (class_extent_m) places a partly seen object's centre.
+std::string extent_class(const Track& t);
+
+/// The class a track is reported as: the camera's when it has one, else the shape_class most of its updates gave
+/// (a tie to the larger class; before any update, its extent_class). The largest extent seen is no class: two
+/// people walking together for a moment made a pedestrian's track a car for good.
 std::string track_class(const Track& t);
 
 class Tracker {
