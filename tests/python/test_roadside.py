@@ -158,7 +158,7 @@ def test_people_bag_gives_moving_people():
     movers = {o["id"] for c in cycles for o in c["objects"] if o["speed_mps"] > 0.3 and o["age_s"] > 1.0}
     assert 3 <= len(movers) <= 60, len(movers)
     # Every one of them is a person walking. Classed by the largest box a track had seen, 14 of 39 ended as cyclists
-    # or cars (two people side by side, a leg beside a chair leg); by what most of its updates' boxes say, none.
+    # or cars; by what most of its updates' boxes say, none.
     last = {o["id"]: o["class"] for c in cycles for o in c["objects"] if o["id"] in movers}
     assert sum(cls == "pedestrian" for cls in last.values()) >= 0.95 * len(movers), last
 
