@@ -147,7 +147,8 @@ void report_frame(std::size_t i, std::size_t total, const rp::Frame& f, const rp
     std::string decode;
     if (f.diagnostics.missing_columns) decode += ", " + std::to_string(f.diagnostics.missing_columns) + " columns missing";
     if (f.diagnostics.cut_columns)
-        decode += " (" + std::to_string(f.diagnostics.cut_columns) + " where the input began or ended within the frame)";
+        decode += " (" + std::to_string(f.diagnostics.cut_columns) +
+                  " where the input began or ended within the frame)";
     if (f.diagnostics.skipped_packets) decode += ", " + std::to_string(f.diagnostics.skipped_packets) + " bad packets skipped";
     decode += LiveStats::describe(f.diagnostics);
     if (!f.diagnostics.complete && decode.empty()) decode = ", partial sweep";

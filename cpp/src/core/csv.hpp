@@ -54,7 +54,8 @@ private:
 inline double finite_cell(const std::vector<std::string>& cells, std::size_t column, const std::string& where,
                           const char* name) {
     const std::optional<double> v = column < cells.size() ? parse_number(cells[column]) : std::nullopt;
-    if (!v || !std::isfinite(*v)) throw std::runtime_error(where + ": expected a finite number in column '" + name + "'");
+    if (!v || !std::isfinite(*v))
+        throw std::runtime_error(where + ": expected a finite number in column '" + name + "'");
     return *v;
 }
 

@@ -3,7 +3,6 @@
 // turns an unparsable ASCII value into 0, so the header and the data are checked against the file first.
 #include "io/cloud_files.hpp"
 
-#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
