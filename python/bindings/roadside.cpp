@@ -147,8 +147,10 @@ void bind_roadside(py::module_& parent) {
         return scan_list(rs::scans_from_telegrams(rs::read_sick_pcap(path, port), skip_bad));
     }, py::arg("path"), py::arg("sensor_port") = 2112, py::arg("skip_bad") = false);
     m.def("read_carmen_log", [](const std::string& path, double rate_hz) {
-        return scan_list(rs::read_carmen_log(path, rate_hz));
-    }, py::arg("path"), py::arg("rate_hz"));
+        bool timestamps_missing = false;
+        auto scans = scan_list(rs::read_carmen_log(path, rate_hz, 0.0, &timestamps_missing));
+        return py::make_tuple(std::move(scans), timestamps_missing);
+    }, py::arg("path"), py::arg("rate_hz"), "(scans, whether every timestamp was 0 and rate_hz timed the scans)");
     m.def("read_scan_csv", [](const std::string& path) { return scan_list(rs::read_scan_csv(path)); });
     m.def("decode_telegram", [](const py::bytes& data) -> py::object {
         const std::string s = data;

@@ -25,6 +25,7 @@ import shutil
 import subprocess
 import sysconfig
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Iterable, Optional, Sequence, Union
 
@@ -39,10 +40,14 @@ def _rs():
     return core().roadside
 
 
-def read_scans(path: PathLike, scanner: Optional[int] = None, rate_hz: float = 37.5, skip_bad: bool = False,
+DEFAULT_SCAN_RATE_HZ = 37.5  #: a SICK LMS's scan rate, for logs whose scans carry no time
+
+
+def read_scans(path: PathLike, scanner: Optional[int] = None, rate_hz: Optional[float] = None, skip_bad: bool = False,
                sensor_port: int = 2112) -> list[dict]:
     """Scans of a file by its extension: SICK ``.json`` dump, ``.pcap``/``.pcapng`` (TCP port `sensor_port`),
-    CARMEN ``.log[.gz]`` (timed at `rate_hz` when its timestamps are 0), scan ``.csv``, ROS bag / MCAP."""
+    CARMEN ``.log[.gz]`` (timed at `rate_hz` when its timestamps are 0: without it at 37.5 Hz, with a warning),
+    scan ``.csv``, ROS bag / MCAP."""
     p = str(path)
     if p.endswith(".csv"):
         scans = _rs().read_scan_csv(p)
@@ -51,7 +56,10 @@ def read_scans(path: PathLike, scanner: Optional[int] = None, rate_hz: float = 3
     elif p.endswith((".pcap", ".pcapng")):
         scans = _rs().read_sick_pcap(p, sensor_port, skip_bad)
     elif p.endswith((".log", ".log.gz", ".clf", ".clf.gz")):
-        scans = _rs().read_carmen_log(p, rate_hz)
+        scans, untimed = _rs().read_carmen_log(p, DEFAULT_SCAN_RATE_HZ if rate_hz is None else rate_hz)
+        if untimed and rate_hz is None:
+            warnings.warn(f"{p}: the log's timestamps are all 0; its scans are timed at {DEFAULT_SCAN_RATE_HZ} Hz "
+                          "(give rate_hz: a robot's log may be slower)", stacklevel=2)
     elif p.endswith((".bag", ".mcap", ".db3")) or Path(p).is_dir():
         scans = read_rosbag_scans(p)
     else:

@@ -5,6 +5,7 @@ the simulated paper scenarios through the processor, real recordings (SICK dumps
 import json
 import math
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -266,3 +267,17 @@ def test_carmen_log_gives_moving_objects_against_its_world_background():
     assert "world background from the scans with poses" in done.stderr
     untimed = lambda cs: [{k: v for k, v in c.items() if k != "process_ms"} for c in cs]  # noqa: E731
     assert untimed(json.loads(line) for line in done.stdout.splitlines()) == untimed(cycles)
+
+
+def test_a_carmen_log_without_times_says_at_what_rate_it_was_timed(tmp_path):
+    log = tmp_path / "untimed.log"
+    line = "FLASER 3 1.0 2.0 3.0 0 0 0 0 0 0 {t} host {t}\n"
+    log.write_text(line.format(t=0) * 2)
+    with pytest.warns(UserWarning, match=r"untimed\.log: the log's timestamps are all 0; .* 37\.5 Hz"):
+        scans = rp.roadside.read_scans(log)
+    assert [s["time_s"] for s in scans] == pytest.approx([0.0, 1 / 37.5])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a rate given, or times in the log: nothing to say
+        assert [s["time_s"] for s in rp.roadside.read_scans(log, rate_hz=5.0)] == pytest.approx([0.0, 0.2])
+        log.write_text(line.format(t=10.0) + line.format(t=10.5))
+        assert [s["time_s"] for s in rp.roadside.read_scans(log)] == pytest.approx([10.0, 10.5])
