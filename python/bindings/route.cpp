@@ -52,7 +52,10 @@ void bind_route(py::module_& m) {
         }, "m, NaN below two points")
         .def_property_readonly("frames", [](py::object self) {
             return view_of(self.cast<const rp::StitchedProfile&>().frames, self);
-        }, "frames that backed each bin");
+        }, "frames that backed each bin")
+        .def_property_readonly("blocked", [](py::object self) {
+            return view_of(self.cast<const rp::StitchedProfile&>().blocked, self, py::dtype("bool"));
+        }, "bool per bin: a frame saw an obstacle there and none saw road (z is NaN, no gap filled across it)");
 
     py::class_<rp::RouteBuilder>(m, "RouteBuilder", "Frames' profiles stitched along the drive, and its segments")
         .def(py::init([](const std::string& config_json) { return rp::RouteBuilder(config_from(config_json)); }),

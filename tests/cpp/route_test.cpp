@@ -55,6 +55,37 @@ TEST(Route, KnownRoadIsStitchedWholeWhateverEachFrameOffset) {
     EXPECT_EQ(p.count[45], 15);
 }
 
+// Frame `r` with bins [first, last) of the left wheel empty and those of [first + 2, last - 2) blocked (or not).
+rp::Result with_obstacle(rp::Result r, int first, int last, bool blocked) {
+    r.left.blocked.assign(r.left.z.size(), 0);
+    for (int k = first; k < last; ++k) {
+        r.left.z[static_cast<std::size_t>(k)] = std::numeric_limits<double>::quiet_NaN();
+        r.left.count[static_cast<std::size_t>(k)] = 0;
+        r.left.blocked[static_cast<std::size_t>(k)] = blocked && k >= first + 2 && k < last - 2;
+    }
+    return r;
+}
+
+TEST(Route, NoGapIsFilledAcrossAnObstacleAFrameSawUnlessAnotherSawRoadThere) {
+    for (const bool blocked : {false, true}) {
+        rp::RouteBuilder route{rp::Config{}};
+        route.add(with_obstacle(frame(0, 0.0, 0.0), 98, 107, blocked));  // 0.9 m empty: within max_gap_m
+        const rp::StitchedProfile p = route.left();
+        for (int j = 98; j < 107; ++j) {
+            EXPECT_EQ(std::isnan(p.z[static_cast<std::size_t>(j)]), blocked) << j;
+            EXPECT_EQ(p.blocked[static_cast<std::size_t>(j)], blocked && j >= 100 && j < 105) << j;
+        }
+    }
+    rp::RouteBuilder route{rp::Config{}};
+    route.add(with_obstacle(frame(0, 0.0, 0.0), 98, 107, true));
+    route.add(frame(1, 1.0, 0.0));  // saw road over the whole stretch: the obstacle moved on
+    const rp::StitchedProfile p = route.left();
+    for (int j = 98; j < 107; ++j) {
+        EXPECT_NEAR(p.z[static_cast<std::size_t>(j)], road((j + 0.5) * kDs), 1e-12) << j;
+        EXPECT_EQ(p.blocked[static_cast<std::size_t>(j)], 0) << j;
+    }
+}
+
 TEST(Route, SegmentsCoverTheStitchedRoadAndRunTheQuarterCarOverTheWholeStretch) {
     rp::RouteBuilder route{rp::Config{}};
     for (int f = 0; f < 5; ++f) route.add(frame(f, f * 1.0, 0.0));
@@ -164,8 +195,11 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
             r.path.icr_y = 20.0, r.path.left_radius = 19.2, r.path.right_radius = 20.8;
         }
         r.left.z[7] = std::nan("");  // missing bins travel as null
+        if (f == 1) r = with_obstacle(r, 20, 29, true);  // blocked bins travel too
         from_results.add(r);
-        from_lines.add(rp::route_input_from_json(rp::result_to_json(r), "line " + std::to_string(f)));
+        const rp::Result line = rp::route_input_from_json(rp::result_to_json(r), "line " + std::to_string(f));
+        EXPECT_EQ(line.left.blocked, r.left.blocked);
+        from_lines.add(line);
     }
     EXPECT_DOUBLE_EQ(from_lines.distance_m(), from_results.distance_m());
     const rp::StitchedProfile a = from_results.left(), b = from_lines.left();
@@ -179,6 +213,7 @@ TEST(Route, OutputLinesStitchLikeTheirResults) {
     }
     EXPECT_EQ(a.count, b.count);
     EXPECT_EQ(a.frames, b.frames);
+    EXPECT_EQ(a.blocked, b.blocked);
 
     rp::Result stopped;
     stopped.status = rp::FrameStatus::VehicleStopped;

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
+from roadpreview.reference.runs import true_runs
 from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_HEIGHT, OS1_128_PCAP, OUSTER
 from paths import run_cli as run
 
@@ -82,6 +83,7 @@ def test_route_matches_the_numpy_reference_on_the_same_run(kitti_route):
         np.testing.assert_allclose([number(r["z_m"]) for r in rows], ref.z, atol=1e-5, equal_nan=True)
         np.testing.assert_array_equal([int(r["count"]) for r in rows], ref.count)
         np.testing.assert_array_equal([int(r["frames"]) for r in rows], ref.frames)
+        np.testing.assert_array_equal([r["blocked"] == "1" for r in rows], ref.blocked)
     rows = read_csv(out / "run.segments.csv")
     expected = route.segments(10.0) + route.segments(100.0)
     assert len(rows) == len(expected)
@@ -133,6 +135,62 @@ def test_a_known_road_is_stitched_whole_whatever_each_frame_s_offset():
     assert stitched.frames[0] == 1 and stitched.frames[45] == 5
 
 
+def test_no_gap_is_filled_across_an_obstacle_a_frame_saw_unless_another_saw_road_there():
+    """A frame's blocked bins (an obstacle in the wheel's path) stay missing in the stitched profile, as in the
+    frame's own: a 0.9 m gap holding one is not interpolated (it was, up to 0.17 m over a kerb-high obstacle on
+    KITTI seq 00), unless another frame saw road there (the obstacle moved on)."""
+    cfg = rp.Config()
+    ds = 0.1
+    s = (np.arange(300) + 0.5) * ds
+
+    def line(f, blocked_bins=range(0)):
+        z = 0.01 * np.sin(2 * np.pi * (f + s) / 7.0)
+        count = np.full(300, 3)
+        blocked = np.zeros(300, dtype=bool)
+        if blocked_bins:
+            z[blocked_bins.start - 2:blocked_bins.stop + 2] = np.nan
+            count[blocked_bins.start - 2:blocked_bins.stop + 2] = 0
+            blocked[blocked_bins] = True
+        profile = {"s": s.tolist(), "z": [None if np.isnan(v) else v for v in z], "count": count.tolist(),
+                   "spread": [0.0] * 300, "blocked": blocked.tolist()}
+        return {"timestamp": f * 0.1, "motion": {"speed": 10.0}, "path": None, "reason": None,
+                "profiles": {"left": profile, "right": profile}}
+
+    for blocked_bins in (range(0), range(100, 105)):  # without an obstacle the same 0.9 m gap is filled
+        route = rp.reference.Route(cfg)
+        route.add(line(0, blocked_bins))
+        stitched = route.stitched("left")
+        assert np.isnan(stitched.z[98:107]).all() == bool(blocked_bins)
+        assert list(np.flatnonzero(stitched.blocked)) == list(blocked_bins)
+    route.add(line(1))  # 1 m further on, road over the whole stretch
+    assert np.isfinite(route.stitched("left").z[98:107]).all() and not route.stitched("left").blocked.any()
+
+
+def test_a_kitti_route_leaves_the_obstacles_in_its_wheel_paths_unfilled(tmp_path):
+    """Three KITTI frames on a curve whose wheel paths meet parked cars and kerbs: every bin the reference marks
+    blocked is missing in the exported profile (27 of them were interpolated before), and none is filled in a
+    run of empty bins that holds one."""
+    proc = run("run", *KITTI_FRAMES[:3], "--speed", KITTI_SPEED, "--yaw-rate", -0.08, "--frame-rate", 10,
+               "--sensor-height", KITTI_SENSOR_HEIGHT, "--export-profile", tmp_path / "profiles", "-q", "-o",
+               tmp_path / "run.jsonl")
+    assert proc.returncode == 0, proc.stderr
+    route = rp.reference.Route(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT))
+    for text in (tmp_path / "run.jsonl").read_text().splitlines():
+        route.add(json.loads(text))
+    blocked_bins = 0
+    for wheel in ("left", "right"):
+        rows = read_csv(tmp_path / "profiles" / f"{wheel}.csv")
+        blocked = np.array([r["blocked"] == "1" for r in rows])
+        np.testing.assert_array_equal(blocked, route.stitched(wheel).blocked)
+        assert all(r["z_m"] == "" for r, b in zip(rows, blocked) if b)
+        empty = np.array([r["count"] == "0" for r in rows])
+        for start, stop in true_runs(empty):
+            if blocked[start:stop].any():
+                assert not any(r["filled"] == "1" for r in rows[start:stop])
+        blocked_bins += int(blocked.sum())
+    assert blocked_bins >= 20
+
+
 def test_poses_give_the_segments_their_place(tmp_path):
     run("run", OS1_128_PCAP, "--speed", 2.5, "--sensor-height", OS1_128_HEIGHT, "--fusion", "kalman", "--poses", POSES,
         "--segments", 10, "--segments-csv", tmp_path / "seg.csv", "-q", "-o", tmp_path / "out.jsonl")
@@ -180,6 +238,7 @@ def test_the_cpp_route_builder_matches_the_numpy_reference_on_the_same_frames():
                 np.testing.assert_allclose(built.spread, ref.spread, atol=1e-9, equal_nan=True)
                 np.testing.assert_array_equal(built.count, ref.count)
                 np.testing.assert_array_equal(built.frames, ref.frames)
+                np.testing.assert_array_equal(built.blocked, ref.blocked)
         for length in (10.0, 100.0):
             mine, theirs = from_lines.segments(length), reference.segments(length)
             assert len(mine) == len(theirs) > 0

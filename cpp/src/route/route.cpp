@@ -106,16 +106,21 @@ void RouteBuilder::add(const Result& r, const std::optional<Pose2>& pose) {
 
 // The frame's backed bins, shifted by the median of their differences to the drive's profile where both
 // hold data (each frame's heights are relative to its own ground plane), added with their point counts as
-// weights.
+// weights; its blocked bins marked.
 void RouteBuilder::stitch(const Profile& p, double scale, WheelSums& w) {
     const double ds = cfg_.profile.ds_m;
     std::vector<std::pair<std::size_t, std::size_t>> bins;  // (drive bin, profile bin)
     std::vector<double> differences;
+    const bool knows_blocked = p.blocked.size() == p.z.size();  // lines read back may not say
     for (std::size_t k = 0; k < p.z.size(); ++k) {
-        if (p.count[k] <= 0 || !std::isfinite(p.z[k])) continue;
         const double d = drive_.metres() + p.s[k] * scale;
         if (d < 0.0) continue;
         const auto j = static_cast<std::size_t>(std::floor(d / ds));
+        if (knows_blocked && p.blocked[k]) {
+            grow(w.blocked, j + 1, std::uint8_t{0});
+            w.blocked[j] = 1;
+        }
+        if (p.count[k] <= 0 || !std::isfinite(p.z[k])) continue;
         bins.emplace_back(j, k);
         if (j < w.weight.size() && w.weight[j] > 0.0) differences.push_back(p.z[k] - w.weighted_z[j] / w.weight[j]);
     }
@@ -149,8 +154,10 @@ StitchedProfile RouteBuilder::finished(const WheelSums& w) const {
             w.weight[j] > 0.0 ? std::max(0.0, w.weighted_square[j] / w.weight[j] - mean * mean) : kNaN;
         out.z.push_back(mean);
         out.spread.push_back(w.count[j] >= 2 ? std::sqrt(variance) : kNaN);
+        // Road seen by any frame outweighs an obstacle seen by another (one that moved on, or a frame's margin).
+        out.blocked.push_back(j < w.blocked.size() && w.blocked[j] && !(w.weight[j] > 0.0));
     }
-    fill_gaps(out.z, out.ds, cfg_.profile.max_gap_m);
+    fill_gaps(out.z, out.ds, cfg_.profile.max_gap_m, &out.blocked);
     return out;
 }
 

@@ -65,11 +65,12 @@ void write_segments_csv(std::ostream& out, const std::vector<RouteSegment>& segm
 }
 
 void write_profile_csv(std::ostream& out, const StitchedProfile& p) {
-    out << "distance_m,z_m,count,frames,filled\n";
+    out << "distance_m,z_m,count,frames,filled,blocked\n";
     for (std::size_t j = 0; j < p.z.size(); ++j) {
         const bool filled = p.count[j] == 0 && std::isfinite(p.z[j]);
+        const bool blocked = j < p.blocked.size() && p.blocked[j];
         out << field("%.2f", (static_cast<double>(j) + 0.5) * p.ds) << ',' << field("%.5f", p.z[j]) << ','
-            << p.count[j] << ',' << p.frames[j] << ',' << (filled ? 1 : 0) << '\n';
+            << p.count[j] << ',' << p.frames[j] << ',' << (filled ? 1 : 0) << ',' << (blocked ? 1 : 0) << '\n';
     }
     if (!out) throw std::runtime_error("profile CSV: write failed");
 }

@@ -57,6 +57,14 @@ Profile profile_from(const json& p, const std::string& where) {
     }
     if (out.z.size() != out.s.size() || out.count.size() != out.s.size() || out.spread.size() != out.s.size())
         fail(where, "s, z, count and spread differ in length");
+    if (const json* blocked = optional_member(p, "blocked")) {  // lines of older runs may lack it, or leave it empty
+        if (!blocked->is_array() || (!blocked->empty() && blocked->size() != out.s.size()))
+            fail(where, "blocked must be an array of true/false as long as s");
+        for (const json& b : *blocked) {
+            if (!b.is_boolean()) fail(where, "blocked must hold true or false, got " + b.dump());
+            out.blocked.push_back(b.get<bool>() ? 1 : 0);
+        }
+    }
     return out;
 }
 

@@ -30,6 +30,7 @@ class Stitched:
     count: np.ndarray  #: points behind each bin over all frames
     spread: np.ndarray  #: m, NaN below two points
     frames: np.ndarray  #: frames that backed the bin
+    blocked: np.ndarray  #: a frame saw an obstacle over the bin and no frame saw road there (z NaN, never filled)
 
 
 @dataclass
@@ -39,6 +40,7 @@ class _Sums:
     weighted_square: list = field(default_factory=list)
     count: list = field(default_factory=list)
     frames: list = field(default_factory=list)
+    blocked: set = field(default_factory=set)  #: drive bins some frame's profile held blocked
 
     def grow(self, size: int) -> None:
         for values in (self.weight, self.weighted_z, self.weighted_square, self.count, self.frames):
@@ -134,6 +136,9 @@ class Route:
         ds = self.cfg.profile.ds_m
         s, z, count, spread = (_values(profile[k]) for k in ("s", "z", "count", "spread"))
         drive = self.distance + s * scale
+        blocked = profile.get("blocked")  # older lines lack it
+        blocked = np.zeros(len(s), dtype=bool) if blocked is None else np.asarray(blocked, dtype=bool)
+        sums.blocked.update(np.floor(drive[blocked & (drive >= 0)] / ds).astype(int).tolist())
         use = (count > 0) & np.isfinite(z) & (drive >= 0)
         bins = np.floor(drive[use] / ds).astype(int)
         z, count, spread = z[use], count[use], np.nan_to_num(spread[use], nan=0.0)
@@ -162,8 +167,10 @@ class Route:
             z = np.where(weight > 0, np.array(sums.weighted_z, dtype=float) / weight, np.nan)
             variance = np.maximum(np.array(sums.weighted_square, dtype=float) / weight - z**2, 0.0)
         spread = np.where(count >= 2, np.sqrt(variance), np.nan)
-        z = fill_gaps(z, self.cfg.profile.ds_m, self.cfg.profile.max_gap_m)
-        return Stitched(self.cfg.profile.ds_m, z, count, spread, np.array(sums.frames, dtype=np.int64))
+        # An obstacle one frame saw counts only where no frame saw road.
+        blocked = np.isin(np.arange(len(z)), list(sums.blocked)) & ~(weight > 0)
+        z = fill_gaps(z, self.cfg.profile.ds_m, self.cfg.profile.max_gap_m, blocked)
+        return Stitched(self.cfg.profile.ds_m, z, count, spread, np.array(sums.frames, dtype=np.int64), blocked)
 
     def pose_at(self, distance: float):
         if not self._track:

@@ -26,6 +26,9 @@ struct StitchedProfile {
     std::vector<std::int32_t> count;    ///< points behind the bin, summed over the frames that saw it
     std::vector<double> spread;         ///< m, spread of those points' heights; NaN below two points
     std::vector<std::int32_t> frames;   ///< frames whose profile backed the bin with points
+    /// 1 where a frame saw an obstacle over the bin (its blocked bins, docs/method.md §5) and none saw road there:
+    /// z is NaN and no gap is filled across it, as in a single frame's profile.
+    std::vector<std::uint8_t> blocked;
 };
 
 /// One wheel's (or, for `vehicle`, both wheels') result over one segment.
@@ -70,6 +73,7 @@ private:
         std::vector<double> weight, weighted_z, weighted_square;  // Σc, Σc·z, Σc·(spread² + z²)
         std::vector<std::int32_t> count, frames;
         std::vector<std::size_t> last_frame;  // the last frame (1-based) that added to the bin
+        std::vector<std::uint8_t> blocked;     // some frame saw an obstacle over the bin (may reach past the rest)
     };
     void stitch(const Profile& p, double scale, WheelSums& w);
     StitchedProfile finished(const WheelSums& w) const;
