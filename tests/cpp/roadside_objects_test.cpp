@@ -299,7 +299,7 @@ TEST(RoadsideProcessor, NanAndOutOfRangeReturnsAreNoReturn) {
     }
     const auto cycles = p.finish();
     ASSERT_FALSE(cycles.empty());
-    EXPECT_EQ(cycles.back().scanners[0].invalid_ranges, 80);  // −1 and 1e6, every scan
+    EXPECT_EQ(cycles.back().scanners[0].invalid_ranges, 120);  // NaN, −1 and 1e6, every scan
 }
 
 namespace {

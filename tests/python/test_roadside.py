@@ -255,6 +255,9 @@ def test_carmen_log_gives_moving_objects_against_its_world_background():
     near = sum(int((s["ranges_m"] <= 30.0).sum()) for s in scans)
     assert 0.002 * near < fg < 0.03 * near, (fg, near)  # walls, trees and hedges are background
     cycles = rp.roadside.Processor(CARMEN_SITE).run(scans)
+    # Every reading that gave no point is counted, the log's maximum-range no-returns too (they counted 0 before).
+    no_point = sum(int((~(s["ranges_m"] > 0) | (s["ranges_m"] >= 80.99)).sum()) for s in scans)
+    assert cycles[-1]["scanners"][0]["invalid_ranges"] == no_point > 0.2 * sum(s["ranges_m"].size for s in scans)
     tracks = tracks_of(cycles)
     moving = [v for v in tracks.values()
               if len(v) >= 4 and math.hypot(v[-1][1]["x_m"] - v[0][1]["x_m"], v[-1][1]["y_m"] - v[0][1]["y_m"]) >= 2.0]

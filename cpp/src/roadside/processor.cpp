@@ -61,7 +61,8 @@ Processor::Processor(Site site)
 
 Processor::~Processor() = default;
 
-// Returns at or beyond the scanner's range (or ≤ 0, NaN) become no return.
+// Returns at or beyond the scanner's range (or ≤ 0, NaN) become no return. `invalid_ranges` counts them all, NaN
+// included: a reader's own no-returns (a CARMEN log's maximum-range readings) count as a SICK's zeros do.
 LaserScan Processor::checked(const LaserScan& input, std::int64_t* invalid_ranges) const {
     if (input.scanner < 0 || input.scanner >= static_cast<int>(site_.scanners.size()))
         throw std::runtime_error(input.source + ": scanner " + std::to_string(input.scanner) + " is not in the site file " +
@@ -72,7 +73,7 @@ LaserScan Processor::checked(const LaserScan& input, std::int64_t* invalid_range
     scan.time_s += where.time_offset_s;
     for (auto& r : scan.ranges_m)
         if (!(r > 0.0f) || r >= where.max_range_m) {
-            if (invalid_ranges && std::isfinite(r)) ++*invalid_ranges;
+            if (invalid_ranges) ++*invalid_ranges;
             r = NAN;
         }
     return scan;

@@ -49,7 +49,7 @@ struct ScannerStatus {
     std::int64_t scans = 0;           ///< scans used so far
     double last_scan_s = -1.0;        ///< site time of its last scan, −1 before the first
     bool active = false;              ///< delivered a scan within the timeout
-    std::int64_t invalid_ranges = 0;  ///< NaN, ≤ 0 or beyond max range, so far
+    std::int64_t invalid_ranges = 0;  ///< NaN, ≤ 0 or at/beyond max range, so far
 };
 
 struct Cycle {
