@@ -27,6 +27,11 @@ namespace rp = roadpreview;
 
 namespace {
 
+// A command line that asks for what cannot be done (exit 2, as CLI11's own parse errors).
+struct UsageError : std::invalid_argument {
+    using std::invalid_argument::invalid_argument;
+};
+
 struct RunOptions {
     std::vector<std::string> inputs;
     double speed = 0.0;
@@ -279,8 +284,17 @@ void write_segments(const RunOptions& o, const rp::RouteBuilder& route) {
                      segments.empty() ? 0.0 : segments.back().end_m, path.c_str());
 }
 
+// The --export-profile directory made before the run, so that a path that cannot be one stops it at once.
+void prepare_profile_dir(const RunOptions& o) {
+    if (o.profile_dir.empty()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(o.profile_dir, ec);
+    if (ec || !std::filesystem::is_directory(o.profile_dir, ec))
+        throw UsageError("--export-profile " + o.profile_dir + ": cannot be made a directory (" +
+                         (ec ? ec.message() : std::string("a file of that name exists")) + ")");
+}
+
 void export_profiles(const RunOptions& o, const rp::RouteBuilder& route) {
-    std::filesystem::create_directories(o.profile_dir);
     const std::string title = "roadpreview " + std::filesystem::path(input_label(o)).filename().string();
     for (const auto& [wheel, profile] : {std::pair{"left", route.left()}, std::pair{"right", route.right()}}) {
         const auto base = std::filesystem::path(o.profile_dir) / wheel;
@@ -387,11 +401,15 @@ rp::DriveOptions drive_options(const RunOptions& o, const CLI::App& app) {
 
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
-        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
+        throw UsageError("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
     check_inputs(o);
     const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
-        throw std::invalid_argument("--poses moves the fusion map: give --fusion ema or kalman too");
+        throw UsageError("--poses moves the fusion map: give --fusion ema or kalman too");
+    if (given(app, "--alpha") && cfg.fusion.method != rp::FusionMethod::Ema)
+        throw UsageError("--alpha weighs the newest frame of the EMA fusion: give --fusion ema too (fusion.method is " +
+                         std::string(rp::to_string(cfg.fusion.method)) + ")");
+    prepare_profile_dir(o);
     if (o.read_ahead_m > 0.0) rp::ProfileReadout(cfg, o.read_ahead_m);  // a distance beyond the profiles: said now
     for (const double length_m : o.segment_lengths_m) rp::RouteBuilder(cfg).check_segment_length(length_m);  // too
     auto source = open_source(o, app, cfg);
@@ -604,6 +622,20 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
     return 0;
 }
 
+// A number in (lo, hi]: CLI11's Range includes lo, which the config then refuses (exit 1, not a usage error).
+CLI::Validator above_and_at_most(double lo, double hi) {
+    char range[64];
+    std::snprintf(range, sizeof range, "(%g, %g]", lo, hi);
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || !(v > lo && v <= hi))
+                return std::string("expected a number in ") + range + ", got " + text;
+            return {};
+        },
+        std::string(range));
+}
+
 // A number > 0 and finite; CLI11's PositiveNumber would print its range as 4.9e-324 to 1.8e308.
 CLI::Validator positive_finite() {
     return CLI::Validator(
@@ -648,6 +680,9 @@ int main(int argc, char** argv) {
     CLI::App app{"roadpreview: road height profiles and ISO 8608 roughness ahead of the wheels, from LiDAR"};
     app.set_version_flag("--version", std::string("roadpreview ") + rp::kVersion);
     app.require_subcommand(1);
+    app.footer("Also, from the Python package (pip install 'roadpreview[drives]'): batch (many recordings to Parquet "
+               "and summaries; roadpreview batch --help), and run / info of ROS bags and MCAP files and with "
+               "--motion-from");
 
     RunOptions o;
     CLI::App* run_cmd =
@@ -678,8 +713,9 @@ int main(int argc, char** argv) {
     add_source_options(run_cmd, o.source);
     add_live_options(run_cmd, o.live);
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
-                                       "Sensor height above the ground, m, in (0, 10] (default: estimated from the "
-                                       "first frame's ground, see the output's mounting)");
+                                       "Sensor height above the ground, m (default: estimated from the first "
+                                       "frame's ground, see the output's mounting)")
+                       ->check(above_and_at_most(0.0, 10.0));
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
                      ->delimiter(',')
                      ->expected(6);
@@ -697,8 +733,8 @@ int main(int argc, char** argv) {
         ->check(positive_finite());  // pcap frames carry their own timestamps
     run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")
         ->check(CLI::IsMember({"none", "ema", "kalman"}));
-    run_cmd->add_option("--alpha", o.alpha, "EMA fusion: weight of the newest frame, (0, 1] (default 0.5)")
-        ->check(CLI::Range(0.0, 1.0));
+    run_cmd->add_option("--alpha", o.alpha, "EMA fusion (--fusion ema): weight of the newest frame (default 0.5)")
+        ->check(above_and_at_most(0.0, 1.0));
     run_cmd->add_option("--beam-sigma-deg", o.beam_sigma_deg,
                         "σ of each beam's elevation angle, deg: counted in the profiles' noise for points whose beam "
                         "the decoder or a beams file gives (default 0: not counted)")
@@ -777,6 +813,9 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("roadside")) return roadside_action();
         if (const int status = replay_action(); status >= 0) return status;
         return run(o, *run_cmd);
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "roadpreview: error: %s\n", e.what());
+        return 2;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "roadpreview: error: %s\n", e.what());
         return 1;

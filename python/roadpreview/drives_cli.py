@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
+import warnings
 from typing import Optional, Sequence
 
 from . import batch, drive
@@ -69,20 +71,73 @@ def run(argv: Sequence[str]) -> int:
         speed = opts["motion"][0] if isinstance(opts.get("motion"), tuple) else None
         opts["motion"] = io_bags.motion_table(args.inputs, speed_mps=speed)
     out = open(args.output, "w", encoding="utf-8") if args.output else sys.stdout
-    frames = 0
+    summary = _Summary()
     try:
-        for res in drive.run(args.inputs, cfg, frames=_frames(args.frames), **opts):
-            out.write(res.to_json() + "\n")
-            frames += 1
+        results = drive.run(args.inputs, cfg, frames=_frames(args.frames), **opts)
+        told = 0
+        while True:
+            with warnings.catch_warnings(record=True) as caught:  # the runner's warnings, said as the CLI says them
+                warnings.simplefilter("always")
+                res = next(results, None)
+            warned = {str(w.message) for w in caught}
+            for note in results.notes[told:]:
+                print(f"roadpreview: {'warning: ' if note in warned else ''}{note}", file=sys.stderr)
+            told = len(results.notes)
+            if res is None:
+                break
+            line = res.to_dict()
+            out.write(json.dumps(line) + "\n")
+            summary.add(line)
             if not args.quiet:
-                print(f"[{frames}] {res!r}", file=sys.stderr)
+                print(f"[{summary.frames}] {_progress(line)}", file=sys.stderr)
     finally:
         if out is not sys.stdout:
             out.close()
-    if not frames:
+    if not summary.frames:
         raise RuntimeError(f"{args.inputs[0]}: no frames in the input; nothing was written")
-    print(f"roadpreview: {frames} frame(s)", file=sys.stderr)
+    print(f"roadpreview: {summary}", file=sys.stderr)
     return 0
+
+
+def _class(roughness: dict) -> str:
+    return roughness.get("class") or "-"
+
+
+def _progress(line: dict) -> str:
+    """A frame's progress line, as the C++ CLI prints it: points, ground, clusters, classes, time."""
+    rough, points, profiles = line["roughness"], line["points"], line.get("profiles") or {}
+    clusters = ""
+    if line.get("obstacles") is not None:
+        in_path = [len((profiles.get(w) or {}).get("obstacles") or []) for w in ("left", "right")]
+        clusters = f", {len(line['obstacles'])} clusters (L {in_path[0]}, R {in_path[1]} in the paths)"
+    reason = f" — {line['reason']}" if line.get("reason") else ""
+    label = line["source"] if line.get("frame") is None else f"{line['source']} #{line['frame']}"
+    return (f"{label}: {points['input']} points, {points['ground']} ground{clusters}, class "
+            f"L={_class(rough['left'])} R={_class(rough['right'])} vehicle={_class(rough['vehicle'])}{reason}, "
+            f"{line['timing_ms']['total']:.2f} ms")
+
+
+class _Summary:
+    """The run's last line, as the C++ CLI's: frames, pipeline times, vehicle classes and IRI."""
+
+    def __init__(self):
+        self.frames, self.ms, self.classes, self.iri = 0, [], {}, []
+
+    def add(self, line: dict) -> None:
+        self.frames += 1
+        self.ms.append(line["timing_ms"]["total"])
+        vehicle = line["roughness"]["vehicle"]
+        self.classes[_class(vehicle)] = self.classes.get(_class(vehicle), 0) + 1
+        iri = (vehicle.get("iri") or {}).get("value")
+        if iri is not None:
+            self.iri.append(iri)
+
+    def __str__(self) -> str:
+        classes = " ".join(f"{c}×{n}" for c, n in sorted(self.classes.items()))
+        iri = (f"vehicle IRI median {statistics.median(self.iri):.2f} m/km ({len(self.iri)} of {self.frames} frames)"
+               if self.iri else "vehicle IRI: none")
+        return (f"{self.frames} frame(s), pipeline median {statistics.median(self.ms):.2f} ms, max "
+                f"{max(self.ms):.2f} ms; vehicle classes: {classes}; {iri}")
 
 
 def info(argv: Sequence[str]) -> int:

@@ -2,6 +2,7 @@
 // at sequence breaks, and the errors of contradicting options (docs/method.md, "Drives").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -194,6 +195,46 @@ TEST(Drive, AGroundAtTheCloudsOriginSettlesTheMountingAsABaseFrame) {
     ASSERT_EQ(notes.size(), 1u);
     EXPECT_NE(notes[0].second.find("the ground in f0.bin lies at the cloud's origin"), std::string::npos)
         << notes[0].second;
+}
+
+// A ground through the origin but tilted is neither a base frame's nor a mounting (the bundled Ouster bag's desk,
+// 11.8°): said so, not "taken as base-frame points" and then "not base-frame points" of the same frame.
+TEST(Drive, ATiltedGroundAtTheCloudsOriginIsNoBaseFrame) {
+    rp::Frame tilted = road_frame("f0.bin");
+    for (Eigen::Index i = 0; i < tilted.points.rows(); ++i)
+        tilted.points(i, 2) = -0.2f * tilted.points(i, 0);  // 11.3° down ahead, through the origin
+    rp::DriveOptions o;
+    o.speed_mps = 5.0;
+    std::vector<std::string> notes;
+    o.on_note = [&](bool, const std::string& text) { notes.push_back(text); };
+    rp::DriveRunner runner(std::make_unique<VectorSource>(std::vector<rp::Frame>{tilted}), rp::Config{}, o);
+    while (runner.next()) {}
+    ASSERT_FALSE(notes.empty());
+    EXPECT_NE(notes[0].find("f0.bin lies at the cloud's origin but tilted 11.3°"), std::string::npos) << notes[0];
+    EXPECT_NE(notes[0].find("neither a level base frame nor a mounting"), std::string::npos) << notes[0];
+}
+
+// A 2-D scanner's scans made clouds (every z exactly 0) hold no heights: said once, not profiled silently.
+TEST(Drive, ATwoDimensionalScanIsNotedOnce) {
+    std::vector<rp::Frame> v;
+    for (int i = 0; i < 3; ++i) {
+        v.push_back(road_frame("scan" + std::to_string(i) + ".bag"));
+        v.back().points.col(2).setZero();
+    }
+    rp::DriveOptions o;
+    o.speed_mps = 1.0;
+    std::vector<std::string> notes;
+    o.on_note = [&](bool, const std::string& text) { notes.push_back(text); };
+    rp::DriveRunner runner(std::make_unique<VectorSource>(std::move(v)), rp::Config{}, o);
+    while (runner.next()) {}
+    const auto said = std::count_if(notes.begin(), notes.end(), [](const std::string& n) {
+        return n.find("scan0.bag: every point has z = 0, as a 2-D scanner's scan") != std::string::npos;
+    });
+    EXPECT_EQ(said, 1);
+    notes.clear();  // a flat road 1.8 m below the sensor has one height too, but is a cloud
+    rp::DriveRunner road(frames(2), mounted(), o);
+    while (road.next()) {}
+    for (const std::string& n : notes) EXPECT_EQ(n.find("z = 0"), std::string::npos) << n;
 }
 
 TEST(Drive, AGivenMountingThatDisagreesWithTheGroundIsNotedOnceAndCounted) {

@@ -19,7 +19,7 @@ from rosbags.typesys import Stores, get_typestore  # noqa: E402
 
 import roadpreview as rp  # noqa: E402
 from roadpreview import drive, io_bags  # noqa: E402
-from paths import DATA, SHARED_DATA  # noqa: E402
+from paths import DATA, SHARED_DATA, cli  # noqa: E402
 
 OUSTER_BAG = DATA / "rosbag" / "512x10_raw.bag"
 SICK_BAG = SHARED_DATA / "laserscan2d" / "sick_scan_xd" / "rms_1xxx_lms_1xx_movement_off.bag"
@@ -165,6 +165,41 @@ def test_the_ouster_bag_runs_with_its_imu_yaw_rate_and_declines_a_class_for_its_
     assert line["path"]["yaw_rate_source"] == "imu"
     assert line["points"]["input"] == 28751 and line["points"]["ground"] > 300
     assert line["roughness"]["vehicle"]["class"] is None and line["roughness"]["vehicle"]["reason"]
+
+
+def test_a_bag_run_on_the_command_line_speaks_as_every_run_does(tmp_path):
+    """`roadpreview run BAG` (the Python side): warnings as one `roadpreview: warning:` line each (not Python's
+    file:line warnings), a progress line per frame with its points, ground, clusters, classes and time, and the
+    summary line with the classes and IRI. The bench capture's ground lies at the origin but 11.8° off level: no
+    base frame, said once (before, it was "taken as base-frame points", then "not base-frame points")."""
+    proc = subprocess.run([cli(), "run", str(OUSTER_BAG), "--speed", "2.5", "-o", str(tmp_path / "o.jsonl")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    err = proc.stderr.splitlines()
+    assert "RuntimeWarning" not in proc.stderr and "drives_cli.py" not in proc.stderr
+    assert any(line.startswith("roadpreview: warning: ") and "lies at the cloud's origin but tilted 11.8°" in line
+               for line in err), proc.stderr
+    assert "taken as base-frame points\n" not in proc.stderr
+    progress = [line for line in err if line.startswith("[1] ")]
+    assert len(progress) == 1 and "512x10_raw.bag #0: 28751 points, " in progress[0], proc.stderr
+    assert " clusters (L " in progress[0] and ", class L=- R=- vehicle=-" in progress[0]
+    assert err[-1].startswith("roadpreview: 1 frame(s), pipeline median ") and "vehicle classes: -×1" in err[-1]
+
+
+def test_a_two_dimensional_scan_made_a_cloud_is_noted(tmp_path):
+    """A 2-D scanner's LaserScan made a PointCloud2 (every z = 0) holds no road heights: the run says so once
+    (before, every point of it in the region was ground, silently)."""
+    rng = np.random.default_rng(3)
+    angle = np.linspace(-2.0, 2.0, 541)
+    ranges = rng.uniform(1.0, 4.0, angle.size)
+    pts = np.column_stack([ranges * np.cos(angle), ranges * np.sin(angle), np.zeros_like(angle),
+                           np.zeros_like(angle)]).astype(np.float32)
+    path = write_bag(tmp_path / "scan.bag", [("/cloud", "sensor_msgs/msg/PointCloud2", 10.0 + 0.02 * k,
+                                              cloud(pts, LAYOUTS[0], t_s=10.0 + 0.02 * k)) for k in range(3)])
+    proc = subprocess.run([cli(), "run", str(path), "--speed", "1", "-q", "-o", str(tmp_path / "o.jsonl")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.count("every point has z = 0, as a 2-D scanner's scan made a point cloud has") == 1, proc.stderr
 
 
 @pytest.mark.skipif(not SICK_BAG.exists(), reason="shared data not present")

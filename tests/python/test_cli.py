@@ -16,6 +16,7 @@ def lines(text):
 def test_version_and_help():
     assert run("--version").stdout.strip() == f"roadpreview {rp.__version__}"
     assert "--sensor-height" in run("run", "--help").stdout
+    assert "batch" in run("--help").stdout  # the Python package's commands are named too
 
 
 def test_directory_input_gives_one_line_per_frame_in_name_order():
@@ -98,12 +99,28 @@ def test_bad_inputs_exit_non_zero_with_one_line_naming_the_file(tmp_path):
                    "tire_width")
 
 
-def test_missing_speed_and_bad_flags_are_usage_errors():
-    assert run("run", KITTI_FRAMES[0], check=False).returncode != 0
+def test_missing_speed_and_bad_flags_are_usage_errors(tmp_path):
+    # Exit 2 (README, "CLI"), before anything is read or written.
+    proc = run("run", KITTI_FRAMES[0], check=False)
+    assert proc.returncode == 2 and "give the vehicle's motion: --speed" in proc.stderr
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--ground", "magic", check=False)
-    assert proc.returncode != 0 and "magic" in proc.stderr
+    assert proc.returncode == 2 and "magic" in proc.stderr
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", 1, "--extrinsics", "0,0,1,0,0,0", check=False)
-    assert proc.returncode != 0 and "excludes" in proc.stderr
+    assert proc.returncode == 2 and "excludes" in proc.stderr
+    # The range the help states is the one checked: 0 is refused as the option's value, not later by the config.
+    assert "(0, 1]" in run("run", "--help").stdout
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--fusion", "ema", "--alpha", 0, check=False)
+    assert proc.returncode == 2 and "--alpha: expected a number in (0, 1], got 0" in proc.stderr
+    # An EMA weight without the EMA fusion did nothing, silently.
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--alpha", 0.3, check=False)
+    assert proc.returncode == 2 and "--alpha weighs the newest frame of the EMA fusion: give --fusion ema" in proc.stderr
+    # A profile directory that cannot be one stops the run before it starts, not after the last frame.
+    taken = tmp_path / "taken"
+    taken.write_text("a file")
+    out = tmp_path / "o.jsonl"
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--export-profile", taken, "-o", out, check=False)
+    assert proc.returncode == 2 and f"--export-profile {taken}: cannot be made a directory" in proc.stderr
+    assert not out.exists()
 
 
 def test_zero_speed_is_a_documented_result_not_an_error():

@@ -118,9 +118,16 @@ def test_a_ground_that_disagrees_with_the_estimated_mounting_is_noted():
     # off it. Before, only a given mounting was checked, and an estimate read off something else went unsaid.
     proc = run("run", VELODYNE / "hdl32_example.pcap", "--speed", 5, "-q")
     assert "#6: the fitted ground is 0.31 m below the base origin and tilted 10.5°: the sensor is about 2.49 m up, " \
-           "not 2.17 m as estimated from an earlier frame's ground" in proc.stderr
+           "not 2.17 m as estimated from the ground in " in proc.stderr and "hdl32_example.pcap #0; check" in proc.stderr
     assert "1 frame(s) fitted a ground that disagrees with the mounting" in proc.stderr
     assert [o["mounting"]["disagrees"] for o in lines(proc.stdout)] == [False] * 6 + [True]
+    # The frame that gave the estimate can disagree with it too: the estimate fits all the points below the sensor,
+    # the frame's ground only those of its region ahead (on this capture, whose "ground" is a wall, the two RANSAC
+    # planes differ by 14°). The note said "an earlier frame's ground".
+    proc = run("run", OUSTER / "OS-1-64_1024x10_fw20.pcap", "--meta", OUSTER / "OS-1-64_sensor_config_reduced.json",
+               "--speed", 2.5, "--ground", "ransac", "-q")
+    assert "#189: the fitted ground is 0.63 m above the base origin and tilted 14.1°: the sensor is about 0.20 m up, " \
+           "not 0.83 m as estimated from all of this frame's points below the sensor" in proc.stderr
 
 
 def test_velodyne_run_and_legacy_ouster_with_meta():

@@ -199,7 +199,7 @@ def test_cli_fuses_the_os1_128_recording_with_its_poses():
     bad = run_cli(*base, "--fusion", "kalman", "--poses", OUSTER / "OS-1-128_v2.3.0_1024x10.json", check=False)
     assert bad.returncode == 1 and "a pose needs 12 finite numbers" in bad.stderr
     unused = run_cli(*base, "--poses", POSES, check=False)
-    assert unused.returncode == 1 and "give --fusion ema or kalman" in unused.stderr
+    assert unused.returncode == 2 and "give --fusion ema or kalman" in unused.stderr  # a usage error
 
 
 def test_a_simulated_class_b_road_reads_b_fused_on_an_hdl_64e():

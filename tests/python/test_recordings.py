@@ -116,6 +116,21 @@ def test_garbage_and_missing_files_are_clear_errors(tmp_path):
         rp.io.open(lonely)
     with pytest.raises(RuntimeError, match=r"absent\.json: cannot read the Ouster metadata file: no such file"):
         rp.io.open(lonely, meta=tmp_path / "absent.json")
+    # A capture of TCP traffic and small UDP datagrams (a SICK scanner's telegrams and mDNS) has no LiDAR packets:
+    # it was sent looking for Ouster metadata it could never use.
+    tcp = dpkt.tcp.TCP(sport=2112, dport=57104, flags=dpkt.tcp.TH_ACK | dpkt.tcp.TH_PUSH, data=b"\x02sSN LMDscandata\x03")
+    mdns = dpkt.udp.UDP(sport=5353, dport=5353, data=bytes(40))
+    recs = [(0.1 * k, bytes(dpkt.ethernet.Ethernet(data=dpkt.ip.IP(p=p, data=seg))))
+            for k, (p, seg) in enumerate([(dpkt.ip.IP_PROTO_TCP, tcp), (dpkt.ip.IP_PROTO_UDP, mdns)] * 3)]
+    sick = write_pcapng(tmp_path / "sick.pcapng", recs)
+    # Another sensor's metadata: its packets' size is found nowhere, and the capture's LiDAR-sized ones say why.
+    with pytest.raises(RuntimeError, match=r"fw20\.pcap: no lidar packets \(6464-byte UDP datagrams\) in 75 records; "
+                                           r"the largest datagram is 12608 bytes on port 7502: if those are the "
+                                           r"LiDAR's, the metadata or sensor model given is another sensor's"):
+        list(rp.io.open(OUSTER / "OS-1-64_1024x10_fw20.pcap", meta=OUSTER / "OS-1-32-G_v2.1.1_1024x10.json"))
+    with pytest.raises(RuntimeError, match=r"sick\.pcapng: holds no LiDAR packets: no UDP datagram of 512 bytes or "
+                                           r"more \(a SICK scanner's telegrams travel over TCP: `roadpreview roadside`"):
+        rp.io.open(sick)
 
 
 def with_short_packet(tmp_path):

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "roadpreview/drive/drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -19,9 +20,10 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kMaxMountingTiltRad = 15.0 / kRadToDeg;  // beyond it the "ground" is more likely a wall
 constexpr double kMinSensorHeightM = 0.1;  // below it the cloud's origin sits on its ground: a base frame already
 
-std::string format(const char* pattern, double a, double b, double c) {
+template <class... Numbers>
+std::string format(const char* pattern, Numbers... values) {
     char text[160];
-    std::snprintf(text, sizeof text, pattern, a, b, c);
+    std::snprintf(text, sizeof text, pattern, values...);
     return text;
 }
 
@@ -88,6 +90,11 @@ bool DriveFrames::estimate_mounting_from(const Frame& f) {
     const std::string figures = format("height %.2f m, roll %.2f°, pitch %.2f°", m->height_m,
                                        m->roll_rad * kRadToDeg, m->pitch_rad * kRadToDeg);
     if (m->height_m < kMinSensorHeightM) {
+        // A base frame's ground is level: one tilted as far as check_mounting warns of is no base frame either.
+        const double tilt_deg = std::acos(std::cos(m->roll_rad) * std::cos(m->pitch_rad)) * kRadToDeg;
+        if (tilt_deg > kMountingMaxTiltDeg)
+            return try_later("the ground in " + frame_label(f) + " lies at the cloud's origin but tilted " +
+                             format("%.1f°", tilt_deg) + " (" + figures + "): neither a level base frame nor a mounting");
         note(true, missing + "the ground in " + frame_label(f) + " lies at the cloud's origin (" + figures +
              "): the points are taken as base-frame points");
         mounting_settled_ = true;
@@ -97,6 +104,7 @@ bool DriveFrames::estimate_mounting_from(const Frame& f) {
         return try_later("the ground in " + frame_label(f) + " gives no plausible mounting (" + figures + ")");
     cfg_.extrinsics = to_extrinsics(*m);
     mounting_source_ = "estimated";
+    mounting_frame_ = frame_label(f);
     mounting_settled_ = true;
     note(false, "no --sensor-height or --extrinsics: mounting estimated from the ground in " + frame_label(f) + ": " +
          figures + " (mounting.source = \"estimated\" in the output" +
@@ -199,7 +207,26 @@ std::optional<DriveStep> DriveRunner::next() {
     check_mounting_of(r, in.frame);
     check_beams_of(in.frame);
     check_body_of(r, in.frame);
+    check_heights_of(in.frame);
     return step;
+}
+
+// Notes a first frame whose points all have z = 0: a 2-D scanner's scan made a cloud (a LaserScan's), which holds no
+// road heights. Taken as base-frame points, every point of it within the region would be "ground". (A 3-D cloud
+// of a flat road has one height too, but not exactly 0: the origin is the sensor, or a base frame's on the road.)
+void DriveRunner::check_heights_of(const Frame& f) {
+    if (std::exchange(heights_checked_, true) || !on_note_) return;
+    float lowest = INFINITY, highest = -INFINITY;
+    Eigen::Index finite = 0;
+    for (Eigen::Index i = 0; i < f.points.rows(); ++i)
+        if (std::isfinite(f.points(i, 0)) && std::isfinite(f.points(i, 1)) && std::isfinite(f.points(i, 2))) {
+            lowest = std::min(lowest, f.points(i, 2)), highest = std::max(highest, f.points(i, 2));
+            ++finite;
+        }
+    if (finite < 3 || lowest != 0.0f || highest != 0.0f) return;  // too few points for a plane: the result says so
+    on_note_(true, frame_label(f) + ": every point has z = 0, as a 2-D scanner's scan made a point cloud has: it holds "
+                                    "no road heights; give a 3-D point cloud (2-D scanners' scans go to "
+                                    "`roadpreview roadside`)");
 }
 
 // Notes, once, one obstacle in both wheels' paths from the very start of the region of interest: a sensor on the
@@ -247,10 +274,15 @@ void DriveRunner::check_mounting_of(const Result& r, const Frame& f) {
     if (r.mounting_source == "none") {
         why += "the points are not base-frame points, as they were taken to be; give --sensor-height / --extrinsics";
     } else {
-        std::snprintf(text, sizeof text, "the sensor is about %.2f m up, not %.2f m%s; check --sensor-height / "
-                      "--extrinsics", r.extrinsics.z_m + c.offset_m, r.extrinsics.z_m,
-                      r.mounting_source == "estimated" ? " as estimated from an earlier frame's ground" : "");
+        std::snprintf(text, sizeof text, "the sensor is about %.2f m up, not %.2f m", r.extrinsics.z_m + c.offset_m,
+                      r.extrinsics.z_m);
         why += text;
+        // The estimate fitted all the points below the sensor; this frame's ground, those of its region ahead.
+        if (r.mounting_source == "estimated")
+            why += frames_.mounting_frame() == frame_label(f)
+                       ? " as estimated from all of this frame's points below the sensor"
+                       : " as estimated from the ground in " + frames_.mounting_frame();
+        why += "; check --sensor-height / --extrinsics";
     }
     on_note_(true, frame_label(f) + why);
 }

@@ -55,13 +55,19 @@ void PcapSource::read_until_frame() {
             ended_ = true;
             if (decoded_ == 0) {
                 if (!first_problem_.empty()) fail("no lidar packet could be decoded; the first problem: " + first_problem_);
+                // Found by size, LiDAR-sized datagrams of another size are most likely another sensor's or
+                // profile's packets than the metadata (or model) describes.
+                const bool other_size = !info_.lidar_port && largest_ >= kMinLidarPacketBytes;
                 fail("no lidar packets (" + std::to_string(packet_bytes_) + "-byte UDP datagrams" +
                      (info_.lidar_port ? " on port " + std::to_string(info_.lidar_port) + ", from the " +
                                              info_.lidar_port_origin
                                        : std::string()) +
                      ") in " + std::to_string(input_->units_read()) + " " + input_->unit() + "s; the largest datagram is " +
                      std::to_string(largest_) + " bytes on port " + std::to_string(largest_port_) +
-                     " (--lidar-port chooses the port)");
+                     (other_size ? ": if those are the LiDAR's, the metadata or sensor model given is another "
+                                   "sensor's or lidar profile's (check --meta / --sensor-model); --lidar-port "
+                                   "chooses the port"
+                                 : " (--lidar-port chooses the port)"));
             }
             try {
                 on_end(ready_);
@@ -114,6 +120,14 @@ bool looks_like_velodyne(const std::string& path) {
     UdpDatagram d;
     for (int i = 0; i < 1000 && reader.next(d); ++i)
         if (d.payload.size() == kVelodynePacketBytes) return true;
+    return false;
+}
+
+bool holds_lidar_sized_datagrams(const std::string& path) {
+    PcapReader reader(path);
+    UdpDatagram d;
+    while (reader.next(d))
+        if (d.payload.size() >= kMinLidarPacketBytes) return true;
     return false;
 }
 

@@ -86,5 +86,9 @@ inline std::unique_ptr<FrameSource> open_velodyne_pcap(const std::string& path, 
 }
 /// True when the first datagrams of the file include a Velodyne data packet (1206 bytes).
 bool looks_like_velodyne(const std::string& path);
+/// True when the file holds a UDP datagram the size of a LiDAR data packet (at least kMinLidarPacketBytes): a
+/// capture without one holds other traffic only (a SICK scanner's telegrams travel over TCP, mDNS over UDP).
+constexpr std::size_t kMinLidarPacketBytes = 512;  // Velodyne's are 1206 bytes, Ouster's lidar packets 3 kB and more
+bool holds_lidar_sized_datagrams(const std::string& path);
 
 }  // namespace roadpreview

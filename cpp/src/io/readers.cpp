@@ -259,6 +259,10 @@ std::unique_ptr<FrameSource> open_pcap(const std::string& path, const SourceOpti
     const std::string meta = find_ouster_metadata(path);
     if (!meta.empty()) return open_ouster_pcap(path, meta, o);
     if (looks_like_velodyne(path)) return open_velodyne_pcap(path, o);
+    if (!holds_lidar_sized_datagrams(path))
+        fail_file(path, "holds no LiDAR packets: no UDP datagram of " + std::to_string(kMinLidarPacketBytes) +
+                        " bytes or more (a SICK scanner's telegrams travel over TCP: `roadpreview roadside` reads "
+                        "those)");
     fail_file(path, "holds no Velodyne data packets and no Ouster metadata JSON was found next to it (looked for " +
                    fs::path(path).stem().string() + ".json and the names its '_'-separated prefixes give); "
                    "pass the metadata with --meta");

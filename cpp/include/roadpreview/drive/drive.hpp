@@ -66,6 +66,8 @@ public:
     const Config& config() const { return cfg_; }
     /// "estimated" once a frame's ground gave the mounting, else empty.
     const std::string& mounting_source() const { return mounting_source_; }
+    /// The frame (its label, as in notes) whose ground gave the mounting; empty before one did.
+    const std::string& mounting_frame() const { return mounting_frame_; }
     SourceInfo info() const { return source_->info(); }
     /// Frames read from the recording so far, skipped ones included.
     std::int64_t frames_read() const { return read_; }
@@ -81,7 +83,7 @@ private:
     std::optional<MotionTable> table_;
     std::optional<std::vector<Pose2>> poses_;
     std::string poses_name_;  // for messages: the poses file, or "poses"
-    std::string mounting_source_;
+    std::string mounting_source_, mounting_frame_;
     std::int64_t read_ = 0;
     bool started_ = false;
     bool mounting_settled_ = false;  // estimated, or the cloud is in a base frame already
@@ -121,6 +123,7 @@ private:
     void check_mounting_of(const Result& r, const Frame& f);
     void check_beams_of(const Frame& f);
     void check_body_of(const Result& r, const Frame& f);
+    void check_heights_of(const Frame& f);
 
     std::function<void(bool, const std::string&)> on_note_;
     bool has_poses_file_;
@@ -129,6 +132,7 @@ private:
     std::int64_t disagreeing_ = 0;
     bool beamless_noted_ = false;
     bool body_noted_ = false;  // an obstacle across both paths at the region's start was noted
+    bool heights_checked_ = false;  // the first frame's points were checked for heights at all
     std::int64_t processed_ = 0;
 };
 
