@@ -246,7 +246,8 @@ class _Sources:
     """The points of each line's frame: a frame file read again, or a recording decoded again up to the frame
     whose timestamp is the line's (recordings are read on, in order, and reopened when a line goes back)."""
 
-    def __init__(self):
+    def __init__(self, beside: Path = Path(".")):
+        self._beside = beside  # where a relative source is looked for when not here: the output file's folder
         self._open = {}  # recording → (frame iterator, last frame read)
 
     def points(self, line: dict):
@@ -254,8 +255,10 @@ class _Sources:
         from . import io
 
         source = Path(line["source"])
+        if not source.is_file() and not source.is_absolute() and (self._beside / source).is_file():
+            source = self._beside / source  # the run was started beside its output, plotted from elsewhere
         if not source.is_file():
-            return f"{source}: not found"
+            return f"{source}: not found" + ("" if source.is_absolute() else f" here nor in {self._beside}")
         try:
             if source.suffix.lower() not in (".pcap", ".pcapng"):
                 return io.read(source)
@@ -328,7 +331,7 @@ def main(argv=None) -> int:
         cfg.sensor_height, cfg.extrinsics = args.sensor_height, None
     wanted = {int(f) for f in args.frames.split(",")} if args.frames else None
     args.out.mkdir(parents=True, exist_ok=True)
-    sources = _Sources()
+    sources = _Sources(args.jsonl.parent)
     for line in _load_lines(args.jsonl):
         if wanted is not None and line["frame"] not in wanted:
             continue

@@ -1,6 +1,7 @@
 """roadpreview.plot: the pictures draw what the output line says (matplotlib with the Agg backend)."""
 
 import json
+import shutil
 import subprocess
 import sys
 
@@ -107,6 +108,18 @@ def test_pcap_output_is_plotted_from_the_recording(tmp_path):
     for frame in (0, 1):
         for kind in ("psd", "profiles", "birdseye"):
             assert (tmp_path / "png" / f"frame{frame}_{kind}.png").exists()
+
+
+def test_a_relative_source_is_found_beside_the_output_when_plotted_from_elsewhere(tmp_path):
+    """A run started in its data's folder writes the source as given (relative); plotted from another folder, the
+    frame is looked for beside the output file too (it was skipped as "not found")."""
+    shutil.copy(KITTI_FRAMES[0], tmp_path / "frame.bin")
+    subprocess.run([cli(), "run", "frame.bin", "--speed", "5", "--sensor-height", str(KITTI_SENSOR_HEIGHT), "-q",
+                    "-o", "run.jsonl"], check=True, cwd=tmp_path)
+    assert json.loads((tmp_path / "run.jsonl").read_text())["source"] == "frame.bin"
+    run = plot_cli(tmp_path / "run.jsonl", tmp_path / "png", "--sensor-height", KITTI_SENSOR_HEIGHT)
+    assert run.returncode == 0 and "skipped" not in run.stderr, run.stderr
+    assert (tmp_path / "png" / "frame0_birdseye.png").exists()
 
 
 def test_a_source_that_cannot_be_read_is_skipped_with_a_note(tmp_path, line):
