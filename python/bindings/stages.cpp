@@ -210,6 +210,10 @@ void bind_stages(py::module_& m) {
         return rp::profile_iri(as_vector(z), ds, config_from(config_json).iri);
     });
     m.def("iso_class", [](double gd) { return std::string(1, rp::iso_class(gd)); });
+    // What the Estimator would refuse of a config, said naming `source` (a config file).
+    m.def("check_config", [](const std::string& config_json, const std::string& source) {
+        rp::validate(rp::config_from_json(config_json, source));
+    }, py::arg("config_json"), py::arg("source"));
     m.def("estimate_mounting", [](py::handle points, const std::string& config_json) -> py::object {
         py::object holder;
         const rp::PointsView view = points_from(points, holder);

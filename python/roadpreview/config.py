@@ -16,8 +16,22 @@ from pathlib import Path
 from typing import Any, Optional
 
 
+class _Fields:
+    """Setting a name that is not one of the dataclass's fields is an error: `cfg.sensor_hieght = 2` would
+    otherwise be kept beside the real field and ignored."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name not in self.__dataclass_fields__:  # type: ignore[attr-defined]
+            import difflib
+
+            close = difflib.get_close_matches(name, self.__dataclass_fields__, n=1)  # type: ignore[attr-defined]
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}{hint}")
+        super().__setattr__(name, value)
+
+
 @dataclass
-class Extrinsics:
+class Extrinsics(_Fields):
     """Pose of the sensor in the base frame (x forward, y left, z up); R = Rz(yaw)·Ry(pitch)·Rx(roll)."""
 
     x_m: float = 0.0
@@ -29,7 +43,7 @@ class Extrinsics:
 
 
 @dataclass
-class GroundConfig:
+class GroundConfig(_Fields):
     #: "zones" (a plane per patch of rings × sectors), "pca" (the paper's one iterative plane) or "ransac" (PCL)
     method: str = "zones"
     roi_x_min_m: float = 1.0
@@ -59,13 +73,13 @@ class GroundConfig:
 
 
 @dataclass
-class PathConfig:
+class PathConfig(_Fields):
     straight_radius_m: float = 1000.0  #: |V/ω| above this is driven as a straight line
     stopped_speed_mps: float = 0.0  #: |V| at or below this means the vehicle is stopped (no path)
 
 
 @dataclass
-class ProfileConfig:
+class ProfileConfig(_Fields):
     preview_length_m: float = 40.0
     ds_m: float = 0.1  #: resampling step along the wheel path
     max_gap_m: float = 1.0  #: interior gaps up to this length are linearly interpolated
@@ -81,7 +95,7 @@ class ProfileConfig:
 
 
 @dataclass
-class RoughnessConfig:
+class RoughnessConfig(_Fields):
     band_min_cpm: float = 0.1
     band_max_cpm: float = 4.0
     min_length_m: float = 5.0  #: shortest valid stretch that is analysed
@@ -92,13 +106,13 @@ class RoughnessConfig:
 
 
 @dataclass
-class IriConfig:
+class IriConfig(_Fields):
     min_length_m: float = 11.0  #: shortest valid stretch whose IRI is computed (ASTM E1926's 11 m lead-in)
     min_backed_fraction: float = 0.25  #: fewest bins of the stretch holding points (the rest interpolated)
 
 
 @dataclass
-class ObstaclesConfig:
+class ObstaclesConfig(_Fields):
     """Euclidean clusters of the non-ground ROI points and where they cross the wheel paths (method.md §5)."""
 
     enabled: bool = True
@@ -113,7 +127,7 @@ class ObstaclesConfig:
 
 
 @dataclass
-class FusionConfig:
+class FusionConfig(_Fields):
     """Temporal fusion: a rolling elevation map fused over frames (docs/method.md §7)."""
 
     method: str = "none"  #: "none" (each frame alone), "ema" (the paper's moving average) or "kalman"
@@ -131,7 +145,7 @@ class FusionConfig:
 
 
 @dataclass
-class StereoConfig:
+class StereoConfig(_Fields):
     """Stereo cameras (docs/method.md §12): OpenCV StereoSGBM's settings, the disparity noise and the rows matched."""
 
     min_disparity: int = 0  #: px, smallest disparity searched
@@ -169,7 +183,7 @@ _STAGES = {
 
 
 @dataclass
-class Config:
+class Config(_Fields):
     """Everything the pipeline needs besides the points, the speed and the yaw rate.
 
     Keyword-constructible; stage blocks accept dataclasses or plain dicts::
@@ -219,6 +233,8 @@ class Config:
             text = path.read_text()
         except OSError as err:
             raise ValueError(f"{path}: cannot read config file ({err.strerror})") from None
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: not a config file: not UTF-8 text") from None
         try:
             if path.suffix.lower() in (".yaml", ".yml"):
                 import yaml
@@ -231,7 +247,14 @@ class Config:
         if _values_beyond(data, _MAX_CONFIG_VALUES):
             raise ValueError(f"{path}: not a config: more than {_MAX_CONFIG_VALUES} values (aliases repeating a node "
                              f"over and over?)")
-        return cls.from_dict(data or {}, source=str(path))
+        cfg = cls.from_dict(data or {}, source=str(path))
+        from ._native import core
+
+        try:  # the values checked now, naming the file, not when an Estimator is made of them
+            core().check_config(cfg.to_json(), str(path))
+        except (ValueError, RuntimeError) as err:
+            raise ValueError(str(err) if str(err).startswith(str(path)) else f"{path}: {err}") from None
+        return cfg
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)

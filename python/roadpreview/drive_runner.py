@@ -21,9 +21,10 @@ class Drive:
     disagreed with the mounting (given, estimated, or none: base-frame points).
     """
 
-    def __init__(self, source, runner):
+    def __init__(self, source, runner, first_frame: int = 0, name: str = "the input"):
         self._source = source  # kept alive: the runner reads from it
         self._runner = runner
+        self._first, self._name, self._results = first_frame, name, 0
         self.notes: list[str] = []
         self.frame = None
 
@@ -33,7 +34,11 @@ class Drive:
     def __next__(self):
         step = self._runner.next(self.notes)
         if step is None:
+            if self._results == 0 and self._first > 0:  # as `roadpreview run --frames A:B` says
+                raise ValueError(f"{self._name}: no frames from index {self._first} on (the input has "
+                                 f"{self.frames_read})")
             raise StopIteration
+        self._results += 1
         self.frame, result = step
         return result
 
@@ -68,7 +73,7 @@ def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Co
     needs ``config.fusion.method``) or a list of (x, y, yaw) (moves the map when there is one, else places the
     frames).
     ``frame_rate``: Hz, timestamps index / rate for frames without their own. ``frames``: (first, last) indices,
-    last excluded (None: to the end). Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
+    last excluded (None: to the end); a first index past the input's end raises ValueError when iterated. Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
     mounting. A file frame that does not continue the previous file's sequence resets the fusion map.
     Bad input raises ValueError (options) or RuntimeError naming the file.
     """
@@ -86,7 +91,8 @@ def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Co
         motion=motion if in_memory else None, poses_file=_path(poses) if _is_path(poses) else "",
         poses=None if poses is None or _is_path(poses) else [tuple(map(float, p)) for p in poses],
         frame_rate_hz=float(frame_rate), first_frame=int(first), last_frame=2**63 - 1 if last is None else int(last))
-    return Drive(source, runner)
+    name = os.fspath(inputs) if _is_path(inputs) else "the input"
+    return Drive(source, runner, int(first), name)
 
 
 def _is_path(p) -> bool:

@@ -85,8 +85,9 @@ def run(argv: Sequence[str]) -> int:
             told = len(results.notes)
             if res is None:
                 break
-            line = res.to_dict()
-            out.write(json.dumps(line) + "\n")
+            text = res.to_json()  # the C++ line, byte for byte as `roadpreview run` writes it
+            out.write(text + "\n")
+            line = json.loads(text)
             summary.add(line)
             if not args.quiet:
                 print(f"[{summary.frames}] {_progress(line)}", file=sys.stderr)
@@ -147,11 +148,20 @@ def info(argv: Sequence[str]) -> int:
     args = p.parse_args(argv)
     from . import io_bags
 
-    for entry in io_bags.topics(args.inputs):
+    topics = io_bags.topics(args.inputs)
+    for entry in topics:
         print(f"{entry['topic']}\t{entry['type']}\t{entry['messages']} messages")
-    src = drive.open_source(args.inputs, topic=args.topic)
-    shown = {k: v for k, v in src.info.items() if k != "topics" and v not in ("", 0, [], None)}
-    print(json.dumps(shown))
+    try:
+        src = drive.open_source(args.inputs, topic=args.topic)
+    except (ValueError, RuntimeError) as err:  # the listing is the answer; what `run` would refuse, said beside it
+        if args.topic:
+            raise  # a topic asked for by name that cannot be read is an error
+        scans = any(e["type"].endswith("LaserScan") for e in topics)
+        print(f"note: {err}" + ("; 2-D scans are read by `roadpreview roadside`" if scans else ""))
+        return 0
+    for key, value in src.info.items():  # as the C++ `info` prints a recording: one "name: value" per line
+        if key != "topics" and value not in ("", 0, [], None):
+            print(f"{key.replace('_', ' ')}: {value}")
     return 0
 
 

@@ -10,6 +10,17 @@ from ._native import core
 from .config import Config
 
 
+YAW_RATE_SOURCES = ("option", "motion", "imu", "default")  #: the output's path.yaw_rate_source values
+
+
+def _number(value, name: str) -> float:
+    """A real number for argument ``name``, or TypeError saying which argument was not one."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number, got {value!r:.60}") from None
+
+
 class Estimator:
     """Runs the C++ pipeline frame by frame; keeps its work buffers between calls (not thread-safe: a call while
     another thread's call on the same estimator runs raises RuntimeError; give each thread its own).
@@ -31,8 +42,8 @@ class Estimator:
         points: (N, 3) or (N, C ≥ 3) array in the sensor frame, float32 (read in place when its columns
         are contiguous) or float64 (converted once); extra columns are ignored, non-finite rows dropped.
         speed: m/s, negative when reversing. yaw_rate: rad/s, positive turning left.
-        yaw_rate_source: where the yaw rate came from (e.g. "imu"); when given, the output line's ``path``
-        carries it (docs/output.md).
+        yaw_rate_source: where the yaw rate came from, one of YAW_RATE_SOURCES ("option", "motion", "imu",
+        "default"); when given, the output line's ``path`` carries it (docs/output.md).
         timestamp: s; with ``cfg.fusion.method`` "ema" or "kalman" the map moves by the speed and yaw rate
         integrated since the previous frame's timestamp (1/``fusion.frame_rate_hz`` without timestamps).
         pose: (x, y, yaw) of the vehicle in the odometry frame (m, m, rad), used instead of that integration.
@@ -45,12 +56,19 @@ class Estimator:
         its points, is counted in that noise (method.md §3); without error_groups the beams are the groups.
         Returns a ``roadpreview.Result`` (arrays are read-only views of the C++ result).
         """
+        speed, yaw_rate = _number(speed, "speed"), _number(yaw_rate, "yaw_rate")
+        if timestamp is not None:
+            timestamp = _number(timestamp, "timestamp")
+        if not isinstance(source, str):
+            raise TypeError(f"source must be a string (the frame's file name), got {type(source).__name__}")
+        if yaw_rate_source and yaw_rate_source not in YAW_RATE_SOURCES:
+            raise ValueError(f"yaw_rate_source must be one of {', '.join(YAW_RATE_SOURCES)}, got {yaw_rate_source!r}")
         if pose is not None:
             pose = tuple(float(v) for v in pose)
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
         error_groups, beams = _int32_ids(error_groups, "error_groups"), _int32_ids(beams, "beams")
-        return self._impl.process(points, float(speed), float(yaw_rate), source, timestamp, yaw_rate_source, pose,
+        return self._impl.process(points, speed, yaw_rate, source, timestamp, yaw_rate_source, pose,
                                   range_variances, error_groups, beams)
 
     def reset(self):

@@ -167,6 +167,10 @@ def stereo_points(left, right, calib: PathLike, *, disparity=None, config=None) 
 
     cfg = config if config is not None else Config()
     as_input = (lambda x: os.fspath(x) if isinstance(x, (str, os.PathLike)) else x)
+    if isinstance(disparity, np.ndarray) and not np.issubdtype(disparity.dtype, np.floating):
+        # A KITTI disparity PNG read as an array holds disparity × 256: taken as px, every depth is 256× short.
+        raise ValueError(f"disparity: an array must hold float px, got {disparity.dtype} (a 16-bit disparity PNG "
+                         f"holds disparity x 256: divide by 256, or pass the PNG's path)")
     found, disp = core().stereo_points(as_input(left), as_input(right), os.fspath(calib), as_input(disparity),
                                        cfg.to_json())
     return StereoPoints(found["points"], found["range_variances"], found["pixels"], found["error_groups"],

@@ -78,6 +78,8 @@ def world_profile(profile_s, profile_z, travelled_m: float, grid_m) -> np.ndarra
     s = np.asarray(profile_s, dtype=np.float64) + travelled_m
     z = np.asarray(profile_z, dtype=np.float64)
     grid = np.asarray(grid_m, dtype=np.float64)
+    if s.shape != z.shape or s.ndim != 1:
+        raise ValueError(f"world_profile: s and z must be 1-D and of one length, got shapes {s.shape} and {z.shape}")
     if len(s) < 2:
         return np.full(len(grid), np.nan)
     ds = s[1] - s[0]

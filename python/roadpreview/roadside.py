@@ -156,8 +156,14 @@ def _native_scan(scan: dict) -> dict:
 
 
 def _site_text(site: PathLike) -> str:
+    """The YAML text of a site given as a file path or as the text itself (a text has a line break or a colon; a
+    single line without one is a path, which must exist)."""
     s = str(site)
-    return Path(s).read_text() if "\n" not in s and Path(s).exists() else s
+    if "\n" in s or (":" in s and not Path(s).exists()):
+        return s
+    if not Path(s).is_file():
+        raise FileNotFoundError(f"{s or repr(s)}: no such site file")
+    return Path(s).read_text()
 
 
 class Processor:
@@ -216,7 +222,11 @@ def fit_l_shape(xy: np.ndarray) -> tuple[float, float, float, float, float]:
 
 def assign(cost: Sequence[Sequence[float]], gate: float) -> list[tuple[int, int]]:
     """Minimum-cost (row, column) pairs with cost ≤ gate (dlib's Hungarian solver)."""
-    return [tuple(p) for p in _rs().assign([[float(c) for c in row] for row in cost], gate)]
+    rows = [[float(c) for c in row] for row in cost]
+    if len({len(row) for row in rows}) > 1:
+        raise ValueError(f"assign: the cost matrix must be rectangular, got rows of {sorted({len(r) for r in rows})} "
+                         f"columns")
+    return [tuple(p) for p in _rs().assign(rows, gate)]
 
 
 def estimate_clock_offsets(scans: Sequence[dict], site: PathLike, reference: int = 0, max_offset_s: float = 0.5
@@ -231,6 +241,10 @@ def estimate_clock_offsets(scans: Sequence[dict], site: PathLike, reference: int
 
     text = _site_text(site)
     doc = yaml.safe_load(text)
+    if not isinstance(doc, dict) or not doc.get("scanners"):
+        raise ValueError(f"{site}: a site needs a list of scanners")
+    if not 0 <= reference < len(doc["scanners"]):
+        raise ValueError(f"reference scanner {reference}: the site has scanners 0 to {len(doc['scanners']) - 1}")
     tracks = []
     for i in range(len(doc["scanners"])):
         single = dict(doc)

@@ -257,7 +257,7 @@ TEST(Fusion, AFrameWithoutGroundOnAnEmptyMapHasNoProfiles) {
     for (int i = 0; i < 10; ++i) far.row(i) << 100.0f, float(i), 0.0f;
     const rp::Result r = est.process(far, 8.0, 0.0, "", rp::FrameMotion{0.1, std::nullopt});
     EXPECT_FALSE(r.plane);
-    EXPECT_EQ(r.status, rp::FrameStatus::NoGround);
+    EXPECT_EQ(r.status, rp::FrameStatus::NoRoiPoints);
     EXPECT_TRUE(r.left.z.empty());
 }
 

@@ -212,7 +212,7 @@ TEST(Obstacles, OffStoppedAndNoGround) {
     EXPECT_TRUE(stopped.left.obstacles && stopped.left.obstacles->empty());
 
     const rp::Result nothing = run(scenes::box(80.0, 0.0, 1.0, 1.0, 1.0), 5.0, 0.0);  // outside the ROI
-    EXPECT_EQ(nothing.status, rp::FrameStatus::NoGround);
+    EXPECT_EQ(nothing.status, rp::FrameStatus::NoRoiPoints);
     EXPECT_TRUE(nothing.obstacles && nothing.obstacles->empty());
 }
 

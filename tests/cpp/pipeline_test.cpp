@@ -77,7 +77,10 @@ TEST(Pipeline, EmptyAndAllNanCloudsGiveReasonsNotCrashes) {
     const scenes::Cloud nans = scenes::Cloud::Constant(100, 3, std::numeric_limits<float>::quiet_NaN());
     EXPECT_EQ(est.process(nans, 5.0, 0.0).status, rp::FrameStatus::NoFinitePoints);
     const scenes::Cloud far = scenes::plane(0, 0, -1.8, 500, 60.0, 80.0);  // nothing in the ROI
-    EXPECT_EQ(est.process(far, 5.0, 0.0).status, rp::FrameStatus::NoGround);
+    const rp::Result beyond = est.process(far, 5.0, 0.0);
+    EXPECT_EQ(beyond.status, rp::FrameStatus::NoRoiPoints);  // said as such, not "no ground"
+    EXPECT_STREQ(rp::to_string(beyond.left.roughness.iri.reason), "no points in the region of interest");
+
 }
 
 TEST(Pipeline, StoppedVehicleKeepsTheGroundButHasNoProfiles) {
@@ -100,13 +103,13 @@ TEST(Pipeline, RoughnessAndIriReasonsGiveTheDocumentedTexts) {
         {R::TooFewOrdinates, "too few PSD ordinates in band"}, {R::NoiseUnknown, "noise floor unknown"},
         {R::NoiseDominates, "noise dominates the band"}, {R::FitFailed, "fit failed (G_d(n0) not finite)"},
         {R::BothWheelsDeclined, "both wheels declined"}, {R::NoFinitePoints, "no finite points"},
-        {R::NoGround, "no ground"}, {R::TiltedGround, rp::kTiltedGround}, {R::VehicleStopped, "vehicle stopped"}};
+        {R::NoRoiPoints, "no points in the region of interest"}, {R::NoGround, "no ground"}, {R::TiltedGround, rp::kTiltedGround}, {R::VehicleStopped, "vehicle stopped"}};
     for (const auto& [reason, text] : roughness) EXPECT_STREQ(rp::to_string(reason), text);
     const std::pair<I, const char*> iri[] = {
         {I::None, ""}, {I::NoValidProfile, "no valid profile"}, {I::StretchTooShort, "valid stretch too short for IRI"},
         {I::TooSparse, "too few bins with points for IRI"}, {I::ClassDeclined, "roughness class declined"},
         {I::SegmentNotCovered, "segment not covered by one valid stretch"}, {I::NoFinitePoints, "no finite points"},
-        {I::NoGround, "no ground"}, {I::TiltedGround, rp::kTiltedGround}, {I::VehicleStopped, "vehicle stopped"}};
+        {I::NoRoiPoints, "no points in the region of interest"}, {I::NoGround, "no ground"}, {I::TiltedGround, rp::kTiltedGround}, {I::VehicleStopped, "vehicle stopped"}};
     for (const auto& [reason, text] : iri) EXPECT_STREQ(rp::to_string(reason), text);
     const std::pair<B, const char*> limits[] = {{B::None, ""},         {B::Requested, "requested"}, {B::Nyquist, "nyquist"},
                                                 {B::Sampling, "sampling"}, {B::Noise, "noise"},         {B::Wheels, "wheels"}};

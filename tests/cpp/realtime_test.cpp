@@ -283,6 +283,7 @@ TEST(Realtime, TryProcessGivesOrdinaryFramesTheirFrameStatus) {
     const std::tuple<const scenes::Cloud*, double, rp::FrameStatus> cases[] = {
         {&nans, 5.0, rp::FrameStatus::NoFinitePoints},
         {&empty, 5.0, rp::FrameStatus::NoFinitePoints},
+        {&road, -5.0, rp::FrameStatus::NoRoiPoints},  // reversing: the region behind, where this road is not
         {&road, 0.0, rp::FrameStatus::VehicleStopped},
         {&road, 5.0, rp::FrameStatus::Ok},
     };

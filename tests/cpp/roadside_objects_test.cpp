@@ -302,6 +302,21 @@ TEST(RoadsideProcessor, NanAndOutOfRangeReturnsAreNoReturn) {
     EXPECT_EQ(cycles.back().scanners[0].invalid_ranges, 120);  // NaN, −1 and 1e6, every scan
 }
 
+TEST(RoadsideProcessor, AScanAtNoFiniteTimeIsAnErrorNamingIt) {
+    rs::Processor p(rs::parse_site(kSite, "site.yaml"));
+    p.push(synthetic_scan({0, -10, kPi / 2}, 0.0, 0));
+    for (const float t : {NAN, INFINITY}) {
+        auto scan = synthetic_scan({0, -10, kPi / 2}, t, 0);
+        scan.source = "scans.csv:7";
+        try {
+            p.push(scan);
+            FAIL() << "no error for t = " << t;
+        } catch (const std::runtime_error& e) {
+            EXPECT_EQ(std::string(e.what()), "scans.csv:7: the scan's time is not a finite number");
+        }
+    }
+}
+
 namespace {
 
 // Range from (x, y) along direction a to the walls of the room [−10, 10] × [−6, 6] and a 1 × 1 m pillar at (3, 2).

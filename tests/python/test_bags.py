@@ -251,11 +251,24 @@ def test_bad_bags_are_refused_naming_the_file_and_topic(tmp_path):
         drive.open_source(tmp_path / "junk.bag")
 
 
+def test_cli_info_of_a_bag_of_2d_scans_lists_it_and_says_where_scans_go(tmp_path):
+    scan = M["sensor_msgs/msg/LaserScan"](header=header(1.0), angle_min=-1.0, angle_max=1.0, angle_increment=0.5,
+                                          time_increment=0.0, scan_time=0.02, range_min=0.1, range_max=20.0,
+                                          ranges=np.ones(5, np.float32), intensities=np.zeros(5, np.float32))
+    path = write_bag(tmp_path / "scans.bag", [("/scan", "sensor_msgs/msg/LaserScan", 1.0, scan)])
+    info = subprocess.run([cli(), "info", str(path)], capture_output=True, text=True, timeout=60)
+    assert info.returncode == 0, info.stderr  # the listing is the answer (it was an error after it)
+    assert "/scan\tsensor_msgs/msg/LaserScan\t1 messages" in info.stdout
+    assert "note: " in info.stdout and "no point clouds in this bag" in info.stdout
+    assert "2-D scans are read by `roadpreview roadside`" in info.stdout
+
+
 def test_cli_info_and_run_of_a_bag(tmp_path):
     exe = str(Path(sys.executable).parent / "roadpreview")
     info = subprocess.run([exe, "info", str(OUSTER_BAG)], capture_output=True, text=True, timeout=60)
     assert info.returncode == 0, info.stderr
     assert "/os_node0/lidar_packets\touster_ros/msg/PacketMsg\t32 messages" in info.stdout
+    assert "sensor model: OS-0-128\n" in info.stdout and "beams: 128\n" in info.stdout  # as `info` of a pcap
     run = subprocess.run([exe, "run", str(OUSTER_BAG), "--speed", "2", "--sensor-height", "1.9", "-q",
                           "-o", str(tmp_path / "o.jsonl")], capture_output=True, text=True, timeout=60)
     assert run.returncode == 0, run.stderr

@@ -100,7 +100,7 @@ def test_non_finite_motion_is_a_value_error(est, kitti, speed, yaw_rate):
     [
         (np.zeros((0, 3), np.float32), "no finite points"),
         (np.full((100, 4), np.nan, np.float32), "no finite points"),
-        (np.array([[100.0, 0.0, 0.0]] * 10, np.float32), "no ground"),
+        (np.array([[100.0, 0.0, 0.0]] * 10, np.float32), "no points in the region of interest"),
     ],
 )
 def test_degenerate_clouds_give_documented_empty_results(est, points, reason):

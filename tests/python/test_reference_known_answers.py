@@ -624,9 +624,12 @@ def test_process_stopped_and_no_ground(impl):
     behind = points.copy()
     behind[:, 0] -= 50.0  # nothing in the ROI
     no_ground = impl.process(behind, 10.0, 0.0, Config(sensor_height=1.8))
-    assert no_ground.reason == "no ground" and no_ground.plane is None
+    assert no_ground.reason == "no points in the region of interest" and no_ground.plane is None
     assert no_ground.points["roi"] == 0 and not no_ground.ground_mask.any()
     assert len(no_ground.left.z) == 0 and no_ground.left.roughness.reason is not None
+    too_few = np.vstack([behind, points[:2]])  # two points in the region: no plane through them
+    no_ground = impl.process(too_few, 10.0, 0.0, Config(sensor_height=1.8))
+    assert no_ground.reason == "no ground" and no_ground.points["roi"] == 2 and no_ground.plane is None
 
 
 @pytest.mark.parametrize("points", [

@@ -27,6 +27,18 @@ def test_result_roughness_and_iri_reprs_say_what_matters(frame):
     assert repr(stopped.vehicle) == "<roadpreview.Roughness no class: vehicle stopped; IRI None (vehicle stopped)>"
 
 
+def test_result_mounting_is_the_output_lines(frame):
+    """`Result.mounting` gives what the output line's `mounting` holds (it was only in to_dict())."""
+    for cfg in (rp.Config(sensor_height=KITTI_SENSOR_HEIGHT), rp.Config(sensor_height=KITTI_SENSOR_HEIGHT + 2)):
+        res = rp.Estimator(cfg).process(frame, 5.0, 0.0)
+        mounting, line = res.mounting, res.to_dict()["mounting"]
+        assert list(mounting["extrinsics"]) == pytest.approx(line["extrinsics"])
+        assert mounting["source"] == line["source"] and mounting["disagrees"] == line["disagrees"]
+        assert mounting["ground_offset"] == pytest.approx(line["ground_offset"], abs=1e-6)
+        assert mounting["ground_tilt_deg"] == pytest.approx(line["ground_tilt_deg"], abs=1e-6)
+    assert mounting["disagrees"] is True  # the sensor said 2 m higher than its ground lies
+
+
 def test_frame_source_repr_names_the_recording():
     source = rp.io.open(OS1_128_PCAP)
     assert repr(source).startswith("<roadpreview.FrameSource ouster pcap, OS-1-128, RNG15_RFL8_NIR8")

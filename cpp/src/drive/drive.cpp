@@ -212,8 +212,8 @@ std::optional<DriveStep> DriveRunner::next() {
 }
 
 // Notes a first frame whose points all have z = 0: a 2-D scanner's scan made a cloud (a LaserScan's), which holds no
-// road heights. Taken as base-frame points, every point of it within the region would be "ground". (A 3-D cloud
-// of a flat road has one height too, but not exactly 0: the origin is the sensor, or a base frame's on the road.)
+// road heights. Taken as base-frame points, every point of it within the region would be "ground". (No recorded 3-D
+// cloud holds one exact height; a synthetic flat road at z = 0 exactly would be noted too, harmlessly.)
 void DriveRunner::check_heights_of(const Frame& f) {
     if (std::exchange(heights_checked_, true) || !on_note_) return;
     float lowest = INFINITY, highest = -INFINITY;

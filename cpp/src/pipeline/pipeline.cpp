@@ -23,6 +23,7 @@ namespace {
 // for a frame without ground (a dropout, a blinded sensor): the profiles are read from it.
 FrameStatus blocking_status(const Result& r, const GroundFit& ground, bool map_has_data) {
     if (!map_has_data && r.points.finite == 0) return FrameStatus::NoFinitePoints;
+    if (!map_has_data && r.points.roi == 0) return FrameStatus::NoRoiPoints;  // the sensor looks elsewhere
     if (!map_has_data && !r.plane) return ground.status == GroundStatus::TiltedGround ? FrameStatus::TiltedGround : FrameStatus::NoGround;
     if (r.path.status == PathStatus::Stopped) return FrameStatus::VehicleStopped;
     return FrameStatus::Ok;
@@ -35,6 +36,7 @@ void mark_declined(Roughness& r, FrameStatus status) {
     switch (status) {
         case FrameStatus::Ok: break;
         case FrameStatus::NoFinitePoints: set(RoughnessReason::NoFinitePoints, IriReason::NoFinitePoints); break;
+        case FrameStatus::NoRoiPoints: set(RoughnessReason::NoRoiPoints, IriReason::NoRoiPoints); break;
         case FrameStatus::NoGround: set(RoughnessReason::NoGround, IriReason::NoGround); break;
         case FrameStatus::TiltedGround: set(RoughnessReason::TiltedGround, IriReason::TiltedGround); break;
         case FrameStatus::VehicleStopped: set(RoughnessReason::VehicleStopped, IriReason::VehicleStopped); break;
@@ -308,6 +310,7 @@ const char* to_string(FrameStatus status) noexcept {
         case FrameStatus::Ok: return "";
         // One text per status: the one its profiles' roughness reason gives (mark_declined).
         case FrameStatus::NoFinitePoints: return to_string(RoughnessReason::NoFinitePoints);
+        case FrameStatus::NoRoiPoints: return to_string(RoughnessReason::NoRoiPoints);
         case FrameStatus::NoGround: return to_string(RoughnessReason::NoGround);
         case FrameStatus::TiltedGround: return to_string(RoughnessReason::TiltedGround);
         case FrameStatus::VehicleStopped: return to_string(RoughnessReason::VehicleStopped);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Sensor layout and calibration files (YAML), docs/method.md §11.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -34,6 +35,14 @@ RangeSensor sensor_from(const YAML::Node& node, const std::string& where) {
     if (!node["id"]) throw std::runtime_error(where + ": missing field 'id'");
     s.id = node["id"].as<std::string>();
     const std::string at = where + " (sensor '" + s.id + "')";
+    // A misspelt field (pitch_degree) would leave its default standing, silently.
+    static const char* const kKeys[] = {"id", "kind", "wheel", "x_m", "y_m", "height_m", "pitch_deg",
+                                        "beam_half_angle_deg", "min_count", "max_count", "max_distance_m"};
+    for (const auto& field : node) {
+        const auto key = field.first.as<std::string>();
+        if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys))
+            throw std::runtime_error(at + ": unknown field '" + key + "'");
+    }
     const std::string kind = node["kind"] ? node["kind"].as<std::string>() : "";
     if (kind != "ultrasonic" && kind != "laser") throw std::runtime_error(at
         + ": kind must be ultrasonic or laser, got '" + kind + "'");

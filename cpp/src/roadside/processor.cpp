@@ -69,6 +69,8 @@ LaserScan Processor::checked(const LaserScan& input, std::int64_t* invalid_range
                                  site_.path + " (" + std::to_string(site_.scanners.size()) + " scanners)");
     const ScannerSite& where = site_.scanners[static_cast<std::size_t>(input.scanner)];
     check_layout(input, where);
+    if (!std::isfinite(input.time_s))  // it would order the cycles and the tracks' motion: nothing to guess
+        throw std::runtime_error(input.source + ": the scan's time is not a finite number");
     LaserScan scan = input;
     scan.time_s += where.time_offset_s;
     for (auto& r : scan.ranges_m)

@@ -122,6 +122,7 @@ const char* to_string(IriReason reason) noexcept {
         case IriReason::SegmentNotCovered: return "segment not covered by one valid stretch";
         // The frame's status: one text, the roughness reason's.
         case IriReason::NoFinitePoints: return to_string(RoughnessReason::NoFinitePoints);
+        case IriReason::NoRoiPoints: return to_string(RoughnessReason::NoRoiPoints);
         case IriReason::NoGround: return to_string(RoughnessReason::NoGround);
         case IriReason::TiltedGround: return to_string(RoughnessReason::TiltedGround);
         case IriReason::VehicleStopped: return to_string(RoughnessReason::VehicleStopped);

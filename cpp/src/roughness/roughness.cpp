@@ -159,6 +159,7 @@ const char* to_string(RoughnessReason reason) noexcept {
         case RoughnessReason::FitFailed: return "fit failed (G_d(n0) not finite)";
         case RoughnessReason::BothWheelsDeclined: return "both wheels declined";
         case RoughnessReason::NoFinitePoints: return "no finite points";
+        case RoughnessReason::NoRoiPoints: return "no points in the region of interest";
         case RoughnessReason::NoGround: return "no ground";
         case RoughnessReason::TiltedGround: return kTiltedGround;
         case RoughnessReason::VehicleStopped: return "vehicle stopped";

@@ -71,8 +71,8 @@ Profile profile_from(const json& p, const std::string& where) {
 // The status whose text (to_string) the line's `reason` holds.
 FrameStatus frame_status(const json& reason, const std::string& where) {
     const std::string text = reason.get<std::string>();
-    for (const FrameStatus s : {FrameStatus::NoFinitePoints, FrameStatus::NoGround, FrameStatus::TiltedGround,
-                                FrameStatus::VehicleStopped})
+    for (const FrameStatus s : {FrameStatus::NoFinitePoints, FrameStatus::NoRoiPoints, FrameStatus::NoGround,
+                                FrameStatus::TiltedGround, FrameStatus::VehicleStopped})
         if (text == to_string(s)) return s;
     fail(where, "unknown reason \"" + text + "\"");
 }

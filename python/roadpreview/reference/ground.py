@@ -66,6 +66,7 @@ def height_above(xyz: np.ndarray, plane: np.ndarray) -> np.ndarray:
 
 
 NO_GROUND = "no ground"
+NO_ROI_POINTS = "no points in the region of interest"  #: nothing to fit ground to: the sensor looks elsewhere
 TILTED_GROUND = "no ground within the tilt limit"  #: the only plane found is steeper than ground.max_tilt_deg
 
 
@@ -93,6 +94,8 @@ def ground_model(base_xyz, cfg: Config | None = None) -> GroundModel:
     if cfg.ground.method not in (*fitters, "zones"):
         raise ValueError(f"unknown ground method {cfg.ground.method!r}; expected 'zones', 'pca' or 'ransac'")
     mask = np.zeros(len(xyz), dtype=bool)
+    if len(roi) == 0:
+        return GroundModel(mask, None, NO_ROI_POINTS)
     if cfg.ground.method == "zones":
         in_roi, plane, too_steep = zone_ground(xyz[roi], cfg)
         ground = np.flatnonzero(in_roi)

@@ -85,6 +85,13 @@ def drive(scene: Scene, lidar: Lidar, speed_mps: float, yaw_rate_rps: float = 0.
           rate_hz: float = 10.0, seed: int = 0, start_s: float = 0.0) -> list[Frame]:
     """Frames recorded while driving at constant speed and yaw rate, from time start_s on (see trajectory);
     deterministic for a given seed."""
+    for name, value in (("speed_mps", speed_mps), ("yaw_rate_rps", yaw_rate_rps), ("start_s", start_s)):
+        if not math.isfinite(value):
+            raise ValueError(f"drive: {name} must be a finite number, got {value!r}")
+    if not (isinstance(frames, (int, np.integer)) and frames >= 0):
+        raise ValueError(f"drive: frames must be a whole number >= 0, got {frames!r}")
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"drive: rate_hz must be > 0, got {rate_hz!r}")
     streams = np.random.SeedSequence(seed).spawn(frames)
     out = []
     for i, pose in enumerate(trajectory(speed_mps, yaw_rate_rps, frames, rate_hz, start_s)):

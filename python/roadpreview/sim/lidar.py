@@ -38,8 +38,12 @@ class Lidar:
     def __post_init__(self):
         if len(self.elevations_deg) != len(self.azimuth_offsets_deg) or not len(self.elevations_deg):
             raise ValueError("a lidar needs one azimuth offset per beam and at least one beam")
-        if self.columns < 1 or not (0 <= self.dropout < 1) or self.range_noise_m < 0:
-            raise ValueError(f"{self.name}: need columns >= 1, 0 <= dropout < 1, range_noise_m >= 0")
+        for ok, need, value in ((self.columns >= 1, "columns >= 1", self.columns),
+                                (0 <= self.dropout < 1, "0 <= dropout < 1", self.dropout),
+                                (self.range_noise_m >= 0, "range_noise_m >= 0", self.range_noise_m),
+                                (0 < self.height_m < 100, "0 < height_m < 100 (above the ground)", self.height_m)):
+            if not ok:
+                raise ValueError(f"{self.name}: need {need}, got {value!r}")
         if not 0 <= self.min_range_m < self.max_range_m:
             raise ValueError(f"{self.name}: need 0 <= min_range_m < max_range_m")
         if self.beam_errors_deg and len(self.beam_errors_deg) != len(self.elevations_deg):

@@ -44,6 +44,7 @@ struct TimingMs {
 enum class FrameStatus {
     Ok,
     NoFinitePoints,   ///< "no finite points": empty, or every row has a NaN or infinite coordinate
+    NoRoiPoints,      ///< "no points in the region of interest": none ahead (behind when reversing) to fit ground to
     NoGround,         ///< "no ground"
     TiltedGround,     ///< "no ground within the tilt limit" (kTiltedGround)
     VehicleStopped,   ///< "vehicle stopped": |speed| at or below path.stopped_speed_mps

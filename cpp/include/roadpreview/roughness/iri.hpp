@@ -23,6 +23,7 @@ enum class IriReason {
     SegmentNotCovered,  ///< "segment not covered by one valid stretch" (a route segment)
     // The frame's FrameStatus, with its text: the frame has no profiles.
     NoFinitePoints,  ///< "no finite points"
+    NoRoiPoints,     ///< "no points in the region of interest"
     NoGround,        ///< "no ground"
     TiltedGround,    ///< "no ground within the tilt limit"
     VehicleStopped,  ///< "vehicle stopped"

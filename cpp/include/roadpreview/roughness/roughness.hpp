@@ -40,6 +40,7 @@ enum class RoughnessReason {
     BothWheelsDeclined,  ///< "both wheels declined" (the vehicle)
     // The frame's FrameStatus, with its text: the frame has no profiles.
     NoFinitePoints,  ///< "no finite points"
+    NoRoiPoints,     ///< "no points in the region of interest"
     NoGround,        ///< "no ground"
     TiltedGround,    ///< "no ground within the tilt limit"
     VehicleStopped,  ///< "vehicle stopped"
