@@ -105,6 +105,9 @@ def test_config_values_that_would_run_for_hours_or_place_the_sensor_nowhere_are_
         rp.Estimator(rp.Config(ground={"pca_iterations": 10**9}))
     with pytest.raises(ValueError, match="extrinsics: x, y and z must be within ±100 m"):
         rp.Estimator(rp.Config(extrinsics={"z_m": 1e6}))
+    # Wheels beside the region roll where it holds no point: every class was declined, with no reason given.
+    with pytest.raises(ValueError, match=r"the wheels \(track_width 100 m, tire_width 0.3 m\) must lie within"):
+        rp.Estimator(rp.Config(track_width=100.0))
     est = rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT))
     points = rp.io.read(KITTI_FRAMES[0])
     with pytest.raises(ValueError, match="yaw_rate must be within ±100 rad/s"):

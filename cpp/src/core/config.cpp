@@ -256,6 +256,11 @@ void validate(const Config& c) {
     require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
             "ground.roi_x_min_m must be < ground.roi_x_max_m");
     require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
+    // Wheels that start beside the region roll where it holds no point: every class would be declined, unsaid.
+    require((c.track_width + c.tire_width) / 2.0 <= g.roi_y_abs_max_m,
+            "the wheels (track_width " + number_text(c.track_width) + " m, tire_width " + number_text(c.tire_width) +
+                " m) must lie within the region of interest's half width ground.roi_y_abs_max_m (" +
+                number_text(g.roi_y_abs_max_m) + " m)");
     require(g.pca_iterations >= 1 && g.pca_iterations <= kMaxFitIterations,
             "ground.pca_iterations must be in [1, " + std::to_string(kMaxFitIterations) + "]");
     require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
