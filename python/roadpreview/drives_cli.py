@@ -79,9 +79,11 @@ def run(argv: Sequence[str]) -> int:
             with warnings.catch_warnings(record=True) as caught:  # the runner's warnings, said as the CLI says them
                 warnings.simplefilter("always")
                 res = next(results, None)
-            warned = {str(w.message) for w in caught}
-            for note in results.notes[told:]:
+            warned, notes = [str(w.message) for w in caught], results.notes[told:]
+            for note in notes:
                 print(f"roadpreview: {'warning: ' if note in warned else ''}{note}", file=sys.stderr)
+            for other in (text for text in warned if text not in notes):  # a reader's own, e.g. a bag's
+                print(f"roadpreview: warning: {other}", file=sys.stderr)
             told = len(results.notes)
             if res is None:
                 break
