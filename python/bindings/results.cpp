@@ -179,11 +179,11 @@ void bind_results(py::module_& m) {
         }, "PathObstacles in this wheel's path, or None when clustering is off");
 
     py::class_<rp::Result>(m, "Result", "Everything one frame yields")
-        .def_readonly("frame", &rp::Result::frame)
-        .def_readonly("source", &rp::Result::source)
-        .def_readonly("timestamp", &rp::Result::timestamp)
-        .def_readonly("speed_mps", &rp::Result::speed_mps, "the motion the paths were planned from")
-        .def_readonly("yaw_rate_rps", &rp::Result::yaw_rate_rps)
+        .def_readonly("frame", &rp::Result::frame, "0-based count of process() calls on this estimator")
+        .def_readonly("source", &rp::Result::source, "where the points came from, as given to process()")
+        .def_readonly("timestamp", &rp::Result::timestamp, "s, as given to process(); None when not given")
+        .def_readonly("speed_mps", &rp::Result::speed_mps, "m/s, the motion the paths were planned from")
+        .def_readonly("yaw_rate_rps", &rp::Result::yaw_rate_rps, "rad/s, positive turning left")
         .def_property_readonly("ground_mask", [](py::object self) {
             return view_of(self.cast<const rp::Result&>().ground_mask, self, py::dtype("bool"));
         }, "bool per input row")
@@ -192,8 +192,9 @@ void bind_results(py::module_& m) {
             py::dict d;
             d["input"] = r.points.input, d["finite"] = r.points.finite, d["roi"] = r.points.roi, d["ground"] = r.points.ground;
             return d;
-        })
-        .def_property_readonly("path", [](const rp::Result& r) { return path_dict(r.path); })
+        }, "point counts: input rows, finite rows, in the region of interest, ground")
+        .def_property_readonly("path", [](const rp::Result& r) { return path_dict(r.path); },
+                               "the wheel paths (docs/output.md `path`): status, centre of rotation, wheel radii")
         .def_property_readonly("mounting", [](const rp::Result& r) {
             const rp::Extrinsics& e = r.extrinsics;
             py::dict d;
@@ -206,9 +207,9 @@ void bind_results(py::module_& m) {
             return d;
         }, "the output line's `mounting` (docs/output.md): extrinsics in force (x, y, z m; roll, pitch, yaw rad), "
            "their source, and how far the fitted ground lies off the base frame's level (`disagrees`)")
-        .def_readonly("left", &rp::Result::left)
-        .def_readonly("right", &rp::Result::right)
-        .def_readonly("vehicle", &rp::Result::vehicle)
+        .def_readonly("left", &rp::Result::left, "the left wheel's Profile (with its roughness)")
+        .def_readonly("right", &rp::Result::right, "the right wheel's Profile (with its roughness)")
+        .def_readonly("vehicle", &rp::Result::vehicle, "Roughness of both wheels together (ISO 8608 class, IRI)")
         .def_property_readonly("obstacles", [](py::object self) {
             return records_or_none(self.cast<const rp::Result&>().obstacles, self);
         }, "Obstacles: every cluster of the frame, or None when clustering is off")
@@ -220,10 +221,10 @@ void bind_results(py::module_& m) {
             d["ground"] = r.timing_ms.ground, d["path"] = r.timing_ms.path, d["profile"] = r.timing_ms.profile;
             d["roughness"] = r.timing_ms.roughness, d["obstacles"] = r.timing_ms.obstacles, d["total"] = r.timing_ms.total;
             return d;
-        })
+        }, "ms per stage, measured inside C++ (ground includes the frame transform and the crop)")
         .def_property_readonly("reason", [](const rp::Result& r) -> py::object {
             return r.status == rp::FrameStatus::Ok ? py::object(py::none()) : py::object(py::str(rp::to_string(r.status)));
-        })
+        }, "why the frame has no profiles (docs/output.md `reason`), None when it has them")
         .def_property_readonly("fusion", [](const rp::Result& r) -> py::object {
             if (!r.fusion) return py::none();
             const rp::FusionStatus& f = *r.fusion;

@@ -2,6 +2,8 @@
 // rp.native route: the C++ RouteBuilder (docs/method.md §10) fed with results or with a run's output lines;
 // segments come out shaped as the numpy reference's (rp.reference.Route) so either can fill a segment table.
 // And the ProfileReadout (§10, "Readout"), whose wheels are handed out as copies (the array moves on).
+#include <cstdio>
+
 #include "common.hpp"
 
 namespace {
@@ -113,5 +115,11 @@ void bind_route(py::module_& m) {
         .def_property_readonly("frames", &rp::ProfileReadout::frames)
         .def_property_readonly("distance_m", &rp::ProfileReadout::distance_m, "driven by the last frame added")
         .def_property_readonly("left", [](const rp::ProfileReadout& r) { return r.left(); }, "a copy")
-        .def_property_readonly("right", [](const rp::ProfileReadout& r) { return r.right(); }, "a copy");
+        .def_property_readonly("right", [](const rp::ProfileReadout& r) { return r.right(); }, "a copy")
+        .def("__repr__", [](const rp::ProfileReadout& r) {
+            char text[160];
+            std::snprintf(text, sizeof text, "<roadpreview.ProfileReadout %g m ahead: %lld frame(s), %.2f m driven>",
+                          r.ahead_m(), static_cast<long long>(r.frames()), r.distance_m());
+            return std::string(text);
+        });
 }

@@ -39,6 +39,27 @@ def test_result_mounting_is_the_output_lines(frame):
     assert mounting["disagrees"] is True  # the sensor said 2 m higher than its ground lies
 
 
+def test_readout_and_beam_calibration_reprs_say_what_they_hold(frame):
+    readout = rp.ProfileReadout(6.0, rp.Config(sensor_height=KITTI_SENSOR_HEIGHT))
+    readout.add(rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)).process(frame, 5.0, 0.0))
+    assert repr(readout) == "<roadpreview.ProfileReadout 6 m ahead: 1 frame(s), 0.00 m driven>"
+    for doc in (rp.Result.frame.__doc__, rp.Result.reason.__doc__, rp.Result.points.__doc__):
+        assert doc  # help(rp.Result) says what each attribute is
+
+
+def test_beam_calibration_repr_says_what_it_holds(tmp_path):
+    from paths import OS1_128_HEIGHT, OUSTER, run_cli
+
+    out = tmp_path / "beams.yaml"
+    run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--poses",
+            OUSTER / "OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt", "-o", out, "-q")
+    cal = rp.read_beam_calibration(out)
+    text = repr(cal)
+    determined = int(np.count_nonzero(cal.determined))
+    assert text.startswith("<roadpreview.BeamCalibration OS-1-128 ") and f": {determined} of 128 beams determined" in text
+    assert f"from {cal.frames} frame(s) over {cal.travel_m:.2f} m>" in text
+
+
 def test_frame_source_repr_names_the_recording():
     source = rp.io.open(OS1_128_PCAP)
     assert repr(source).startswith("<roadpreview.FrameSource ouster pcap, OS-1-128, RNG15_RFL8_NIR8")
