@@ -144,6 +144,23 @@ def summary_path(out_dir: Path, rid: str) -> Path:
     return recording_dir(out_dir, rid) / "summary.json"
 
 
+def bind_inputs(out_dir: Path, recordings: Sequence[Recording], resume: bool) -> None:
+    """Each recording id keeps the inputs it was made from (recordings/ID/inputs.json, real paths): ids come
+    from folder names and the order of the arguments, so a resumed batch given its inputs in another order, or
+    another folder of the same name, would take one recording's finished parts for another's. Refused."""
+    for rec in recordings:
+        path = recording_dir(out_dir, rec.id) / "inputs.json"
+        given = [os.path.realpath(p) for p in rec.inputs]
+        if resume and path.exists():
+            made_from = json.loads(path.read_text())
+            if made_from != given:
+                raise ValueError(f"{out_dir}: recording {rec.id} there was made from {', '.join(made_from)}, not "
+                                 f"{', '.join(given)}: give the inputs as the earlier batch did (in the same order) "
+                                 f"or choose another -o")
+            continue
+        _write_atomically(path, lambda tmp: tmp.write_text(json.dumps(given) + "\n"))
+
+
 def _write_atomically(path: Path, write):
     """``write(tmp_path)`` then rename, so readers and --resume never see a half-written file; returns what
     ``write`` returns. A failed write leaves nothing behind."""
@@ -466,6 +483,7 @@ def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, 
     unreadable = []
     recordings = plan(inputs, chunk_frames, overlap_frames, source_options, unreadable)
     out.mkdir(parents=True, exist_ok=True)
+    bind_inputs(out, recordings, resume)
     errors_file = out / "errors.jsonl"
     if errors_file.exists():
         errors_file.unlink()  # a batch's errors are those of its last run

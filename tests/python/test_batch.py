@@ -123,6 +123,21 @@ def test_resume_redoes_only_what_is_missing(client, recordings, tmp_path):
     assert {rid: frames_of(out, rid) for rid in expected} == expected
 
 
+def test_resume_with_the_inputs_in_another_order_is_refused(client, recordings, tmp_path):
+    """Ids come from folder names and argument order: two folders named `seq` are `seq` and `seq-2`. Resumed with
+    them swapped, `seq` named the other folder, and its finished parts were taken as that folder's (exit 0)."""
+    good, _ = recordings
+    for name in ("x", "y"):
+        (tmp_path / name / "seq").mkdir(parents=True)
+        shutil.copy(next(Path(good[0]).glob("*.bin")), tmp_path / name / "seq")
+    x, y, out = str(tmp_path / "x" / "seq"), str(tmp_path / "y" / "seq"), tmp_path / "out"
+    batch.run_batch([x], out, client=client, quiet=True, **RUN)
+    with pytest.raises(ValueError, match=r"recording seq there was made from .*x/seq, not .*y/seq: give the inputs"):
+        batch.run_batch([y, x], out, client=client, resume=True, quiet=True, **RUN)
+    again = batch.run_batch([x, y], out, client=client, resume=True, quiet=True, **RUN)
+    assert again["skipped"] == ["seq"] and again["done"] == ["seq-2"]
+
+
 def test_segments_of_a_recording_match_the_cli(client, recordings, tmp_path):
     good, _ = recordings
     batch.run_batch(good[:1], tmp_path / "out", client=client, quiet=True, **RUN)
