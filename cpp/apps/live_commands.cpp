@@ -7,6 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "cli_checks.hpp"
+
 namespace rp = roadpreview;
 
 namespace {
@@ -70,7 +72,8 @@ std::function<int()> add_replay_command(CLI::App& app) {
     cmd->add_option("--to", a->to, "ADDR:PORT for the lidar datagrams; other ports keep their distance from it "
                                    "(default 127.0.0.1:7502)");
     cmd->add_option("--rate", a->rate, "Times the recorded speed, or max (default 1.0)");
-    cmd->add_option("--loop", a->loops, "Times through the capture (default 1)")->check(CLI::PositiveNumber);
+    cmd->add_option("--loop", a->loops, "Times through the capture (default 1)")
+        ->check(roadpreview::cli::positive_finite());
     cmd->add_option("--drop", a->drop, "Test hook: fraction of datagrams not sent (default 0)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--reorder", a->reorder, "Test hook: fraction of datagrams sent after the next one (default 0)")
@@ -82,10 +85,10 @@ std::function<int()> add_replay_command(CLI::App& app) {
 
 void add_live_options(CLI::App* run, LiveRunOptions& o) {
     run->add_option("--duration", o.duration_s, "udp:// input: end the run after S seconds")
-        ->check(CLI::PositiveNumber);
+        ->check(roadpreview::cli::positive_finite());
     run->add_option("--timeout", o.timeout_s,
                     "udp:// input: no datagram for S seconds ends the stream; none at all is an error (default 5)")
-        ->check(CLI::PositiveNumber);
+        ->check(roadpreview::cli::positive_finite());
 }
 
 void LiveStats::add(const rp::Frame& f, double result_s) {

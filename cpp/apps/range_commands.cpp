@@ -10,6 +10,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "cli_checks.hpp"
+
 #include "roadpreview/roadpreview.hpp"
 
 namespace rp = roadpreview;
@@ -144,6 +146,13 @@ int run_readings(const RangeOptions& o, bool with_motion) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "%s: %lld readings, %lld windows in %.2f s (%.0f readings/s)\n", o.readings.c_str(),
                  static_cast<long long>(readings), static_cast<long long>(windows), s, readings / std::max(s, 1e-9));
+    if (profiler.dropped_behind() > 0)
+        std::fprintf(stderr, "roadpreview: warning: %s: %lld samples fell behind the start of their window and were "
+                     "dropped: the track ran backwards (reversing, or a negative speed in the motion)\n",
+                     o.readings.c_str(), static_cast<long long>(profiler.dropped_behind()));
+    if (windows == 0)  // as `roadpreview run` does: a run that writes nothing fails
+        throw std::runtime_error(o.readings + ": no window was written (" + std::to_string(readings) +
+                                 " readings); nothing was written");
     return 0;
 }
 
@@ -171,7 +180,7 @@ std::function<int()> add_range_commands(CLI::App& app) {
         "Motion CSV (t,speed,yaw_rate) of each run, in the runs' order")->required();
     off->add_option("--search", o->search_m,
         "Search the shift within the layout's geometric foot ± this, m (default 0.5)")
-        ->check(CLI::PositiveNumber);
+        ->check(roadpreview::cli::positive_finite());
     off->add_option("-o,--output", o->output, "Calibration file to write (YAML)")->required();
 
     CLI::App* run = range->add_subcommand("run", "Profiles, ISO 8608 class and IRI from range sensor readings");
@@ -183,7 +192,7 @@ std::function<int()> add_range_commands(CLI::App& app) {
     auto* motion = run->add_option("--motion", o->motion_file, "Motion CSV t,speed,yaw_rate in the readings' clock");
     motion->excludes(speed)->excludes(yaw);
     run->add_option("--frame-length-m", o->frame_length_m, "Window length along the track, m (default 40)")
-        ->check(CLI::PositiveNumber);
+        ->check(roadpreview::cli::positive_finite());
     run->add_option("-o,--output", o->output, "Output JSON-lines file (default stdout)");
     run->add_flag("-q,--quiet", o->quiet, "No per-window progress on stderr");
 

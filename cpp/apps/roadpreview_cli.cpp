@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bounded_sample.hpp"
+#include "cli_checks.hpp"
 #include "live_commands.hpp"
 #include "python_commands.hpp"
 #include "range_commands.hpp"
@@ -244,8 +245,7 @@ void check_source_options(const CLI::App& run, const rp::SourceInfo& info) {
     for (const char* name :
          {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port", "--skip-bad-packets"})
         if (run.count(name))
-            throw std::invalid_argument(std::string(name) +
-                                        " applies to pcap recordings only; the input is frame files");
+            throw UsageError(std::string(name) + " applies to pcap recordings only; the input is frame files");
 }
 
 // Route outputs (--segments, --export-profile): the frames' profiles stitched along the drive.
@@ -374,12 +374,20 @@ rp::Config with_camera_pose(rp::Config cfg, const RunOptions& o) {
     return cfg;
 }
 
-void check_inputs(const RunOptions& o) {
-    if (is_stereo(o) && !o.inputs.empty())
-        throw std::invalid_argument("give INPUT files or --stereo/--disparity, not both");
+// What the command line asks of its inputs, checked before any is read: usage errors.
+void check_inputs(const RunOptions& o, const CLI::App& app) {
+    if (is_stereo(o) && !o.inputs.empty()) throw UsageError("give INPUT files or --stereo/--disparity, not both");
     if (!is_stereo(o) && o.inputs.empty())
-        throw std::invalid_argument("give INPUT files, or --stereo LEFT RIGHT / --disparity DISP with --calib");
-    if (is_stereo(o) && o.calib.empty()) throw std::invalid_argument("--stereo and --disparity need --calib FILE");
+        throw UsageError("give INPUT files, or --stereo LEFT RIGHT / --disparity DISP with --calib");
+    if (is_stereo(o) && o.calib.empty()) throw UsageError("--stereo and --disparity need --calib FILE");
+    if (is_live(o) && o.frames.find_first_not_of('0') == std::string::npos && !o.frames.empty())
+        throw UsageError("--frames " + o.frames + ": a live run's --frames N ends it after N ≥ 1 frames");
+    if (!is_stereo(o) && !o.calib.empty())
+        throw UsageError("--calib is a stereo calibration: it goes with --stereo or --disparity");
+    if (is_stereo(o))  // a LiDAR decoder's options would be ignored, silently
+        for (const char* name : {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port",
+                                 "--skip-bad-packets", "--beam-calibration", "--columns"})
+            if (app.count(name)) throw UsageError(std::string(name) + " applies to LiDAR inputs; the input is stereo");
 }
 
 // The drive's policy options from the command line (docs/method.md, "Drives").
@@ -402,7 +410,7 @@ rp::DriveOptions drive_options(const RunOptions& o, const CLI::App& app) {
 int run(const RunOptions& o, const CLI::App& app) {
     if (!app.count("--speed") && o.motion_file.empty())
         throw UsageError("give the vehicle's motion: --speed (and --yaw-rate), or --motion FILE");
-    check_inputs(o);
+    check_inputs(o, app);
     const rp::Config cfg = with_camera_pose(build_config(o, app), o);
     if (!o.poses_file.empty() && cfg.fusion.method == rp::FusionMethod::None)
         throw UsageError("--poses moves the fusion map: give --fusion ema or kalman too");
@@ -622,32 +630,6 @@ int info(const std::vector<std::string>& inputs, const rp::SourceOptions& option
     return 0;
 }
 
-// A number in (lo, hi]: CLI11's Range includes lo, which the config then refuses (exit 1, not a usage error).
-CLI::Validator above_and_at_most(double lo, double hi) {
-    char range[64];
-    std::snprintf(range, sizeof range, "(%g, %g]", lo, hi);
-    return CLI::Validator(
-        [=](std::string& text) -> std::string {
-            double v = 0.0;
-            if (!CLI::detail::lexical_cast(text, v) || !(v > lo && v <= hi))
-                return std::string("expected a number in ") + range + ", got " + text;
-            return {};
-        },
-        std::string(range));
-}
-
-// A number > 0 and finite; CLI11's PositiveNumber would print its range as 4.9e-324 to 1.8e308.
-CLI::Validator positive_finite() {
-    return CLI::Validator(
-        [](std::string& text) -> std::string {
-            double v = 0.0;
-            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v <= 0.0)
-                return "expected a number > 0, got " + text;
-            return {};
-        },
-        "> 0");
-}
-
 // Usage errors exit with 2 (argparse's and CLI11's convention); --help and --version with 0.
 int parse_command_line(CLI::App& app, int argc, char** argv) {
     try {
@@ -715,7 +697,7 @@ int main(int argc, char** argv) {
     auto* height = run_cmd->add_option("--sensor-height", o.sensor_height,
                                        "Sensor height above the ground, m (default: estimated from the first "
                                        "frame's ground, see the output's mounting)")
-                       ->check(above_and_at_most(0.0, 10.0));
+                       ->check(rp::cli::above_and_at_most(0.0, 10.0));
     auto* extr = run_cmd->add_option("--extrinsics", o.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
                      ->delimiter(',')
                      ->expected(6);
@@ -726,15 +708,15 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"zones", "pca", "ransac"}));
     run_cmd->add_option("--clusters", o.clusters, "Obstacle clustering (default on)")->check(CLI::IsMember({"on", "off"}));
     run_cmd->add_option("--cluster-tolerance", o.cluster_tolerance, "Euclidean cluster tolerance, m (default 0.5)")
-        ->check(positive_finite());
+        ->check(rp::cli::positive_finite());
     run_cmd->add_option("--threads", o.threads, "Threads one frame may use; the same answer for any number (default 1)")
         ->check(CLI::Range(1, rp::kMaxThreads));
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
-        ->check(positive_finite());  // pcap frames carry their own timestamps
+        ->check(rp::cli::positive_finite());  // pcap frames carry their own timestamps
     run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")
         ->check(CLI::IsMember({"none", "ema", "kalman"}));
     run_cmd->add_option("--alpha", o.alpha, "EMA fusion (--fusion ema): weight of the newest frame (default 0.5)")
-        ->check(above_and_at_most(0.0, 1.0));
+        ->check(rp::cli::above_and_at_most(0.0, 1.0));
     run_cmd->add_option("--beam-sigma-deg", o.beam_sigma_deg,
                         "σ of each beam's elevation angle, deg: counted in the profiles' noise for points whose beam "
                         "the decoder or a beams file gives (default 0: not counted)")
@@ -748,7 +730,7 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--segments", o.segment_lengths_m,
                         "Segment lengths along the drive, m (e.g. 10,100): per-segment class, G_d(n0), IRI to a CSV")
         ->delimiter(',')
-        ->check(CLI::PositiveNumber);
+        ->check(rp::cli::positive_finite());
     run_cmd->add_option("--segments-csv", o.segments_file, "File for the --segments rows (default: OUT.segments.csv, "
                                                             "or segments.csv without -o)");
     run_cmd->add_option("--export-profile", o.profile_dir,
@@ -757,7 +739,7 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--read-ahead-m", o.read_ahead_m,
                         "Add each wheel's readout to every line: the profile read this far ahead, m, and kept in an "
                         "array along the drive as the vehicle drives on (the moving-average paper's profile)")
-        ->check(positive_finite());
+        ->check(rp::cli::positive_finite());
     run_cmd->add_option("--config", o.config_file, "JSON or YAML config file with the fields of rp.Config; flags override it");
     run_cmd->add_option("-o,--output", o.output, "Output JSON-lines file (default stdout)");
     run_cmd->add_flag("--roi-columns", o.roi_columns,
@@ -787,12 +769,12 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"zones", "pca", "ransac"}));
     cal_cmd->add_option("--config", c.config_file, "JSON or YAML config file with the fields of rp.Config");
     cal_cmd->add_option("--beams", c.beams, "Beams of a sensor whose files do not number them (default 64, HDL-64E)")
-        ->check(CLI::PositiveNumber);
+        ->check(rp::cli::positive_finite());
     cal_cmd->add_option("--cell", c.cell, "Method motion: road cell in which beams are compared, m (default 0.2)")
-        ->check(CLI::PositiveNumber);
+        ->check(rp::cli::positive_finite());
     cal_cmd->add_option("--max-sigma", c.max_sigma,
                         "A beam less certain than this (deg) is not determined (default 0.01 motion, 0.05 surface)")
-        ->check(CLI::PositiveNumber);
+        ->check(rp::cli::positive_finite());
     cal_cmd->add_option("--method", c.calibration_method,
                         "motion: the same road seen by different beams as the vehicle moves (default); surface: each "
                         "frame's beams against its smooth road, no motion needed (docs/method.md §8)")

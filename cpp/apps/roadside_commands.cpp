@@ -16,6 +16,7 @@
 
 #include <unistd.h>
 
+#include "cli_checks.hpp"
 #include "helper_programs.hpp"
 #include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
@@ -318,7 +319,7 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
         cmd->add_option("--process-width", v.process_width_px, "Video frames are scaled to this width for detection, "
                                                                "px (default 720, as the paper)");
         cmd->add_option("--video-stride", v.stride, "Detect in every n-th video frame (default 1)")
-            ->check(CLI::PositiveNumber);
+            ->check(roadpreview::cli::positive_finite());
         cmd->add_option("--video-start", v.start_s, "Camera time of the video's first frame, s (default 0)");
     }
     CLI::App* info_cmd = roadside->add_subcommand("info", "What scan files hold: scans, beams, angles, times, ranges");
@@ -329,10 +330,10 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
     ext_cmd->add_option("--site", o->site, "Site file with both scanners' approximate poses")->required();
     ext_cmd->add_option("SCANS", o->inputs, "FIXED MOVING scan files (NAME=FILE to name their scanners)")->required();
     ext_cmd->add_option("--max-distance", o->max_distance_m, "ICP correspondence distance, m (default 1)")
-        ->check(CLI::PositiveNumber);
+        ->check(roadpreview::cli::positive_finite());
     for (CLI::App* cmd : {run_cmd, info_cmd, ext_cmd}) {
         cmd->add_option("--scan-rate", o->carmen_rate_hz, "Scan rate for logs without timestamps (CARMEN), Hz "
-                                                          "(default 37.5)")->check(CLI::PositiveNumber);
+                                                          "(default 37.5)")->check(roadpreview::cli::positive_finite());
         cmd->add_option("--sensor-port", o->sensor_port, "TCP port of the scanner in captures (default 2112)")
             ->check(CLI::Range(1, 65535));
     }

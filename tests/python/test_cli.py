@@ -114,6 +114,11 @@ def test_missing_speed_and_bad_flags_are_usage_errors(tmp_path):
     # An EMA weight without the EMA fusion did nothing, silently.
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--alpha", 0.3, check=False)
     assert proc.returncode == 2 and "--alpha weighs the newest frame of the EMA fusion: give --fusion ema" in proc.stderr
+    # Options the input cannot use were ignored: the stereo calibration with LiDAR frames, a decoder's with a pair.
+    proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--calib", "calib.txt", check=False)
+    assert proc.returncode == 2 and "--calib is a stereo calibration: it goes with --stereo or --disparity" in proc.stderr
+    proc = run("run", "--disparity", "d.png", "--calib", "calib.txt", "--meta", "m.json", "--speed", 5, check=False)
+    assert proc.returncode == 2 and "--meta applies to LiDAR inputs; the input is stereo" in proc.stderr
     # A profile directory that cannot be one stops the run before it starts, not after the last frame.
     taken = tmp_path / "taken"
     taken.write_text("a file")

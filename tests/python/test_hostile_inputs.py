@@ -158,6 +158,12 @@ def test_range_sensor_inputs_that_would_multiply_the_output_or_read_upside_down_
     d, motion, readings, layout = range_files
     fails("range", "run", readings, "--sensors", layout(1e6), "--motion", motion,
           naming=["layout_1000000.0.yaml", "x_m and y_m must lie within ±20 m"])
+    header_only = d / "header_only.csv"  # wrote nothing and said "0 windows", exit 0
+    header_only.write_text("t,sensor,distance\n")
+    fails("range", "run", header_only, "--sensors", layout(), "--speed", 10,
+          naming=["header_only.csv: no window was written (0 readings)"])
+    backwards = run("range", "run", readings, "--sensors", layout(), "--speed", -10, "-o", d / "back.jsonl")
+    assert "samples fell behind the start of their window and were dropped" in backwards.stderr  # were dropped unsaid
     misspelt = d / "misspelt.yaml"  # pitch_degree: the sensor would have been read level
     misspelt.write_text("sensors:\n  - {id: l, kind: laser, wheel: left, x_m: 0.5, y_m: 0.8, height_m: 0.3, "
                         "pitch_degree: 20}\n")

@@ -130,6 +130,16 @@ def test_cli_live_run_without_datagrams_is_an_error_naming_the_address():
     assert f"udp://127.0.0.1:{port}: no datagrams within 0.3 s" in proc.stderr
 
 
+def test_cli_live_run_that_ends_before_any_datagram_says_so():
+    # --duration shorter than --timeout: it said "no lidar packets ... the largest datagram is 0 bytes on port 0".
+    port = free_port_pair()
+    proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--duration", "0.3", check=False)
+    assert proc.returncode == 1
+    assert f"udp://127.0.0.1:{port}: no datagram arrived before the run ended" in proc.stderr
+    proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--frames", "0", check=False)
+    assert proc.returncode == 2 and "--frames 0: a live run's --frames N ends it after N ≥ 1 frames" in proc.stderr
+
+
 def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))

@@ -55,6 +55,9 @@ void PcapSource::read_until_frame() {
             ended_ = true;
             if (decoded_ == 0) {
                 if (!first_problem_.empty()) fail("no lidar packet could be decoded; the first problem: " + first_problem_);
+                if (input_->units_read() == 0)  // a live run that ended (--duration) before anything came
+                    fail(std::string(input_->kind()) == "udp" ? "no datagram arrived before the run ended"
+                                                              : "holds no records");
                 // Found by size, LiDAR-sized datagrams of another size are most likely another sensor's or
                 // profile's packets than the metadata (or model) describes.
                 const bool other_size = !info_.lidar_port && largest_ >= kMinLidarPacketBytes;

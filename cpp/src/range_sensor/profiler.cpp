@@ -110,9 +110,10 @@ RangeWindow RangeProfiler::close_window() {
     w.s_start_m = static_cast<double>(index_) * cfg_.frame_length_m;
     w.s_end_m = w.s_start_m + cfg_.frame_length_m;
     w.samples.swap(open_);
-    w.samples.erase(std::remove_if(w.samples.begin(), w.samples.end(),  // behind the window (reversing): dropped
-                                   [&](const RangeSample& s) { return s.s_m < w.s_start_m; }),
-                    w.samples.end());
+    const auto behind = std::remove_if(w.samples.begin(), w.samples.end(),  // behind the window (reversing): dropped
+                                       [&](const RangeSample& s) { return s.s_m < w.s_start_m; });
+    dropped_behind_ += w.samples.end() - behind;
+    w.samples.erase(behind, w.samples.end());
     // The next window holds about as many: one allocation instead of a doubling chain (copies of megabytes,
     // and the allocator handing pages back and faulting them in again, window after window).
     open_.reserve(w.samples.size());

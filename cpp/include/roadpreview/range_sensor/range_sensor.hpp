@@ -282,6 +282,8 @@ public:
     const std::vector<RangeSensor>& layout() const { return layout_; }
     const RangeCalibration& calibration() const { return cal_; }
     const RangeProfilerConfig& config() const { return cfg_; }
+    /// Samples that fell behind their window's start (reversing: the track runs back over closed windows), dropped.
+    std::int64_t dropped_behind() const { return dropped_behind_; }
 
 private:
     RangeWindow close_window();
@@ -289,7 +291,7 @@ private:
     std::vector<RangeSensor> layout_;
     RangeCalibration cal_;
     RangeProfilerConfig cfg_;
-    std::int64_t index_ = 0;
+    std::int64_t index_ = 0, dropped_behind_ = 0;
     std::vector<RangeSample> open_, next_;
     std::vector<double> latest_;  // per sensor, the furthest s_m so far
 };

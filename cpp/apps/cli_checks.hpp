@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Option checks shared by the CLI's commands. CLI11's own PositiveNumber and Range print their bounds as doubles'
+// extremes ("4.9e-324 to 1.8e308", a 309-digit number) and Range includes its lower bound, which the config then
+// refuses after the parse (exit 1, not a usage error): these say the range as the help does.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace roadpreview::cli {
+
+/// A finite number > 0.
+inline CLI::Validator positive_finite() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v <= 0.0)
+                return "expected a number > 0, got " + text;
+            return {};
+        },
+        "> 0");
+}
+
+/// A number in (lo, hi].
+inline CLI::Validator above_and_at_most(double lo, double hi) {
+    char range[64];
+    std::snprintf(range, sizeof range, "(%g, %g]", lo, hi);
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || !(v > lo && v <= hi))
+                return std::string("expected a number in ") + range + ", got " + text;
+            return {};
+        },
+        std::string(range));
+}
+
+}  // namespace roadpreview::cli
