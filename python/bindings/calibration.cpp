@@ -106,12 +106,14 @@ void bind_calibration(py::module_& m) {
         .def_readonly("travel_m", &rp::BeamCalibration::travel_m)
         .def_readonly("residual_m", &rp::BeamCalibration::residual_m, "robust σ of one point's height after the fit")
         .def("__repr__", [](const rp::BeamCalibration& c) {
-            const auto determined = std::count_if(c.beams.begin(), c.beams.end(), [](const auto& b) { return b.determined; });
+            const auto determined =
+                std::count_if(c.beams.begin(), c.beams.end(), [](const auto& b) { return b.determined; });
             char text[200];
-            std::snprintf(text, sizeof text, "<roadpreview.BeamCalibration %s%s%s: %lld of %d beams determined from %lld "
-                          "frame(s) over %.2f m>", c.sensor_model.empty() ? "sensor" : c.sensor_model.c_str(),
-                          c.serial.empty() ? "" : " ", c.serial.c_str(), static_cast<long long>(determined), c.beam_count,
-                          static_cast<long long>(c.frames), c.travel_m);
+            std::snprintf(text, sizeof text,
+                          "<roadpreview.BeamCalibration %s%s%s: %lld of %d beams determined from %lld frame(s) over "
+                          "%.2f m>", c.sensor_model.empty() ? "sensor" : c.sensor_model.c_str(),
+                          c.serial.empty() ? "" : " ", c.serial.c_str(), static_cast<long long>(determined),
+                          c.beam_count, static_cast<long long>(c.frames), c.travel_m);
             return std::string(text);
         })
         .def_property_readonly("determined", [](const rp::BeamCalibration& c) {

@@ -200,7 +200,8 @@ void bind_results(py::module_& m) {
             py::dict d;
             d["extrinsics"] = py::make_tuple(e.x_m, e.y_m, e.z_m, e.roll_rad, e.pitch_rad, e.yaw_rad);
             d["source"] = r.mounting_source.empty() ? py::object(py::none()) : py::object(py::str(r.mounting_source));
-            const std::optional<rp::MountingCheck> c = r.plane ? std::optional(rp::check_mounting(*r.plane)) : std::nullopt;
+            const std::optional<rp::MountingCheck> c =
+                r.plane ? std::optional(rp::check_mounting(*r.plane)) : std::nullopt;
             d["ground_offset"] = c ? py::object(py::float_(c->offset_m)) : py::object(py::none());
             d["ground_tilt_deg"] = c ? py::object(py::float_(c->tilt_deg)) : py::object(py::none());
             d["disagrees"] = c ? py::object(py::bool_(c->disagrees)) : py::object(py::none());

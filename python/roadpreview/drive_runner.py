@@ -73,7 +73,8 @@ def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Co
     needs ``config.fusion.method``) or a list of (x, y, yaw) (moves the map when there is one, else places the
     frames).
     ``frame_rate``: Hz, timestamps index / rate for frames without their own. ``frames``: (first, last) indices,
-    last excluded (None: to the end); a first index past the input's end raises ValueError when iterated. Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
+    last excluded (None: to the end); a first index past the input's end raises ValueError when iterated.
+    Without ``sensor_height``/``extrinsics`` the first frame's ground gives the
     mounting. A file frame that does not continue the previous file's sequence resets the fusion map.
     Bad input raises ValueError (options) or RuntimeError naming the file.
     """

@@ -103,13 +103,15 @@ TEST(Pipeline, RoughnessAndIriReasonsGiveTheDocumentedTexts) {
         {R::TooFewOrdinates, "too few PSD ordinates in band"}, {R::NoiseUnknown, "noise floor unknown"},
         {R::NoiseDominates, "noise dominates the band"}, {R::FitFailed, "fit failed (G_d(n0) not finite)"},
         {R::BothWheelsDeclined, "both wheels declined"}, {R::NoFinitePoints, "no finite points"},
-        {R::NoRoiPoints, "no points in the region of interest"}, {R::NoGround, "no ground"}, {R::TiltedGround, rp::kTiltedGround}, {R::VehicleStopped, "vehicle stopped"}};
+        {R::NoRoiPoints, "no points in the region of interest"}, {R::NoGround, "no ground"},
+        {R::TiltedGround, rp::kTiltedGround}, {R::VehicleStopped, "vehicle stopped"}};
     for (const auto& [reason, text] : roughness) EXPECT_STREQ(rp::to_string(reason), text);
     const std::pair<I, const char*> iri[] = {
         {I::None, ""}, {I::NoValidProfile, "no valid profile"}, {I::StretchTooShort, "valid stretch too short for IRI"},
         {I::TooSparse, "too few bins with points for IRI"}, {I::ClassDeclined, "roughness class declined"},
         {I::SegmentNotCovered, "segment not covered by one valid stretch"}, {I::NoFinitePoints, "no finite points"},
-        {I::NoRoiPoints, "no points in the region of interest"}, {I::NoGround, "no ground"}, {I::TiltedGround, rp::kTiltedGround}, {I::VehicleStopped, "vehicle stopped"}};
+        {I::NoRoiPoints, "no points in the region of interest"}, {I::NoGround, "no ground"},
+        {I::TiltedGround, rp::kTiltedGround}, {I::VehicleStopped, "vehicle stopped"}};
     for (const auto& [reason, text] : iri) EXPECT_STREQ(rp::to_string(reason), text);
     const std::pair<B, const char*> limits[] = {{B::None, ""},         {B::Requested, "requested"}, {B::Nyquist, "nyquist"},
                                                 {B::Sampling, "sampling"}, {B::Noise, "noise"},         {B::Wheels, "wheels"}};

@@ -94,7 +94,8 @@ bool DriveFrames::estimate_mounting_from(const Frame& f) {
         const double tilt_deg = std::acos(std::cos(m->roll_rad) * std::cos(m->pitch_rad)) * kRadToDeg;
         if (tilt_deg > kMountingMaxTiltDeg)
             return try_later("the ground in " + frame_label(f) + " lies at the cloud's origin but tilted " +
-                             format("%.1f°", tilt_deg) + " (" + figures + "): neither a level base frame nor a mounting");
+                             format("%.1f°", tilt_deg) + " (" + figures +
+                             "): neither a level base frame nor a mounting");
         note(true, missing + "the ground in " + frame_label(f) + " lies at the cloud's origin (" + figures +
              "): the points are taken as base-frame points");
         mounting_settled_ = true;
