@@ -6,11 +6,18 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
 namespace roadpreview::cli {
+
+/// A command line that asks for what cannot be done: the CLI prints it and exits 2, as for CLI11's own parse errors,
+/// before any input is read.
+struct UsageError : std::invalid_argument {
+    using std::invalid_argument::invalid_argument;
+};
 
 /// A finite number > 0.
 inline CLI::Validator positive_finite() {

@@ -32,8 +32,8 @@ double parse_rate(const std::string& text) {
     } catch (const std::exception&) {
     }
     if (used != text.size() || !std::isfinite(v) || v < rp::kMinReplayRate)
-        throw std::invalid_argument("--rate " + text + ": expected a factor of at least 0.001 (1.0 = recorded "
-                                    "speed) or max");
+        throw roadpreview::cli::UsageError("--rate " + text + ": expected a factor of at least 0.001 (1.0 = "
+                                           "recorded speed) or max");
     static_assert(rp::kMinReplayRate == 1e-3, "the message above names it");
     return v;
 }
@@ -45,7 +45,13 @@ int replay(const ReplayArgs& a) {
     o.drop_fraction = a.drop;
     o.reorder_fraction = a.reorder;
     o.seed = a.seed;
-    const rp::UdpEndpoint to = rp::parse_udp_endpoint(a.to, false);
+    const rp::UdpEndpoint to = [&] {
+        try {
+            return rp::parse_udp_endpoint(a.to, false);
+        } catch (const std::invalid_argument& e) {
+            throw roadpreview::cli::UsageError(std::string("--to: ") + e.what());
+        }
+    }();
     if (!a.quiet) std::fprintf(stderr, "roadpreview: replaying %s to %s at %s\n", a.capture.c_str(), a.to.c_str(),
                                o.rate > 0.0 ? (a.rate + "×").c_str() : "max rate");
     const rp::ReplayStats s = rp::replay_pcap(a.capture, to, o);

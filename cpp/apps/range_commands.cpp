@@ -90,8 +90,8 @@ void read_reference(const std::string& path, std::vector<double>& x, std::vector
 
 int calibrate_offset(const RangeOptions& o) {
     if (o.runs.size() != o.motions.size())
-        throw std::runtime_error("give one --motion file per run (" + std::to_string(o.runs.size()) + " runs, " +
-                                 std::to_string(o.motions.size()) + " motion files)");
+        throw roadpreview::cli::UsageError("give one --motion file per run (" + std::to_string(o.runs.size()) +
+                                           " runs, " + std::to_string(o.motions.size()) + " motion files)");
     rp::ReferenceProfile ref;
     read_reference(o.reference, ref.x_m, ref.z_m);
     const auto layout = rp::read_range_layout(o.sensors);
@@ -200,7 +200,7 @@ std::function<int()> add_range_commands(CLI::App& app) {
         if (dist->parsed()) return calibrate_distance(*o);
         if (off->parsed()) return calibrate_offset(*o);
         if (!motion->count() && !speed->count())
-            throw std::runtime_error("range run needs --motion M.csv or --speed V");
+            throw roadpreview::cli::UsageError("range run needs --motion M.csv or --speed V");
         return run_readings(*o, motion->count() > 0);
     };
 }

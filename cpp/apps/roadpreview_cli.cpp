@@ -28,10 +28,7 @@ namespace rp = roadpreview;
 
 namespace {
 
-// A command line that asks for what cannot be done (exit 2, as CLI11's own parse errors).
-struct UsageError : std::invalid_argument {
-    using std::invalid_argument::invalid_argument;
-};
+using rp::cli::UsageError;
 
 struct RunOptions {
     std::vector<std::string> inputs;
@@ -355,10 +352,7 @@ std::unique_ptr<rp::FrameSource> open_live_source(const RunOptions& o, const CLI
 // The frames of the run: a live sensor (udp://), stereo pairs / disparity images, or the INPUT files and recordings.
 std::unique_ptr<rp::FrameSource> open_source(const RunOptions& o, const CLI::App& app, const rp::Config& cfg) {
     if (is_live(o)) return open_live_source(o, app, cfg);
-    for (const char* name : {"--duration", "--timeout"})
-        if (app.count(name)) throw std::invalid_argument(std::string(name) + " applies to a udp:// input only");
     if (!is_stereo(o)) return rp::open_frames(o.inputs, source_options(o, app, cfg));
-    if (o.roi_columns) throw std::invalid_argument("--roi-columns applies to Ouster and Velodyne recordings and streams");
     rp::StereoInputs in;
     if (!o.stereo.empty()) in.left = {o.stereo[0]}, in.right = {o.stereo[1]};
     if (!o.disparity.empty()) in.disparity = {o.disparity};
@@ -382,11 +376,14 @@ void check_inputs(const RunOptions& o, const CLI::App& app) {
     if (is_stereo(o) && o.calib.empty()) throw UsageError("--stereo and --disparity need --calib FILE");
     if (is_live(o) && o.frames.find_first_not_of('0') == std::string::npos && !o.frames.empty())
         throw UsageError("--frames " + o.frames + ": a live run's --frames N ends it after N ≥ 1 frames");
+    if (!is_live(o))
+        for (const char* name : {"--duration", "--timeout"})
+            if (app.count(name)) throw UsageError(std::string(name) + " applies to a udp:// input only");
     if (!is_stereo(o) && !o.calib.empty())
         throw UsageError("--calib is a stereo calibration: it goes with --stereo or --disparity");
     if (is_stereo(o))  // a LiDAR decoder's options would be ignored, silently
         for (const char* name : {"--meta", "--sensor-model", "--calibration", "--cut-angle", "--lidar-port",
-                                 "--skip-bad-packets", "--beam-calibration", "--columns"})
+                                 "--skip-bad-packets", "--beam-calibration", "--columns", "--roi-columns"})
             if (app.count(name)) throw UsageError(std::string(name) + " applies to LiDAR inputs; the input is stereo");
 }
 
@@ -507,9 +504,9 @@ private:
 int calibrate(const RunOptions& o, const CLI::App& app) {
     const bool by_motion = o.calibration_method != "surface";
     if (by_motion && !app.count("--speed") && o.motion_file.empty() && o.poses_file.empty())
-        throw std::invalid_argument("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE "
-                                    "(or --method surface, which needs none)");
-    if (o.output.empty()) throw std::invalid_argument("give the beams file to write: -o beams.yaml");
+        throw UsageError("give the vehicle's motion: --speed (and --yaw-rate), --motion FILE or --poses FILE "
+                         "(or --method surface, which needs none)");
+    if (o.output.empty()) throw UsageError("give the beams file to write: -o beams.yaml");
     rp::DriveOptions drive = drive_options(o, app);
     if (!by_motion && !drive.speed_mps && drive.motion_file.empty() && drive.poses_file.empty())
         drive.speed_mps = 0.0;  // the surface method reads no motion

@@ -72,9 +72,13 @@ std::vector<Input> resolve_inputs(const std::vector<std::string>& args, const rs
             const std::string name = a.substr(0, eq);
             for (std::size_t i = 0; i < site->scanners.size(); ++i)
                 if (site->scanners[i].name == name) in = {a.substr(eq + 1), static_cast<int>(i)};
-            if (in.scanner < 0) throw std::runtime_error(a + ": no scanner named '" + name + "' in " + site->path);
+            if (in.scanner < 0) throw roadpreview::cli::UsageError(a + ": no scanner named '" + name + "' in " + site->path);
         }
         if (in.scanner < 0 && !ends_with(in.path, ".csv")) in.scanner = next++;
+        if (site && in.scanner >= static_cast<int>(site->scanners.size()))
+            throw roadpreview::cli::UsageError(in.path + ": the site file " + site->path + " has " +
+                                      std::to_string(site->scanners.size()) + " scanner(s), and this is scan file " +
+                                      std::to_string(in.scanner + 1) + " (name each file's scanner: NAME=FILE)");
         out.push_back(in);
     }
     return out;
@@ -109,12 +113,24 @@ std::vector<rs::LaserScan> read_input(const Input& in, const RoadsideOptions& o,
     return scans;
 }
 
-std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const RoadsideOptions& o, bool quiet) {
+// Why an input gave no scans, for the error when none did.
+std::string why_no_scans(const Input& in, const rs::SickDecodeCounts& counts, int sensor_port) {
+    const std::string& p = in.path;
+    if ((ends_with(p, ".pcap") || ends_with(p, ".pcapng")) && counts.telegrams == 0)
+        return p + ": no SICK telegram in a TCP stream on port " + std::to_string(sensor_port) +
+               " (not a SICK capture, or another --sensor-port)";
+    if (counts.telegrams > 0) return p + ": " + std::to_string(counts.telegrams) + " telegrams, none a scan";
+    return p + ": no scans";
+}
+
+std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const RoadsideOptions& o, bool quiet,
+                                    std::vector<std::string>* empty = nullptr) {
     std::vector<rs::LaserScan> all;
     for (const auto& in : inputs) {
         rs::SickDecodeCounts counts;
         std::string note;
         auto scans = read_input(in, o, &counts, &note);
+        if (scans.empty() && empty) empty->push_back(why_no_scans(in, counts, o.sensor_port));
         if (!quiet && counts.telegrams)
             std::fprintf(stderr, "%s: %lld telegrams, %lld scans, %lld other, %lld bad, %lld repeating the scan before "
                          "(dropped)\n", in.path.c_str(), static_cast<long long>(counts.telegrams),
@@ -165,8 +181,13 @@ int detect(const RoadsideOptions& o) { return run_program(video_command(o.camera
 
 int run(const RoadsideOptions& o) {
     const rs::Site site = rs::read_site(o.site);
-    auto scans = read_all(resolve_inputs(o.inputs, &site), o, o.quiet);
-    if (scans.empty()) throw std::runtime_error("no scans in the inputs");
+    std::vector<std::string> empty;
+    auto scans = read_all(resolve_inputs(o.inputs, &site), o, o.quiet, &empty);
+    if (scans.empty()) {
+        std::string why;
+        for (const std::string& e : empty) why += (why.empty() ? "" : "; ") + e;
+        throw std::runtime_error("no scans in the inputs: " + why);
+    }
     // Site clock: each scanner's offset applied before merging, so the cycles see one time line.
     std::stable_sort(scans.begin(), scans.end(), [&](const rs::LaserScan& a, const rs::LaserScan& b) {
         auto offset = [&](const rs::LaserScan& s) {
@@ -263,7 +284,8 @@ int info(const RoadsideOptions& o) {
 int extrinsics(const RoadsideOptions& o) {
     const rs::Site site = rs::read_site(o.site);
     const auto inputs = resolve_inputs(o.inputs, &site);
-    if (inputs.size() != 2) throw std::runtime_error("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
+    if (inputs.size() != 2)
+        throw roadpreview::cli::UsageError("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
     std::vector<std::vector<rs::LaserScan>> scans;
     for (const auto& in : inputs) scans.push_back(read_all({in}, o, true));
     for (std::size_t k = 0; k < 2; ++k)

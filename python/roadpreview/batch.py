@@ -113,7 +113,10 @@ def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_o
         seen[rid] += 1
         if seen[rid] > 1:
             rid = f"{rid}-{seen[rid]}"
-        frames = frame_count(path)
+        try:
+            frames = frame_count(path)
+        except RuntimeError as err:  # a folder without frame files: a wrong argument, said before any run
+            raise ValueError(str(err)) from None
         if frames == 0:
             raise ValueError(f"{path}: no frame files in this recording")
         try:

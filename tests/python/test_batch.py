@@ -200,6 +200,11 @@ def test_cli_exit_status_and_errors(recordings, tmp_path):
     run = subprocess.run([str(exe), "batch", corrupt, "-o", str(tmp_path / "o3")], capture_output=True, text=True,
                          timeout=60)
     assert run.returncode == 2 and "give the vehicle's motion" in run.stderr
+    (tmp_path / "empty").mkdir()  # a usage error, said before anything runs
+    run = subprocess.run([str(exe), "batch", str(tmp_path / "empty"), "-o", str(tmp_path / "o4"), "--speed", "5", "-q"],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and f"{tmp_path / 'empty'}: directory holds no .bin, .pcd or .ply files" in run.stderr
+    assert not (tmp_path / "o4").exists()
 
 
 def test_the_default_overlap_lets_ema_fusion_settle_to_the_serial_profiles(tmp_path):

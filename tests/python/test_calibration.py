@@ -183,6 +183,12 @@ def test_cli_calibrate_rejects_a_static_drive(tmp_path):
     assert r.returncode != 0 and "too short" in r.stderr
 
 
+def test_cli_calibrate_without_motion_is_a_usage_error(tmp_path):
+    r = run_cli("calibrate", OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "-o", tmp_path / "b.yaml")
+    assert r.returncode == 2 and "give the vehicle's motion" in r.stderr and "--method surface" in r.stderr
+    assert not (tmp_path / "b.yaml").exists()
+
+
 @pytest.mark.skipif(not rp.native_available(), reason="needs the compiled extension")
 def test_cpp_agrees_with_the_reference(drive, uniform_offsets):
     errors, lidar, frames = drive

@@ -151,7 +151,7 @@ def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
 
 def test_cli_live_options_are_refused_with_files():
     proc = run_cli("run", OS1_128_PCAP, "--speed", "1", "--duration", "1", check=False)
-    assert proc.returncode == 1 and "--duration applies to a udp:// input only" in proc.stderr
+    assert proc.returncode == 2 and "--duration applies to a udp:// input only" in proc.stderr  # a usage error
 
 
 def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):
@@ -173,4 +173,4 @@ def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):
 ])
 def test_cli_replay_refuses_bad_options(args, message):
     proc = run_cli("replay", OS1_128_PCAP, *args, check=False)
-    assert proc.returncode == 1 and message in proc.stderr
+    assert proc.returncode == 2 and message in proc.stderr  # usage errors

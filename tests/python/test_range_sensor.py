@@ -219,6 +219,16 @@ def test_counts_without_a_distance_calibration_are_an_error(bench, tmp_path):
     assert proc.returncode != 0 and "no distance calibration" in proc.stderr
 
 
+def test_usage_errors_exit_2_before_reading(bench, tmp_path):
+    readings, motion = bench["runs"][0]
+    layout = bench["dir"] / "sensors.yaml"
+    proc = run_cli("range", "run", readings, "--sensors", layout, check=False)
+    assert proc.returncode == 2 and "range run needs --motion M.csv or --speed V" in proc.stderr
+    proc = run_cli("range", "calibrate-offset", "--reference", bench["dir"] / "ref.csv", "--sensors", layout,
+                   readings, readings, "--motion", motion, "-o", tmp_path / "cal.yaml", check=False)
+    assert proc.returncode == 2 and "give one --motion file per run (2 runs, 1 motion files)" in proc.stderr
+
+
 def test_a_speed_no_vehicle_has_is_an_error(bench):
     """Once 1e300 m/s wrote one empty 40 m window per reading, the readings 10^298 m down the road."""
     readings = bench["runs"][0][0]

@@ -8,7 +8,7 @@ import pytest
 
 import roadpreview as rp
 from roadpreview.sim import roadside as sr
-from paths import SHARED_DATA, run_cli
+from paths import SHARED_DATA, VELODYNE, run_cli
 
 SICK = SHARED_DATA / "laserscan2d" / "sick_scan_xd"
 
@@ -62,6 +62,18 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     assert proc.returncode == 1 and "unknown scan format" in proc.stderr
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", check=False)
     assert proc.returncode == 2  # usage: SCANS missing
+    # Before any is read: a third scan file for a two-scanner site, a scanner the site does not name.
+    three = [tmp_path / f"s{k}.json" for k in range(3)]
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", *three, check=False)
+    assert proc.returncode == 2, proc.stderr
+    assert f"{three[2]}: the site file {d / 'site.yaml'} has 2 scanner(s), and this is scan file 3" in proc.stderr
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", f"s9={three[0]}", check=False)
+    assert proc.returncode == 2 and f"s9={three[0]}: no scanner named 's9'" in proc.stderr
+    # A LiDAR capture is not a SICK one: the error names it and what was looked for.
+    velodyne = VELODYNE / "velodyne_example.pcap"
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", velodyne, check=False)
+    assert proc.returncode == 1
+    assert f"no scans in the inputs: {velodyne}: no SICK telegram in a TCP stream on port 2112" in proc.stderr
     huge = tmp_path / "det.jsonl"  # a number beyond a double: nlohmann's out_of_range once escaped without the file
     huge.write_text('{"t": 1e400, "x": 1, "y": 2, "w": 3, "h": 4, "class": "car"}\n')
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", huge, check=False)
