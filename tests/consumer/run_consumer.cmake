@@ -12,6 +12,7 @@ run(${CMAKE_COMMAND} -S ${CONSUMER_DIR} -B ${WORK_DIR}/build -G ${GENERATOR} -DC
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/consumer)
 run(${WORK_DIR}/build/consumer_core)
+run(${WORK_DIR}/build/consumer_io)
 run(${WORK_DIR}/build/consumer_roadside)
 # The core alone needs none of the recording I/O's libraries.
 execute_process(COMMAND readelf -d ${WORK_DIR}/build/consumer_core OUTPUT_VARIABLE needed RESULT_VARIABLE rc)

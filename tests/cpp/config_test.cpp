@@ -140,3 +140,18 @@ TEST(Config, TheZoneModelsPatchesAreBounded) {  // 1000 rings of 100000 sectors 
                   std::string::npos) << e.what();
     }
 }
+
+// An enum made from an integer names no method: refused, not run as some method unsaid; check_config says the same
+// without throwing.
+TEST(Config, AMethodOutsideTheEnumIsRefused) {
+    rp::Config cfg;
+    cfg.ground.method = static_cast<rp::GroundMethod>(7);
+    EXPECT_THROW(rp::validate(cfg), std::invalid_argument);
+    rp::Status s = rp::check_config(cfg);
+    EXPECT_EQ(s.code(), rp::StatusCode::InvalidArgument);
+    EXPECT_STREQ(s.message(), "invalid config: ground.method must be pca, ransac or zones, got the value 7");
+    cfg = rp::Config{};
+    cfg.fusion.method = static_cast<rp::FusionMethod>(-1);
+    EXPECT_STREQ(rp::check_config(cfg).message(), "invalid config: fusion.method must be none, ema or kalman, got the value -1");
+    EXPECT_TRUE(rp::check_config(rp::Config{}).ok());
+}

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A program built with -fno-exceptions (ctest: realtime_noexceptions) uses the pipeline through try_process:
-// a good frame gives Ok and profiles, a bad speed a Status with the message, and nothing is thrown at it.
+// a bad config is refused by check_config, a good frame gives Ok and profiles, a bad speed a Status with the message,
+// and nothing is thrown at it.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -16,10 +17,20 @@ int main() {
         for (float y = -5.0f; y < 5.0f; y += 0.25f) xyz.insert(xyz.end(), {x, y, -1.8f});
     const rp::PointsView points = rp::points_view(xyz.data(), static_cast<Eigen::Index>(xyz.size() / 3), 3);
     rp::Config cfg;
+    int failures = 0;
+    cfg.sensor_height = -1.8;  // checked before an Estimator is made of it, which would throw
+    const rp::Status refused = rp::check_config(cfg);
+    if (refused.code() != rp::StatusCode::InvalidArgument || !std::strstr(refused.message(), "sensor_height must be")) {
+        std::printf("FAIL: a negative sensor height gave %s: '%s'\n", rp::to_string(refused.code()), refused.message());
+        ++failures;
+    }
     cfg.sensor_height = 1.8;
+    if (!rp::check_config(cfg)) {
+        std::printf("FAIL: the config was refused: '%s'\n", rp::check_config(cfg).message());
+        ++failures;
+    }
     rp::Estimator est(cfg);
     rp::Result out;
-    int failures = 0;
     const rp::Status good = est.try_process(points, 5.0, 0.0, out);
     if (!good || out.status != rp::FrameStatus::Ok || out.left.z.empty()) {
         std::printf("FAIL: a flat road gave status %s, frame status '%s', %zu bins\n", rp::to_string(good.code()),

@@ -79,6 +79,21 @@ rp::Frame simulated_frame() {
 
 }  // namespace
 
+// The counter sees what it must: operator new, and malloc as Eigen's aligned_allocator (PCL's clouds) calls it.
+TEST(Realtime, TheCounterSeesOperatorNewAndMalloc) {
+    EXPECT_EQ(allocations_in([] { std::vector<int> v(8); asm volatile("" : : "r"(v.data()) : "memory"); }), 1);
+    if (!kCountsMalloc) GTEST_SKIP() << "malloc is AddressSanitizer's to count";
+    EXPECT_EQ(allocations_in([] {
+                  std::vector<float, Eigen::aligned_allocator<float>> v(100);
+                  asm volatile("" : : "r"(v.data()) : "memory");
+              }),
+              1);
+    void* (*volatile allocate_bytes)(std::size_t) = std::malloc;  // called through a pointer: not elided
+    void* p = nullptr;
+    EXPECT_EQ(allocations_in([&] { p = allocate_bytes(64); }), 1);
+    std::free(p);
+}
+
 // Planned ahead (twiddles, factors, buffers), the FFT of every stretch length allocates nothing at its first
 // transform either — prime lengths included, whose transforms use the generic butterfly's buffer.
 TEST(Realtime, PlannedFftsTransformEveryLengthWithoutAllocating) {
@@ -237,6 +252,60 @@ TEST(Realtime, AReusedResultEqualsAFreshOne) {
             EXPECT_EQ(out.cluster_labels, expected.cluster_labels) << "frame " << k;
         }
     }
+}
+
+// A Result reused by an estimator with obstacles off after one with them on says "off" (null), as a fresh one does.
+TEST(Realtime, AResultReusedWithObstaclesOffHasNoObstacleLists) {
+    const rp::Frame f = kitti_frames()[0];
+    rp::Config off = kitti_config(rp::FusionMethod::None);
+    off.obstacles.enabled = false;
+    rp::Estimator with(kitti_config(rp::FusionMethod::None)), without(off);
+    rp::Result out;
+    with.process(f, 5.0, 0.0, {}, out);
+    ASSERT_TRUE(out.left.obstacles && out.right.obstacles);
+    without.process(f, 5.0, 0.0, {}, out);
+    EXPECT_FALSE(out.left.obstacles || out.right.obstacles || out.obstacles);
+    rp::Result expected = without.process(f, 5.0, 0.0);
+    out.timing_ms = expected.timing_ms;
+    out.frame = expected.frame;
+    EXPECT_EQ(rp::result_to_json(out), rp::result_to_json(expected));
+}
+
+// A Frame's own timestamp spaces the fused frames unless the motion gives one: 0.25 s apart at 4 m/s is 1 m.
+TEST(Realtime, AFramesTimestampIsUsedUnlessTheMotionGivesOne) {
+    rp::Frame f = kitti_frames()[0];
+    rp::Estimator est(kitti_config(rp::FusionMethod::Ema));
+    rp::Result out;
+    f.timestamp = 100.0;
+    est.process(f, 4.0, 0.0, {}, out);
+    EXPECT_EQ(out.timestamp, std::optional<double>(100.0));
+    f.timestamp = 100.25;
+    const rp::Result r = est.process(f, 4.0, 0.0);
+    EXPECT_EQ(r.timestamp, std::optional<double>(100.25));
+    ASSERT_TRUE(r.fusion);
+    EXPECT_NEAR(r.fusion->pose.x_m, 1.0, 1e-9);
+    rp::FrameMotion given;
+    given.timestamp_s = 200.0;
+    EXPECT_EQ(est.process(f, 4.0, 0.0, given).timestamp, std::optional<double>(200.0));
+}
+
+// A view made by hand that no buffer can hold (rows overlapping, read backwards, a negative count) is refused,
+// not read out of bounds.
+TEST(Realtime, AViewNoBufferHoldsIsRefused) {
+    rp::Estimator est(kitti_config(rp::FusionMethod::None));
+    const scenes::Cloud road = scenes::plane(0.0, 0.0, -1.73, 2000);
+    rp::Result out;
+    for (const Eigen::Index stride : {2, 0, -4}) {
+        const rp::Status s = est.try_process(rp::points_view(road.data(), road.rows(), stride), 5.0, 0.0, out);
+        EXPECT_EQ(s.code(), rp::StatusCode::InvalidArgument) << stride;
+        EXPECT_EQ(std::string(s.message()), "points: each row must hold x, y, z, so its stride must be at least 3 "
+                                            "floats (got " + std::to_string(stride) + ")");
+    }
+    const rp::Status s = est.try_process(rp::points_view(road.data(), -1, 3), 5.0, 0.0, out);
+    EXPECT_EQ(s.code(), rp::StatusCode::InvalidArgument);
+    EXPECT_STREQ(s.message(), "points: a negative row count (-1)");
+    EXPECT_THROW(est.process(rp::points_view(road.data(), road.rows(), 2), 5.0, 0.0, out), std::invalid_argument);
+    EXPECT_TRUE(est.try_process(rp::points_view(nullptr, 0, 0), 5.0, 0.0, out).ok());  // no rows: nothing to read
 }
 
 // try_process reports bad input as a Status with the text process() throws, and writes nothing then.

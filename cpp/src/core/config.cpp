@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
 
 // Type errors then name the offending field (/track_width); the setting is part of nlohmann's ABI tag.
@@ -17,6 +18,7 @@
 
 #include "core/input_file.hpp"
 #include "core/text.hpp"
+#include "core/without_exceptions.hpp"
 
 namespace roadpreview {
 
@@ -253,6 +255,11 @@ void validate(const Config& c) {
             "threads must be between 1 and " + std::to_string(kMaxThreads) + ", got " + std::to_string(c.threads));
 
     const GroundConfig& g = c.ground;
+    // An enum set from an integer (a cast, a config of another version) names no method: it would run one unsaid.
+    require(std::string_view(to_string(g.method)) != "?",
+            "ground.method must be pca, ransac or zones, got the value " + std::to_string(static_cast<int>(g.method)));
+    require(std::string_view(to_string(c.fusion.method)) != "?", "fusion.method must be none, ema or kalman, got the "
+                                                                  "value " + std::to_string(static_cast<int>(c.fusion.method)));
     require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
             "ground.roi_x_min_m must be < ground.roi_x_max_m");
     require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");
@@ -334,6 +341,8 @@ void validate(const Config& c) {
     require(positive(f.align_excess_half_width_m), "fusion.align_excess_half_width_m must be > 0");
     validate_stereo(c.stereo);
 }
+
+Status check_config(const Config& cfg) noexcept { return without_exceptions([&] { validate(cfg); }); }
 
 Extrinsics effective_extrinsics(const Config& c) {
     if (c.extrinsics) return *c.extrinsics;

@@ -97,7 +97,10 @@ GroundFit ransac_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     const PointsView pts = roi.view();
     GroundFit fit;
     fit.mask.assign(cloud->size(), 0);
-    if (cloud->size() < 3) return fit;
+    // Points that span no plane (collinear, coincident) hold no ground, and PCL's sampler would print a complaint to
+    // stderr for each of its draws: up to ransac_max_iterations lines a frame.
+    const auto any_plane = fit_plane(pts);
+    if (cloud->size() < 3 || !any_plane) return fit;
     const pcl::Indices in_input_order(roi.input_order.begin(), roi.input_order.end());
     auto model = std::make_shared<SeededPlaneModel>(cloud, in_input_order, cfg.ransac_seed);
     model->setAxis(Eigen::Vector3f::UnitZ());
@@ -105,9 +108,8 @@ GroundFit ransac_ground(const RoiCloud& roi, const GroundConfig& cfg) {
     pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, cfg.ransac_distance_m);
     ransac.setMaxIterations(cfg.ransac_max_iterations);
     ransac.setProbability(0.99);
-    if (!ransac.computeModel()) {  // no sample within the tilt limit: say so when the points do span a plane
-        const auto any_plane = fit_plane(pts);
-        if (any_plane && !within_tilt(*any_plane, cfg.max_tilt_deg)) fit.status = GroundStatus::TiltedGround;
+    if (!ransac.computeModel()) {  // no sample within the tilt limit: say so when the points' plane is tilted
+        if (!within_tilt(*any_plane, cfg.max_tilt_deg)) fit.status = GroundStatus::TiltedGround;
         return fit;
     }
 

@@ -12,6 +12,7 @@
 #include "core/parallel.hpp"
 #include "core/roi_cloud.hpp"
 #include "core/stopwatch.hpp"
+#include "core/without_exceptions.hpp"
 #include "profile/profile_scratch.hpp"
 #include "roughness/roughness_scratch.hpp"
 
@@ -215,7 +216,11 @@ void Estimator::Impl::build_wheel_profiles(Result& r) {
     const BlockedBins* blocked = crossed ? &crossings.blocked : nullptr;
     if (fusion) fusion->profiles(r.path, blocked, *r.fusion, r.left, r.right);
     else bin_profile_hits(cfg.profile, blocked, profile_scratch, r.left, r.right);
-    if (!cfg.obstacles.enabled) return;
+    if (!cfg.obstacles.enabled) {  // null, not empty, also in a Result an estimator with obstacles filled before
+        r.left.obstacles.reset();
+        r.right.obstacles.reset();
+        return;
+    }
     for (auto [p, in_path] : {std::pair{&r.left, &crossings.left}, std::pair{&r.right, &crossings.right}}) {
         if (!p->obstacles) p->obstacles.emplace();
         if (crossed)
@@ -323,6 +328,14 @@ namespace {
 // What process() refuses, as a Status (try_process returns it, process() throws its message).
 Status check_input(PointsView points, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
                    const PointErrors& errors) noexcept {
+    // A view made by hand (points_view) can claim what no buffer holds: rows overlapping or read backwards.
+    if (points.rows() < 0)
+        return Status::error(StatusCode::InvalidArgument, "points: a negative row count (%lld)",
+                             static_cast<long long>(points.rows()));
+    if (points.rows() > 0 && (points.outerStride() < 3 || points.data() == nullptr))
+        return Status::error(StatusCode::InvalidArgument,
+                             "points: each row must hold x, y, z, so its stride must be at least 3 floats (got %lld%s)",
+                             static_cast<long long>(points.outerStride()), points.data() ? "" : ", and no data");
     if (points.rows() > std::numeric_limits<std::int32_t>::max())
         return Status::error(StatusCode::InvalidArgument, "too many points in one frame: %lld",
                              static_cast<long long>(points.rows()));
@@ -365,21 +378,12 @@ PointErrors errors_of(const Frame& frame) {
 
 PointsView points_of(const Frame& frame) { return points_view(frame.points.data(), frame.points.rows(), 4); }
 
-// Runs `step`, turning what it throws into a Status: the error path of try_process.
-template <class Step>
-Status without_exceptions(Step&& step) noexcept {
-    try {
-        step();
-        return {};
-    } catch (const std::invalid_argument& e) {
-        return Status::error(StatusCode::InvalidArgument, "%s", e.what());
-    } catch (const std::bad_alloc& e) {
-        return Status::error(StatusCode::OutOfMemory, "%s", e.what());
-    } catch (const std::exception& e) {
-        return Status::error(StatusCode::Internal, "%s", e.what());
-    } catch (...) {
-        return Status::error(StatusCode::Internal, "unknown exception");
-    }
+// The motion a frame is processed with: the frame's own timestamp unless `given` has one (the fusion spaces frames
+// by their timestamps; without any, by 1/fusion.frame_rate_hz).
+FrameMotion motion_of(const Frame& frame, const FrameMotion& given) {
+    FrameMotion m = given;
+    if (!m.timestamp_s) m.timestamp_s = frame.timestamp;
+    return m;
 }
 
 }  // namespace
@@ -418,7 +422,7 @@ void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps
 void Estimator::process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion,
                         Result& out) {
     throw_unless_ok(check_frame(frame));
-    process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, errors_of(frame), out);
+    process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion_of(frame, motion), errors_of(frame), out);
 }
 
 void Estimator::process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
@@ -441,8 +445,8 @@ Status Estimator::try_process(const Frame& frame, double speed_mps, double yaw_r
                               Result& out) noexcept {
     Status s = check_frame(frame);
     if (!s) return s;
-    return try_process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion, errors_of(frame),
-                       out);
+    return try_process(points_of(frame), speed_mps, yaw_rate_rps, frame.source, motion_of(frame, motion),
+                       errors_of(frame), out);
 }
 
 Status Estimator::try_process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "roadpreview/core/status.hpp"
+
 namespace roadpreview {
 
 /// Pose of the sensor in the base frame (x forward, y left, z up); R = Rz(yaw)·Ry(pitch)·Rx(roll).
@@ -183,6 +185,10 @@ constexpr int kMaxRansacIterations = 1'000'000;
 
 /// Throws std::invalid_argument naming the first offending field.
 void validate(const Config& cfg);
+
+/// validate() without exceptions, for programs built without them: Ok, or InvalidArgument with the text validate()
+/// throws. An Estimator made from a config it passes throws nothing but std::bad_alloc.
+Status check_config(const Config& cfg) noexcept;
 
 /// The extrinsics in force: sensor_height, extrinsics, or identity.
 Extrinsics effective_extrinsics(const Config& cfg);

@@ -105,7 +105,7 @@ public:
     Result process(PointsView points, double speed_mps, double yaw_rate_rps, const std::string& source,
                    const FrameMotion& motion, const PointErrors& errors);
     /// A frame of a FrameSource: its points, source, range variances, error groups and beams (checked: one per point
-    /// or none).
+    /// or none), and its timestamp unless `motion` gives one.
     Result process(const Frame& frame, double speed_mps, double yaw_rate_rps, const FrameMotion& motion = {});
 
     /// The real-time forms of the above: the result goes into `out`, reusing its buffers.
