@@ -81,3 +81,35 @@ TEST(Io, DirectoriesExpandToTheirFramesSortedByName) {
     fs::create_directories(empty);
     EXPECT_THROW(rp::expand_inputs({empty.string()}), std::runtime_error);
 }
+
+// open_frames refuses what it cannot read before reading: no inputs, a negative column count; recordings of two
+// kinds of sensor are named by kind (a Velodyne's model is not known before its first packet: no blank for it).
+TEST(Io, OpenFramesRefusesNoInputsNegativeColumnsAndMixedSensors) {
+    try {
+        rp::open_frames({});
+        ADD_FAILURE() << "no inputs were taken";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(), "open_frames: no inputs given (files, folders or recordings)");
+    }
+    rp::SourceOptions negative;
+    negative.columns = -3;
+    const std::string kitti = kData + "/semantickitti/000000.bin";
+    try {
+        rp::open_frames({kitti}, negative);
+        ADD_FAILURE() << "columns -3 was taken";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(kitti + ": columns must be 0"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("got -3"), std::string::npos) << e.what();
+    }
+    const std::string ouster = kData + "/ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+    const std::string velodyne = kData + "/velodyne/velodyne_vlp16.pcap";
+    auto source = rp::open_frames({ouster, velodyne});
+    try {
+        while (source->next()) {
+        }
+        ADD_FAILURE() << "an Ouster and a Velodyne recording were read as one drive";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(velodyne + ": holds velodyne pcap data but " + ouster + " holds ouster pcap OS-1-128"),
+                  std::string::npos) << e.what();
+    }
+}

@@ -292,6 +292,11 @@ namespace {
 
 // Split recordings of one drive, read in the order given as one stream of frames. A sweep cut by the split
 // comes out as two partial frames; a recording that starts before the previous one ended is an error.
+// "ouster OS-1-128", or the format alone while the model is not known (a Velodyne's, before its first packet).
+std::string kind_of(const SourceInfo& info) {
+    return info.sensor_model.empty() ? info.format : info.format + " " + info.sensor_model;
+}
+
 class PcapSequenceSource : public FrameSource {
 public:
     PcapSequenceSource(std::vector<std::string> paths, const SourceOptions& options)
@@ -308,8 +313,8 @@ public:
             current_ = open_pcap(paths_[index_], options_);
             const SourceInfo next_info = current_->info();
             if (next_info.format != info_.format || next_info.sensor_model != info_.sensor_model)
-                fail_file(paths_[index_], "holds " + next_info.format + " " + next_info.sensor_model + " data but " +
-                                              paths_[0] + " holds " + info_.format + " " + info_.sensor_model);
+                fail_file(paths_[index_], "holds " + kind_of(next_info) + " data but " + paths_[0] + " holds " +
+                                              kind_of(info_));
         }
     }
 
@@ -336,6 +341,10 @@ private:
 }  // namespace
 
 std::unique_ptr<FrameSource> open_frames(const std::vector<std::string>& inputs, const SourceOptions& options) {
+    if (inputs.empty()) throw std::invalid_argument("open_frames: no inputs given (files, folders or recordings)");
+    if (options.columns < 0)
+        fail_file(inputs[0], "columns must be 0 (read by the file's kind) or the float32 values per point, at least 3; "
+                             "got " + std::to_string(options.columns));
     const auto pcaps = std::count_if(inputs.begin(), inputs.end(), is_pcap_path);
     if (pcaps == 0) {
         if (!options.roi_columns.empty())
