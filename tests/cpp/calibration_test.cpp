@@ -315,8 +315,11 @@ TEST(SurfaceCalibrator, ANoiseFreeRoadIsNoCrash) {
         calibrator.add_frame(rp::points_view(xyz.data(), static_cast<Eigen::Index>(beams.size()), 3), beams);
     }
     const rp::BeamCalibration c = calibrator.solve();
+    int determined = 0;
     for (const rp::BeamOffsets& o : c.beams)
         if (o.determined) {
-            EXPECT_NEAR(o.elevation_offset_deg, 0.0, 1e-3);
+            ++determined;
+            EXPECT_NEAR(o.elevation_offset_deg, 0.0, 1e-9);  // exact heights: no offset but rounding's
         }
+    EXPECT_GE(determined, kBeams / 2);  // most beams see the road (19 of 24 measured)
 }

@@ -50,10 +50,13 @@ TEST(Pipeline, ExtraColumnsAreIgnoredAndReadInPlace) {
     rp::PointMatrix xyzi(xyz.rows(), 4);
     xyzi << xyz, Eigen::MatrixXf::Constant(xyz.rows(), 1, 7.0f);
     rp::Estimator a(kitti_like()), b(kitti_like());
-    const rp::Result r3 = a.process(xyz, 5.0, 0.2), r4 = b.process(xyzi, 5.0, 0.2);
+    rp::Result r3 = a.process(xyz, 5.0, 0.2);
+    const rp::Result r4 = b.process(xyzi, 5.0, 0.2);
     EXPECT_EQ(r3.ground_mask, r4.ground_mask);
-    EXPECT_EQ(rp::result_to_json(r3).substr(0, 2000), rp::result_to_json(r4).substr(0, 2000));
-    EXPECT_EQ(r3.left.count, r4.left.count);
+    EXPECT_EQ(r3.cluster_labels, r4.cluster_labels);
+    ASSERT_TRUE(r3.left.roughness.iso_class);  // the whole line below holds profiles and their roughness
+    r3.timing_ms = r4.timing_ms;  // the clock differs
+    EXPECT_EQ(rp::result_to_json(r3), rp::result_to_json(r4));
 }
 
 TEST(Pipeline, NonFinitePointsAreDroppedAndCounted) {
