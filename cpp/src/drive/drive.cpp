@@ -78,7 +78,7 @@ void DriveFrames::note(bool warning, const std::string& text) const {
 // gave it. A ground under the cloud's origin settles it: the cloud is in a base frame already.
 bool DriveFrames::estimate_mounting_from(const Frame& f) {
     const auto m = estimate_mounting(points_view(f.points.data(), f.points.rows(), f.points.cols()), cfg_.ground);
-    const std::string missing = "no --sensor-height or --extrinsics, and ";
+    const std::string missing = "no sensor height or extrinsics given (--sensor-height, --extrinsics), and ";
     const auto try_later = [&](const std::string& why) {
         if (!mounting_warned_)
             note(true, missing + why + ": the points are taken as base-frame points until a later frame's ground "
@@ -107,9 +107,9 @@ bool DriveFrames::estimate_mounting_from(const Frame& f) {
     mounting_source_ = "estimated";
     mounting_frame_ = frame_label(f);
     mounting_settled_ = true;
-    note(false, "no --sensor-height or --extrinsics: mounting estimated from the ground in " + frame_label(f) + ": " +
-         figures + " (mounting.source = \"estimated\" in the output" +
-         (mounting_warned_ ? "; the frames before it were taken as base-frame points)" : ")"));
+    note(false, "no sensor height or extrinsics given (--sensor-height, --extrinsics): mounting estimated from the "
+                "ground in " + frame_label(f) + ": " + figures + " (mounting.source = \"estimated\" in the output" +
+                    (mounting_warned_ ? "; the frames before it were taken as base-frame points)" : ")"));
     return true;
 }
 

@@ -83,6 +83,8 @@ public:
     /// The next frame, or nullopt at the end. Throws std::runtime_error naming the file on bad input;
     /// frames returned before the error stay valid.
     virtual std::optional<Frame> next() = 0;
+    /// What the source is. Some of it is known only once packets have been read: a Velodyne source's model, beams,
+    /// calibration and frame rate come from its first packets, so they are empty (0) until the first next().
     virtual SourceInfo info() const = 0;
 };
 
