@@ -54,6 +54,7 @@ def run_cli(*args, check=True) -> subprocess.CompletedProcess:
         assert proc.returncode == 0, proc.stderr
     return proc
 
-# The project's shared data (real recordings too large or not licensed for tests/data): ../shared/data beside
-# the repository, or ROADPREVIEW_SHARED_DATA. Tests that need it skip when it is absent.
-SHARED_DATA = Path(os.environ.get("ROADPREVIEW_SHARED_DATA", REPO.parent / "shared" / "data"))
+
+# The project's shared data (real recordings too large or not licensed for tests/data), found as shared_data()
+# finds it (a worktree's too). Tests that need it skip when it is absent.
+SHARED_DATA = shared_data()

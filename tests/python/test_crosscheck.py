@@ -124,16 +124,36 @@ def test_real_kitti_frames_agree(frame, yaw_rate):
     cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)
     cpp, ref = run_both(points, 6.0, yaw_rate, cfg)
     assert_ground_agrees(points, cfg, cpp, ref)
-    assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
+    # No point of these frames lies within float32 rounding of a threshold: the same ground, so the whole profiles
+    # (heights, spreads, roughness) are compared, not only their stations.
+    np.testing.assert_array_equal(cpp.ground_mask, ref.ground_mask)
+    assert_profiles_agree(cpp, ref, ground_identical=True)
     # Real, non-trivial profiles: a 15 m curve leaves the road early, and runs into parked cars (blocked bins).
     assert np.isfinite(cpp.left.z).sum() + cpp.left.blocked.sum() > 50
     if yaw_rate == 0.0:
         assert cpp.vehicle.iso_class is not None
 
 
+def assert_same_profiles(cpp, ref, z_atol):
+    """Both wheels' bins and roughness and the vehicle's, as close as rounding allows: counts and gaps equal, heights
+    within `z_atol` (m; set by the caller from what it measured), spreads within 1e-6 relative."""
+    assert cpp.reason == ref.reason
+    for c, r in ((cpp.left, ref.left), (cpp.right, ref.right)):
+        np.testing.assert_array_equal(c.count, r.count)
+        np.testing.assert_array_equal(np.isnan(c.z), np.isnan(r.z))
+        np.testing.assert_allclose(c.z, r.z, rtol=0, atol=z_atol, equal_nan=True)
+        np.testing.assert_array_equal(np.isnan(c.spread), np.isnan(r.spread))
+        np.testing.assert_allclose(c.spread, r.spread, rtol=1e-6, atol=0, equal_nan=True)
+        assert_roughness_agrees(c.roughness, r.roughness, iri_bound(c, r))
+    bound = (iri_bound(cpp.left, ref.left) + iri_bound(cpp.right, ref.right)) / 2  # the vehicle's: the wheels' mean
+    assert_roughness_agrees(cpp.vehicle, ref.vehicle, bound)
+
+
 def random_scene(rng, sensor_height, pitch, roll, obstacles, noise):
-    """A sensor-frame cloud: a tilted, noisy ground seen from `sensor_height`, plus box-like obstacles."""
-    n = 15000
+    """A sensor-frame cloud: a tilted, noisy ground seen from `sensor_height`, plus box-like obstacles. 60,000 ground
+    points, 1.4 per 10-cm bin of a wheel's track: bins with two points give the spreads the noise-aware roughness
+    weighs the noise by (at 15,000, 0.4 per bin, few bins had a spread and most wheels were declined)."""
+    n = 60000
     x, y = rng.uniform(-5, 45, n), rng.uniform(-12, 12, n)
     z = -sensor_height + np.tan(pitch) * x + np.tan(roll) * y + rng.normal(0, noise, n)
     z += 0.02 * np.sin(0.7 * x) * np.cos(0.3 * y)
@@ -148,33 +168,58 @@ def random_scene(rng, sensor_height, pitch, roll, obstacles, noise):
     return pts
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 2**31 - 1), sensor_height=st.floats(0.5, 2.5), pitch=st.floats(-0.05, 0.05),
-       roll=st.floats(-0.05, 0.05), obstacles=st.integers(0, 4), noise=st.floats(0.0, 0.03),
-       speed=st.sampled_from([0.0, 3.0, -2.0, 15.0]), yaw_rate=st.floats(-0.8, 0.8),
-       level=st.booleans())
-def test_random_scenes_agree(seed, sensor_height, pitch, roll, obstacles, noise, speed, yaw_rate, level):
-    rng = np.random.default_rng(seed)
-    points = random_scene(rng, sensor_height, pitch, roll, obstacles, noise)
-    cfg = rp.Config(sensor_height=sensor_height, profile={"level": level})
-    cpp, ref = run_both(points, speed, yaw_rate, cfg)
-    assert_ground_agrees(points, cfg, cpp, ref)
-    assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
+def test_random_scenes_agree():
+    """Random scenes agree, and most driven forward with a noise the bins' points can average out (σ ≤ 1 cm) are
+    classed with an IRI on both wheels: the roughness outputs are compared, not only the reasons for declining."""
+    classed = []  # per forward scene with σ ≤ 1 cm: both wheels classed, with an IRI
+
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(seed=st.integers(0, 2**31 - 1), sensor_height=st.floats(0.5, 2.5), pitch=st.floats(-0.05, 0.05),
+           roll=st.floats(-0.05, 0.05), obstacles=st.integers(0, 4), noise=st.floats(0.0, 0.03),
+           speed=st.sampled_from([0.0, 3.0, -2.0, 8.0, 15.0]), yaw_rate=st.floats(-0.8, 0.8), level=st.booleans())
+    def agree(seed, sensor_height, pitch, roll, obstacles, noise, speed, yaw_rate, level):
+        rng = np.random.default_rng(seed)
+        points = random_scene(rng, sensor_height, pitch, roll, obstacles, noise)
+        cfg = rp.Config(sensor_height=sensor_height, profile={"level": level})
+        cpp, ref = run_both(points, speed, yaw_rate, cfg)
+        assert_ground_agrees(points, cfg, cpp, ref)
+        assert_profiles_agree(cpp, ref, np.array_equal(cpp.ground_mask, ref.ground_mask))
+        # Reversing, the wheels' paths lie behind the sensor, outside the ground ROI (x ≥ 1 m): too short by design.
+        # Noisier, most wheels are rightly declined ("noise dominates the band": 1.4 points per bin, a smooth road).
+        if speed > 0 and noise <= 0.01:
+            classed.append(all(w.roughness.iso_class is not None and w.roughness.iri.value is not None
+                               for w in (cpp.left, cpp.right)))
+
+    agree()
+    assert len(classed) >= 15 and np.mean(classed) >= 0.75, classed  # measured: 31 of 37
 
 
-@settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), count=st.integers(2, 600), ds=st.sampled_from([0.05, 0.1, 0.25]),
-       gap=st.floats(0.0, 0.6))
-def test_roughness_stage_agrees_on_random_profiles(seed, count, ds, gap):
-    rng = np.random.default_rng(seed)
-    z = np.cumsum(rng.normal(0, 0.003, count))
-    z[rng.random(count) < 0.15] = np.nan
-    cfg = rp.Config()
-    filled_cpp, filled_ref = rp.native.fill_gaps(z, ds, gap), rp.reference.fill_gaps(z, ds, gap)
-    np.testing.assert_array_equal(np.isnan(filled_cpp), np.isnan(filled_ref))
-    np.testing.assert_allclose(filled_cpp, filled_ref, rtol=1e-14, atol=1e-15, equal_nan=True)  # rounding only
-    assert rp.native.longest_valid_stretch(z) == rp.reference.longest_valid_stretch(z)
-    assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg))
+def test_roughness_stage_agrees_on_random_profiles():
+    """Gap filling and roughness agree, on the raw profiles (15 % NaN: mostly "valid stretch too short") and on the
+    profiles filled as the pipeline fills them; those long enough are classed, so the PSD and G_d are compared too."""
+    classed = []  # per profile at least min_length_m long: classed
+
+    @settings(max_examples=40, deadline=None)
+    @given(seed=st.integers(0, 2**31 - 1), count=st.integers(2, 600), ds=st.sampled_from([0.05, 0.1, 0.25]),
+           gap=st.floats(0.0, 0.6))
+    def agree(seed, count, ds, gap):
+        rng = np.random.default_rng(seed)
+        z = np.cumsum(rng.normal(0, 0.003, count))
+        z[rng.random(count) < 0.15] = np.nan
+        cfg = rp.Config()
+        filled_cpp, filled_ref = rp.native.fill_gaps(z, ds, gap), rp.reference.fill_gaps(z, ds, gap)
+        np.testing.assert_array_equal(np.isnan(filled_cpp), np.isnan(filled_ref))
+        np.testing.assert_allclose(filled_cpp, filled_ref, rtol=1e-14, atol=1e-15, equal_nan=True)  # rounding only
+        assert rp.native.longest_valid_stretch(z) == rp.reference.longest_valid_stretch(z)
+        assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg))
+        filled = rp.reference.fill_gaps(z, ds, cfg.profile.max_gap_m)  # gaps up to 1 m, as the pipeline's
+        got = rp.native.analyze_roughness(filled, ds, cfg)
+        assert_roughness_agrees(got, rp.reference.analyze_roughness(filled, ds, cfg))
+        if count * ds >= cfg.roughness.min_length_m:
+            classed.append(got.iso_class is not None)
+
+    agree()
+    assert len(classed) >= 15 and np.mean(classed) >= 0.9, classed  # measured: 22 of 22
 
 
 def random_support(rng, count_bins):

@@ -72,6 +72,30 @@ def test_the_stated_numbers():
     assert blended == pytest.approx([0.015, 0.15, 0.37, 1.00, 1.04, 1.00], abs=0.005)
 
 
+@pytest.mark.parametrize("scene", ["one band", "blended"])
+def test_the_reference_levelling_gives_the_stated_numbers(scene):
+    """The same table, from the reference's local_ground_heights on sines (3 rows 0.1 m apart, 2 cm steps): one
+    band alone (10–20 m, no neighbour to blend with) and bands with both neighbours (scored on 20–80 m of 0–100 m).
+    The table rounds to 0.01: the reference lies within 0.004 of it."""
+    cfg = Config(profile={"level_band_m": 10.0})
+    if scene == "one band":
+        x, wavelengths, stated = np.arange(10.0, 20.0, 0.02), (20.0, 10.0, 5.0, 2.5), [0.10, 0.70, 0.92, 0.98]
+        scored = np.ones(len(x), dtype=bool)
+    else:
+        x, wavelengths = np.arange(0.0, 100.0, 0.02), (40.0, 20.0, 15.0, 10.0, 7.5, 5.0)
+        stated, scored = [0.015, 0.15, 0.37, 1.00, 1.04, 1.00], (x >= 20.0) & (x < 80.0)
+    left = []
+    for wavelength in wavelengths:
+        fractions = []
+        for phase in PHASES:
+            z = 0.001 * np.sin(2 * np.pi * x / wavelength + phase)
+            xyz = np.vstack([np.column_stack([x, np.full_like(x, y), z]) for y in (-0.1, 0.0, 0.1)])
+            levelled = local_ground_heights(xyz, LEVEL, cfg)[len(x):2 * len(x)]  # the row on the axis
+            fractions.append(np.mean(levelled[scored] ** 2) / (0.001 ** 2 / 2))
+        left.append(np.mean(fractions))
+    assert left == pytest.approx(stated, abs=0.005)
+
+
 def test_blending_leaves_no_step_where_bands_meet():
     """Level to 15 m, then rising 3 %: the 10–20 m band's plane leans between the two, the 20–30 m band's lies on
     the grade, and alone they would meet 20 m ahead with a step of centimetres. Blended, the heights meet there

@@ -264,14 +264,16 @@ def test_arc_length_on_the_wheel_circle_is_angle_times_radius(impl, speed, yaw_r
     for s_outside in (-0.05, 40.0 + 1e-6):  # behind the wheel, beyond the preview length
         xy.append(on_wheel_circle(path, y_wheel, s_outside, yaw_rate))
         z.append(1000.0)
+    # The same points mirrored across the axle line (x → −x, on the same circle): where the vehicle does not go,
+    # behind it driving forward and ahead of it reversing (which looks behind), so in no bin.
+    xy += [p * [-1.0, 1.0] for p in xy[:2 * len(bins)]]
+    z += [1000.0] * (2 * len(bins))
     profile = profile_of(impl, xy, z, speed, yaw_rate, wheel, cfg)
     expected_count = np.zeros(400, np.int64)
     for k in bins:
         expected_count[[k, k - 1]] = 1
         assert profile.z[k] == k and profile.z[k - 1] == -k
     np.testing.assert_array_equal(profile.count, expected_count)
-    if speed < 0:  # reversing looks behind the vehicle
-        assert all(p[0] < 0 for p in xy[:-2])
 
 
 @pytest.mark.parametrize("yaw_rate", [0.0, 0.5])

@@ -12,7 +12,7 @@ import pytest
 import roadpreview as rp
 from paths import DATA, REPO, STEREO_PAIR, run_cli
 from roadpreview import sim
-from test_crosscheck import assert_profiles_agree
+from test_crosscheck import assert_profiles_agree, assert_same_profiles
 
 cv2 = pytest.importorskip("cv2")
 
@@ -65,7 +65,8 @@ def test_ground_plane_disparity_gives_points_on_the_ground_cpp_and_reference(cal
     cfg = cfg_for(max_depth_m=1000.0)
     found = rp.io.stereo_points(None, None, calib, disparity=d, config=cfg)
     points, variances, pixels = rp.reference.stereo.disparity_to_points(d, 0, CAMERA, cfg.stereo)
-    assert found.first_row == 0 or found.first_row == rp.reference.stereo.first_road_row(CAMERA, 240, cfg)
+    # Rows above cy − fy·(road_rise_m − h)/max_depth_m = 60 − 400·0.5/1000 = 59.8 see no road 2 m up within 1 km
+    assert found.first_row == rp.reference.stereo.first_road_row(CAMERA, 240, cfg) == 59
     keep = pixels >= found.first_row * 640
     np.testing.assert_array_equal(found.pixels, pixels[keep])
     np.testing.assert_allclose(found.points[:, :3], points[keep], rtol=1e-6, atol=1e-5)
@@ -242,9 +243,8 @@ def test_fused_range_variances_and_error_groups_cpp_against_reference(calib):
                           error_groups=found.error_groups)
         ref = rp.reference.process_fused(state, points, 5.0, 0.0, timestamp=0.1 * k,
                                          range_variances=found.range_variances, error_groups=found.error_groups)
-        for c, r in ((cpp.left, ref.left), (cpp.right, ref.right)):
-            np.testing.assert_allclose(c.z, r.z, atol=1e-4, equal_nan=True)
-            np.testing.assert_allclose(c.spread, r.spread, rtol=1e-3, atol=1e-6, equal_nan=True)
+        # Measured: heights ≤ 6.9e-9 m apart, spreads (≥ 2.5 cm) ≤ 3.4e-8 relative; rounding room, no more.
+        assert_same_profiles(cpp, ref, z_atol=5e-8)  # declined: noise dominates
         alone = ungrouped.process(points, 5.0, 0.0, timestamp=0.1 * k, range_variances=found.range_variances)
     with pytest.raises(ValueError, match="error_groups must have one entry per point"):
         rp.reference.process_fused(state, points, 5.0, 0.0, timestamp=0.4, error_groups=found.error_groups[:-1])
