@@ -29,7 +29,8 @@ public:
     bool empty() const { return count_ == 0; }
     std::uint64_t count() const { return count_; }
     double max() const { return max_; }
-    /// The value below which a fraction q of them lie (the ⌈q·n⌉-th smallest); median(): the (n/2 + 1)-th.
+    /// The value below which a fraction q of them lie (the ⌈q·n⌉-th smallest); median(): the middle one, or the mean
+    /// of the two middle ones of an even count (as Python's statistics.median and the batch's summary take it).
     /// NaN before the first value.
     double percentile(double q) const {
         if (empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -37,7 +38,12 @@ public:
         const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
         return v[std::min(k, v.size() - 1)];
     }
-    double median() const { return empty() ? std::numeric_limits<double>::quiet_NaN() : sorted()[values_.size() / 2]; }
+    double median() const {
+        if (empty()) return std::numeric_limits<double>::quiet_NaN();
+        const std::vector<double> v = sorted();
+        const std::size_t mid = v.size() / 2;
+        return v.size() % 2 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
+    }
 
 private:
     std::vector<double> sorted() const {

@@ -415,8 +415,17 @@ int run(const RunOptions& o, const CLI::App& app) {
         throw UsageError("--alpha weighs the newest frame of the EMA fusion: give --fusion ema too (fusion.method is " +
                          std::string(rp::to_string(cfg.fusion.method)) + ")");
     prepare_profile_dir(o);
-    if (o.read_ahead_m > 0.0) rp::ProfileReadout(cfg, o.read_ahead_m);  // a distance beyond the profiles: said now
-    for (const double length_m : o.segment_lengths_m) rp::RouteBuilder(cfg).check_segment_length(length_m);  // too
+    // Distances the profiles cannot hold: usage errors, said before any input is read.
+    const auto as_usage_error = [](const char* flag, auto&& check) {
+        try {
+            check();
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(std::string(flag) + ": " + e.what());
+        }
+    };
+    if (o.read_ahead_m > 0.0) as_usage_error("--read-ahead-m", [&] { rp::ProfileReadout(cfg, o.read_ahead_m); });
+    for (const double length_m : o.segment_lengths_m)
+        as_usage_error("--segments", [&] { rp::RouteBuilder(cfg).check_segment_length(length_m); });
     auto source = open_source(o, app, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;

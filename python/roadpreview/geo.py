@@ -84,24 +84,28 @@ def locate_from_gnss(distances_m, frame_distance_m, frame_times_s, track: dict, 
 
 def locate_segments(rows: list[dict], frames, origin: Optional[Sequence[float]] = None,
                     gnss: Optional[str] = None, frame_rate_hz: float = 10.0) -> list[dict]:
-    """The segment rows (``batch.segment_rows``) with start/end lat and lon added."""
+    """The segment rows (``batch.segment_rows``) with start/end lat and lon added; None for a start or end ahead of
+    the drive's last frame (the road it previewed but never reached: docs/output.md)."""
     if not rows:
         return rows
+    if origin is not None and all(r["x_start_m"] is None for r in rows):
+        raise ValueError("--origin places poses on the map: the segments have no poses "
+                         "(give --poses or --motion-from lidar, or a --gnss file)")
     for end in ("start", "end"):
         if origin is not None:
-            xs = [r[f"x_{end}_m"] for r in rows]
-            if any(x is None for x in xs):
-                raise ValueError("--origin places poses on the map: the segments have no poses "
-                                 "(give --poses or --motion-from lidar, or a --gnss file)")
-            lat, lon = locate_from_origin(xs, [r[f"y_{end}_m"] for r in rows], origin)
+            driven = [r[f"x_{end}_m"] is not None for r in rows]
+            xs = [r[f"x_{end}_m"] if ok else 0.0 for r, ok in zip(rows, driven)]
+            ys = [r[f"y_{end}_m"] if ok else 0.0 for r, ok in zip(rows, driven)]
+            lat, lon = locate_from_origin(xs, ys, origin)
         else:
             track = read_gnss(gnss)
             d = distance_by_frame(frames.column("timestamp").to_pylist(), frames.column("speed_mps").to_pylist(),
                                   frame_rate_hz)
             t = np.array([np.nan if v is None else v for v in frames.column("timestamp").to_pylist()], dtype=float)
+            driven = [r[f"{end}_m"] <= d[-1] + 1e-9 for r in rows]
             lat, lon = locate_from_gnss([r[f"{end}_m"] for r in rows], d, t, track, os.fspath(gnss))
-        for r, a, b in zip(rows, lat, lon):
-            r[f"lat_{end}"], r[f"lon_{end}"] = float(a), float(b)
+        for r, ok, a, b in zip(rows, driven, lat, lon):
+            r[f"lat_{end}"], r[f"lon_{end}"] = (float(a), float(b)) if ok else (None, None)
     return rows
 
 
@@ -115,8 +119,8 @@ def to_geodataframe(segments):
     missing = [c for c in ("lat_start", "lon_start", "lat_end", "lon_end") if c not in df]
     if missing:
         raise ValueError(f"segments have no {', '.join(missing)}: give --origin with poses, or --gnss")
-    lines = [LineString([(a, b), (c, d)]) for a, b, c, d in
-             zip(df["lon_start"], df["lat_start"], df["lon_end"], df["lat_end"])]
+    lines = [LineString([(a, b), (c, d)]) if all(pd.notna([a, b, c, d])) else None  # ahead of the drive: none
+             for a, b, c, d in zip(df["lon_start"], df["lat_start"], df["lon_end"], df["lat_end"])]
     return gpd.GeoDataFrame(df, geometry=lines, crs="EPSG:4326")
 
 
@@ -130,12 +134,15 @@ def write_map(gdf, png_path, length_m: Optional[float] = None, side: str = "vehi
     from matplotlib.ticker import MaxNLocator
 
     length = length_m if length_m is not None else float(gdf["segment_length_m"].min())
-    shown = gdf[gdf["segment_length_m"] == length]
+    shown = gdf[(gdf["segment_length_m"] == length) & gdf.geometry.notna()]  # the segments the drive reached
     colours = [ISO_COLOURS.get(c, NO_CLASS_COLOUR) if isinstance(c, str) else NO_CLASS_COLOUR
                for c in shown[f"class_{side}"]]
     fig, ax = plt.subplots(figsize=(7, 7))
-    shown.plot(ax=ax, color=colours, linewidth=4, aspect=None)
-    _square_view(ax, shown.total_bounds)
+    if len(shown):
+        shown.plot(ax=ax, color=colours, linewidth=4, aspect=None)
+        _square_view(ax, shown.total_bounds)
+    else:  # a drive shorter than a segment: every segment ends on road it previewed but never reached
+        ax.text(0.5, 0.5, f"no {length:g} m segment lies on the drive", ha="center", transform=ax.transAxes)
     present = sorted({c for c in shown[f"class_{side}"] if isinstance(c, str)})
     handles = [Line2D([], [], color=ISO_COLOURS[c], lw=4, label=f"class {c}") for c in present]
     handles.append(Line2D([], [], color=NO_CLASS_COLOUR, lw=4, label="no class"))

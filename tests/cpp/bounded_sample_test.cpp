@@ -20,10 +20,18 @@ TEST(BoundedSample, ExactPercentilesUpToItsCapacity) {
     }
     std::sort(all.begin(), all.end());
     EXPECT_EQ(s.count(), 1000u);
-    EXPECT_EQ(s.median(), all[500]);
+    EXPECT_EQ(s.median(), 0.5 * (all[499] + all[500]));  // an even count: the mean of the two middle values
     EXPECT_EQ(s.percentile(0.99), all[989]);
     EXPECT_EQ(s.percentile(0.5), all[499]);
     EXPECT_EQ(s.max(), all.back());
+}
+
+TEST(BoundedSample, TheMedianOfAnOddCountIsItsMiddleValue) {
+    BoundedSample s;
+    for (const double v : {4.88, 3.83, 9.0}) s.add(v);
+    EXPECT_EQ(s.median(), 4.88);
+    s.add(1.0);
+    EXPECT_DOUBLE_EQ(s.median(), 0.5 * (3.83 + 4.88));
 }
 
 TEST(BoundedSample, BeyondItsCapacityAFairSampleOfEveryValue) {

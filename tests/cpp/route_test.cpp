@@ -114,6 +114,8 @@ TEST(Route, PosesGiveDistanceAndPlace) {
     const auto segments = route.segments(2.0);
     ASSERT_TRUE(segments[0].end.has_value());
     EXPECT_NEAR(segments[0].end->y_m, 3.0, 1e-12);
+    ASSERT_TRUE(segments[1].start.has_value());  // 2 m: driven
+    EXPECT_FALSE(segments[1].end.has_value());   // 4 m: ahead of the last frame, where the drive never was
     EXPECT_THROW(route.add(frame(2, 4.0, 0.0)), std::invalid_argument);  // a pose for every frame or none
 }
 

@@ -81,11 +81,12 @@ def test_a_gnss_track_puts_the_batch_segments_on_the_map(tmp_path):
 
     segs = gpd.read_parquet(out / "segments.geoparquet")
     assert len(segs) > 0 and segs.crs.to_epsg() == 4326
-    # the vehicle is at distance d at t = d / 5 s; road seen ahead of the last frame (t = 2 s) is placed at the
-    # last frame, as the route's poses are
+    # the vehicle is at distance d at t = d / 5 s; road seen ahead of the last frame (t = 2 s, 10 m) was never
+    # reached: not placed (it once took the last frame's place, every such segment on one point)
     assert list(segs["start_m"][:2]) == [0.0, 10.0]
-    when = np.minimum(segs["start_m"].to_numpy() / 5.0, 2.0)
-    np.testing.assert_allclose(segs["lat_start"], np.interp(when, t, lat), atol=1e-9)
+    np.testing.assert_allclose(segs["lat_start"], np.interp(segs["start_m"] / 5.0, t, lat), atol=1e-9)
+    assert list(segs["end_m"]) == [10.0, 20.0] and np.isnan(segs["lat_end"].iloc[1])  # 20 m: never reached
+    assert segs.geometry.notna().sum() == 1  # 0–10 m: the drive's one whole segment
     assert segs["lat_start"].iloc[1] - segs["lat_start"].iloc[0] == pytest.approx(10.0 / 111_250.0, rel=1e-6)
     features = json.loads((out / "segments.geojson").read_text())["features"]
     assert len(features) == len(segs) and features[0]["geometry"]["type"] == "LineString"
@@ -105,6 +106,8 @@ def test_poses_and_an_origin_put_the_segments_on_the_map(tmp_path):
     segs = gpd.read_parquet(out / "segments.geoparquet")
     assert len(segs) >= 1
     assert segs["lat_start"].iloc[0] == pytest.approx(ORIGIN[0], abs=1e-7)  # the drive starts at the origin
+    assert segs["lat_end"].isna().all()  # every segment ends ahead of the drive's 0.5 m: never reached, not placed
+    assert segs.geometry.isna().all()
     with pytest.raises(ValueError, match="--origin places poses on the map: the segments have no poses"):
         run_one(tmp_path / "out2", [str(OS1_128_PCAP)], "os1", config={"sensor_height": OS1_128_HEIGHT},
                 motion=(2.5, None), geo_options={"origin": ORIGIN})
@@ -121,4 +124,7 @@ def test_lidar_odometry_places_a_pcap_without_poses_on_the_map(tmp_path):
     assert len(np.loadtxt(out / "recordings" / "os1" / "odometry.poses.txt", ndmin=2)) == 3
     import geopandas as gpd
 
-    assert gpd.read_parquet(out / "segments.geoparquet")["lat_start"].notna().all()
+    segs = gpd.read_parquet(out / "segments.geoparquet")
+    driven = segs["start_m"] <= 0.5  # the drive's 0.5 m: what lies further ahead was never reached, not placed
+    assert segs["lat_start"][driven].notna().all() and segs["lat_start"][~driven].isna().all()
+    assert segs["lat_end"].isna().all()

@@ -157,6 +157,13 @@ def test_sparse_sampling_limits_the_band(impl):
     assert np.sinc(n_hi * 0.5) ** 4 >= 0.5 > np.sinc((n_hi + 1 / 40.1) * 0.5) ** 4  # where Φ drops below ½
     assert result.iso_class == "D"
     assert impl.analyze_roughness(z, DS, Config()).iso_class in "ABC"  # the interpolation smooths it away
+    # The noise floor is the noise's mean over the band the fit used, not over the requested one: gaps redden the
+    # noise (more at low n), so the mean up to 4 cycles/m would read it ~2× lower.
+    n, noise = np.asarray(result.n), np.asarray(result.noise_psd)
+    in_band = (n >= result.band[0] * (1 - 1e-9)) & (n <= n_hi * (1 + 1e-9))
+    assert result.noise_floor == pytest.approx(noise[in_band].mean(), rel=1e-12)
+    requested = (n >= result.band[0] * (1 - 1e-9)) & (n <= 4.0 * (1 + 1e-9))
+    assert result.noise_floor > 1.5 * noise[requested].mean()
 
 
 def test_profile_noise_floor_of_a_flat_noisy_road(impl):

@@ -161,7 +161,8 @@ def test_a_distance_ahead_that_is_not_within_the_profiles_is_an_error(ahead):
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--read-ahead-m",
                ahead, "-q", check=False)
     if float(ahead) > 0:
-        one_line_error(proc, "readout: the distance ahead", "profile.preview_length_m")
+        one_line_error(proc, "--read-ahead-m: readout: the distance ahead", "profile.preview_length_m")
+        assert proc.returncode == 2  # a usage error, said before the input is read
     else:  # refused by the flag's own check
         assert proc.returncode != 0 and proc.stderr.startswith("--read-ahead-m: expected a number > 0"), proc.stderr
     with pytest.raises(ValueError, match="distance ahead"):

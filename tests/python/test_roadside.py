@@ -69,6 +69,78 @@ def test_assignment_matches_scipy_linear_sum_assignment(rows, cols, seed):
     assert all(cost[r, c] <= 6.0 for r, c in got)
 
 
+def reference_track(scans, pose, confirm_hits, background_s, cycle_s=1 / sr.SCAN_HZ):
+    """One object's track through the reference stages (§13.3–13.8): background, foreground points per cycle, one
+    component, its centre (L-shape, or once moving the extent along the velocity grown to the learned extent and the
+    class's smallest, away from the scanner), Kalman predict/update. Returns (t_end, x, y, speed) per cycle."""
+    extent = {"car": (4.5, 1.8), "cyclist": (1.75, 0.5), "pedestrian": (0.0, 0.0)}  # class_extent_m
+    half_turn = lambda a: (a - math.pi / 2) % -math.pi + math.pi / 2  # noqa: E731 — to (−π/2, π/2]: box axes
+    t0 = scans[0]["time_s"]
+    learn = [s for s in scans if s["time_s"] - t0 < background_s]
+    bg = ref.background(np.array([s["ranges_m"] for s in learn], np.float64))
+    cycles = {}
+    for s in scans[len(learn):]:
+        cycles.setdefault(math.floor((s["time_s"] - t0) / cycle_s), []).append(s)
+    track, out = None, []
+
+    def box(pts):  # §13.8's visible box: along the velocity once moving, else the L-shape's (axes as the track's)
+        if track is None or track["hits"] < confirm_hits or math.hypot(*track["x"][2:]) <= 1.0:
+            x, y, length, width, heading = ref.fit_l_shape(pts)
+            if track is not None and track["hits"] > 0 and abs(half_turn(heading - track["heading"])) > math.pi / 4:
+                length, width, heading = width, length, heading + math.pi / 2
+            return np.array([x, y]), length, width, heading, False
+        heading = math.atan2(track["x"][3], track["x"][2])
+        u = np.array([math.cos(heading), math.sin(heading)])
+        v = np.array([-u[1], u[0]])
+        c1, c2 = pts @ u, pts @ v
+        return (c1.min() + c1.max()) / 2 * u + (c2.min() + c2.max()) / 2 * v, np.ptp(c1), np.ptp(c2), heading, True
+
+    for k in sorted(cycles):
+        t_meas = np.mean([s["time_s"] for s in cycles[k]])
+        pts = np.vstack([ref.scan_points(s["ranges_m"], s["start_angle_rad"], s["step_rad"], pose,
+                                         ref.foreground(s["ranges_m"], bg)) for s in cycles[k]])
+        labels, n = ref.label_points(pts) if len(pts) else (None, 0)
+        comps = [pts[labels == i] for i in range(1, n + 1) if np.sum(labels == i) >= 2]
+        assert len(comps) <= 1  # the pedestrian alone: no assignment to replay
+        if track is not None and t_meas > track["t"]:
+            track["x"], track["P"] = ref.kalman_predict(track["x"], track["P"], t_meas - track["t"])
+            track["t"] = t_meas
+        if comps:
+            m = comps[0]
+            l_shape = np.array(ref.fit_l_shape(m)[:2])
+            sigma = 0.08 + 0.005 * math.hypot(*(l_shape - pose[:2]))  # position_sigma_m + sigma_per_range · range
+            new = track is None
+            if new:
+                track = dict(t=t_meas, x=np.array([*l_shape, 0.0, 0.0]), P=np.diag([sigma ** 2] * 2 + [100.0] * 2),
+                             hits=0, length=0.0, width=0.0, heading=0.0, corrected=False, offset=np.zeros(2))
+            visible, length, width, heading, moving = box(m)
+            z = visible
+            if moving:  # grown to the learned extent (at least its class's), away from the scanner
+                speed = math.hypot(*track["x"][2:])
+                cls = ("car" if track["length"] >= 2.6 or track["width"] >= 1.4 else
+                       "cyclist" if track["length"] >= 1.2 or speed > 2.5 else "pedestrian")
+                u = np.array([math.cos(heading), math.sin(heading)])
+                v, away = np.array([-u[1], u[0]]), visible - pose[:2]
+                z = (visible + np.sign(away @ u or 1) * max(0.0, max(track["length"], extent[cls][0]) - length) / 2 * u
+                     + np.sign(away @ v or 1) * max(0.0, max(track["width"], extent[cls][1]) - width) / 2 * v)
+                if not track["corrected"]:  # the correction switches on: the state moves with it, once
+                    track["x"][:2] += z - visible - track["offset"]
+                    track["corrected"] = True
+            track["offset"] = z - visible
+            track["x"], track["P"] = ref.kalman_update(track["x"], track["P"], z, sigma)
+            _, length, width, heading, _ = box(m)  # the learned extent, along the updated velocity
+            track["length"], track["width"] = max(track["length"], length), max(track["width"], width)
+            track["heading"] = half_turn(heading)
+            track["hits"] += 1
+            if new:
+                track["x"][:2] = l_shape
+        if track is not None:
+            t_end = t0 + (k + 1) * cycle_s
+            x = ref.kalman_predict(track["x"], track["P"], t_end - track["t"])[0] if t_end > track["t"] else track["x"]
+            out.append((t_end, x[0], x[1], math.hypot(x[2], x[3])))
+    return out
+
+
 def test_kalman_track_matches_the_reference():
     """A single track fed the same centres: the C++ output equals the reference filter predicted to the cycle."""
     site = sr.site_yaml(sr.scanners()[:1], camera=False, processing="{confirm_hits: 1, background_s: 0.05}")
@@ -76,12 +148,14 @@ def test_kalman_track_matches_the_reference():
     sc = sr.scanners()[0]
     mover = sr.Mover("pedestrian", -4.5, -3.0, math.pi / 2, 1.4, 0.2, 5.0, 1)
     rng = np.random.default_rng(0)
-    cycles = []
+    cycles, scans = [], []
     for k in range(60):
         t = k / sr.SCAN_HZ
         s = sr.scan(sc, k, t, [mover] if mover.present(t) else [], rng)
         s["scanner"] = 0
+        scans.append(s)
         cycles += proc.push(s)
+    cycles += proc.finish()
     tracked = [c for c in cycles if c["objects"]]
     assert len(tracked) >= 35  # from 0.2 s (the pedestrian appears) to 1.57 s
     assert {o["id"] for c in tracked for o in c["objects"]} == {1}
@@ -90,12 +164,15 @@ def test_kalman_track_matches_the_reference():
     assert math.hypot(last["x_m"] - truth[0], last["y_m"] - truth[1]) < 0.1
     assert last["speed_mps"] == pytest.approx(1.4, abs=0.15)
     assert last["class"] == "pedestrian" and last["source"] == "laser"
-    # The reference filter on the same kind of measurements converges to the same speed.
-    x, P = np.array([truth[0], -3.0, 0.0, 0.0]), np.diag([0.0064, 0.0064, 100.0, 100.0])
-    for k in range(1, 60):
-        x, P = ref.kalman_predict(x, P, 1 / sr.SCAN_HZ)
-        x, P = ref.kalman_update(x, P, (-4.5, -3.0 + 1.4 * k / sr.SCAN_HZ))
-    assert x[3] == pytest.approx(1.4, abs=0.05)
+    # The reference filter fed the same centres, cycle by cycle (the start-up transient too: 0 to 3.7 m/s).
+    want = reference_track(scans, np.array([sc.x_m, sc.y_m, sc.yaw_rad]), confirm_hits=1, background_s=0.05)
+    assert len(want) == len(tracked)
+    for c, (t_end, x, y, speed) in zip(tracked, want):
+        o = c["objects"][0]
+        assert c["t_s"] == pytest.approx(t_end, abs=1e-6)
+        # The output is rounded to mm (measured differences ≤ 5.0e-4 m, m/s): 1 mm, far below the 1.4 m/s and the
+        # 0.1–0.7 m the track's start-up would be off by with the wrong centre (the class's extent left out).
+        assert (o["x_m"], o["y_m"], o["speed_mps"]) == pytest.approx((x, y, speed), abs=1e-3), c["t_s"]
 
 
 @pytest.mark.parametrize("scenario", sr.SCENARIOS)
@@ -116,6 +193,23 @@ def test_simulated_scenarios_track_each_road_user(scenario):
     assert np.mean(classes) > 0.95
     ids = {o["id"] for c in cycles for o in c["objects"] if o["id"] > 0 and o["age_s"] > 1.0}
     assert len(ids) == len(run.movers), ids  # one lasting id per road user, none for walls and poles
+
+
+def test_each_cycles_scanner_status_counts_the_scans_up_to_its_end():
+    """A cycle's `scanners` are as of its end: the scans it and the cycles before it used (once each counted the scan
+    that closed it, of the next cycle: its `last_scan_s` lay up to a scan period after `t_s`)."""
+    run = sr.simulate("two_cars_crossing", seed=3)
+    cycles = rp.roadside.Processor(run.site_yaml).run(run.scans, run.detections)
+    times = [np.array([s["time_s"] for s in run.scans if s["scanner"] == k]) for k in range(len(sr.scanners()))]
+    assert len(cycles) > 100
+    # Scanner 0 scans on the cycles' boundaries (a scan at a cycle's end opens the next one, up to rounding and t_s's
+    # 1 µs), scanner 1 11 ms after them: the scan that closed a cycle came 11 ms after its end.
+    for c in cycles:
+        for k, status in enumerate(c["scanners"]):
+            up_to_end = times[k][times[k] <= c["t_s"] + 1e-5]
+            assert len(times[k][times[k] < c["t_s"] - 1e-5]) <= status["scans"] <= len(up_to_end), (c["t_s"], k)
+            assert status["last_scan_s"] == pytest.approx(up_to_end[-1], abs=2e-5) or status["scans"] < len(up_to_end)
+            assert status["last_scan_s"] <= c["t_s"] + 1e-5, (c["t_s"], k)
 
 
 @pytest.mark.parametrize("offset", [0.1, -0.1])

@@ -66,6 +66,10 @@ def test_segments_csv_has_a_row_per_segment_with_the_documented_columns(kitti_ro
             assert f"{key}_{side}" in rows[0]
     classified = [r for r in tens if r["class_vehicle"]]
     assert classified and all(r["class_vehicle"] in "ABCDEFGH" for r in classified)
+    # The vehicle as a frame's (method §4): declined exactly when both wheels are, then for that reason.
+    declined = [r for r in rows if not r["class_left"] and not r["class_right"]]
+    assert declined and all(r["class_reason_vehicle"] == "both wheels declined" for r in declined)
+    assert all(r["class_vehicle"] for r in rows if r["class_left"] and r["class_right"])
     assert all(r["x_start_m"] == "" for r in rows)  # no poses given
     assert any(number(r["iri_m_per_km_left"]) > 0 for r in tens)  # IRI of 10 m segments, from the whole stretch
 
@@ -193,26 +197,36 @@ def test_a_kitti_route_leaves_the_obstacles_in_its_wheel_paths_unfilled(tmp_path
 
 def test_poses_give_the_segments_their_place(tmp_path):
     run("run", OS1_128_PCAP, "--speed", 2.5, "--sensor-height", OS1_128_HEIGHT, "--fusion", "kalman", "--poses", POSES,
-        "--segments", 10, "--segments-csv", tmp_path / "seg.csv", "-q", "-o", tmp_path / "out.jsonl")
+        "--segments", 0.2, "--segments-csv", tmp_path / "seg.csv", "-q", "-o", tmp_path / "out.jsonl")
     rows = read_csv(tmp_path / "seg.csv")
-    assert rows and number(rows[0]["x_start_m"]) == pytest.approx(0.0, abs=1e-6)
-    assert number(rows[-1]["x_end_m"]) == pytest.approx(0.498, abs=0.01)  # the poses' last x: 0.245 + 0.253 m
+    # The drive's three frames span x 0 … 0.498 m (0.245 + 0.253): a segment's ends are placed where it passed them,
+    # and left empty ahead of its last frame, where it never was (they once repeated the last pose).
+    assert number(rows[0]["x_start_m"]) == pytest.approx(0.0, abs=1e-6)
+    assert [number(r["x_end_m"]) for r in rows[:2]] == pytest.approx([0.2, 0.4], abs=0.01)
+    assert rows[2]["x_start_m"] != "" and all(r["x_end_m"] == r["y_end_m"] == "" for r in rows[2:])
+    assert all(r["x_start_m"] == "" for r in rows[3:])
 
 
 def test_route_errors_name_the_problem(tmp_path):
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--segments", "0,10",
                check=False)
-    assert proc.returncode != 0 and "--segments" in proc.stderr
-    # Shorter than a bin: once 61 MB of rows for 40 m of road, and on. Refused before the input is read.
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == "--segments: expected a number > 0, got 0\nRun with --help for more information.\n"
+    # Shorter than a bin: once 61 MB of rows for 40 m of road, and on. A usage error, said before the input is read.
     proc = run("run", tmp_path / "absent.bin", "--speed", 5, "--segments", "10,1e-9", check=False)
-    assert proc.returncode == 1 and "at least one profile bin (profile.ds_m 0.1 m), got 1e-09" in proc.stderr
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == ("roadpreview: error: --segments: route: segment length must be a number of metres of at "
+                           "least one profile bin (profile.ds_m 0.1 m), got 1e-09\n")
     with pytest.raises(ValueError, match="at least one profile bin"):
         rp.reference.Route().segments(0.05)
     blocked = tmp_path / "file"
     blocked.write_text("")
     proc = run("run", KITTI_FRAMES[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--export-profile",
                blocked / "sub", "-q", "-o", tmp_path / "o.jsonl", check=False)
-    assert proc.returncode != 0 and "sub" in proc.stderr
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == (f"roadpreview: error: --export-profile {blocked / 'sub'}: cannot be made a directory "
+                           "(Not a directory)\n")
+    assert not (tmp_path / "o.jsonl").exists()  # refused before anything was run
 
 
 def test_the_cpp_route_builder_matches_the_numpy_reference_on_the_same_frames():

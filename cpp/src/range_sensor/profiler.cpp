@@ -11,6 +11,7 @@
 #include "core/text.hpp"
 #include "pipeline/output_json.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
+#include "roadpreview/roughness/support.hpp"
 
 namespace roadpreview {
 namespace {
@@ -34,16 +35,42 @@ double sample_std(const std::vector<double>& v) {
     return std::sqrt(ss / static_cast<double>(v.size() - 1));
 }
 
-// Noise-aware roughness needs bins of 2+ readings to measure the noise; with single-reading bins only, the
-// plain fit of §4 (its reason names the fallback).
+// The highest frequency (cycles/m) the readings' spacing resolves over a profile's longest stretch: Φ ≥
+// min_resolved_fraction up to it (docs/noise-aware-roughness.md §3); infinite when every ordinate is resolved.
+double resolved_band_max(const Profile& p, double min_resolved_fraction) {
+    const auto [first, last] = longest_valid_stretch(p.z);
+    const std::size_t bins = last - first;
+    std::vector<double> n;
+    for (std::size_t k = 1; k <= bins / 2; ++k)  // the grid of the stretch's PSD
+        n.push_back(static_cast<double>(k) / (static_cast<double>(bins) * p.ds));
+    if (n.empty()) return std::numeric_limits<double>::infinity();
+    const std::vector<double> phi = resolved_fraction(p.count.data() + first, bins, p.ds, n);
+    for (std::size_t k = 0; k < n.size(); ++k)
+        if (phi[k] < min_resolved_fraction) return k > 0 ? n[k - 1] : 0.0;
+    return std::numeric_limits<double>::infinity();
+}
+
+// Noise-aware roughness needs bins of 2+ readings to measure the noise. With single-reading bins only, the plain
+// fit of §4 over the band the readings' spacing resolves (`resolved_max`, cycles/m; band_limit "sampling" when it
+// is the limit): between sparse readings the interpolation smooths the short waves away, and a fit up to
+// 4 cycles/m read a class C road as A.
+template <class Analyze>
+Roughness plain_fit_over_resolved_band(const RoughnessConfig& cfg, double resolved_max, Analyze&& analyze) {
+    RoughnessConfig plain = cfg;
+    plain.noise_aware = false;
+    const bool sampling = resolved_max < plain.band_max_cpm;
+    plain.band_max_cpm = std::min(plain.band_max_cpm, resolved_max);
+    Roughness r = analyze(plain);
+    if (sampling) r.band_limit = BandLimit::Sampling;
+    return r;
+}
+
 Roughness wheel_roughness(const Profile& p, const RangeProfilerConfig& cfg) {
     Roughness r = analyze_roughness(p, cfg.roughness);
-    if (r.reason == RoughnessReason::NoiseUnknown) {
-        RoughnessConfig plain = cfg.roughness;
-        plain.noise_aware = false;
-        r = analyze_roughness(p.z, p.ds, plain);
-    }
-    r.iri = profile_iri(p.z, p.ds, cfg.iri);
+    if (r.reason == RoughnessReason::NoiseUnknown)
+        r = plain_fit_over_resolved_band(cfg.roughness, resolved_band_max(p, cfg.roughness.min_resolved_fraction),
+                                         [&](const RoughnessConfig& plain) { return analyze_roughness(p, plain); });
+    r.iri = wheel_iri(p, r, cfg.iri);  // backed fraction, noise, and declined where too sparse
     return r;
 }
 
@@ -136,9 +163,10 @@ RangeWindow RangeProfiler::close_window() {
     w.right.roughness = wheel_roughness(w.right, cfg_);
     w.vehicle = vehicle_roughness(w.left, w.right, cfg_.roughness);
     if (w.vehicle.reason == RoughnessReason::NoiseUnknown) {
-        RoughnessConfig plain = cfg_.roughness;
-        plain.noise_aware = false;
-        w.vehicle = vehicle_roughness(w.left.z, w.right.z, cfg_.ds_m, plain);
+        const double f = cfg_.roughness.min_resolved_fraction;
+        w.vehicle = plain_fit_over_resolved_band(
+            cfg_.roughness, std::min(resolved_band_max(w.left, f), resolved_band_max(w.right, f)),
+            [&](const RoughnessConfig& plain) { return vehicle_roughness(w.left, w.right, plain); });
     }
     w.vehicle.iri = vehicle_iri(w.left.roughness.iri, w.right.roughness.iri);
     if (std::none_of(left.begin(), left.end(), [](auto v) { return v; })) w.reason = "no left-wheel samples";

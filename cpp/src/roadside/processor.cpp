@@ -108,7 +108,6 @@ std::vector<bool> Processor::world_foreground(const LaserScan& input) const {
 std::vector<Cycle> Processor::push(const LaserScan& input) {
     std::int64_t invalid = 0;
     LaserScan scan = checked(input, &invalid);
-    status_[static_cast<std::size_t>(scan.scanner)].invalid_ranges += invalid;
     const ScannerSite& where = site_.scanners[static_cast<std::size_t>(scan.scanner)];
     if (scan.pose && !world_)
         throw std::runtime_error(scan.source + ": the scan carries a pose (a moving scanner): learn the world "
@@ -117,8 +116,12 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     auto& st = status_[static_cast<std::size_t>(scan.scanner)];
     if (st.last_scan_s >= 0.0 && scan.time_s + 1e-9 < st.last_scan_s)
         throw std::runtime_error(scan.source + ": scan time goes backwards for scanner '" + where.name + "'");
-    st.last_scan_s = scan.time_s;
-    ++st.scans;
+    // Counted once the cycle this scan closes is out: that cycle's status is of the scans up to its end.
+    const auto count_scan = [&] {
+        st.last_scan_s = scan.time_s;
+        ++st.scans;
+        st.invalid_ranges += invalid;
+    };
     std::vector<Cycle> done;
     BackgroundModel& bg = background_[static_cast<std::size_t>(scan.scanner)];
     if (!scan.pose && !bg.frozen()) {
@@ -127,6 +130,7 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
         if (bg.learned_scans() == 0) start = scan.time_s;
         if (scan.time_s - start < site_.settings.background_s) {
             bg.learn(scan);
+            count_scan();
             return done;
         }
         bg.freeze();
@@ -135,6 +139,7 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     if (index > cycle_index_ && !pending_.empty())
         done.push_back(run_cycle(first_time_s_ + static_cast<double>(cycle_index_ + 1) * site_.settings.cycle_s));
     cycle_index_ = std::max(cycle_index_, index);
+    count_scan();
     pending_.push_back(std::move(scan));
     return done;
 }

@@ -295,24 +295,24 @@ void classify(Roughness& r, double length_m, double ds, const RoughnessConfig& c
     used.clear();
     for (std::size_t k = 1; k < sp.n.size(); ++k)
         if (sp.n[k] >= lo * (1.0 - kBandEdgeTolerance) && sp.n[k] <= hi * (1.0 + kBandEdgeTolerance)) used.push_back(k);
-    if (support) {
-        r.backed_fraction = support->backed_fraction;
-        if (support->noise_known) {
-            r.noise_psd.assign(support->noise.begin(), support->noise.end());
-            double sum = 0.0;
-            for (std::size_t k : used) sum += r.noise_psd[k];
-            if (!used.empty()) r.noise_floor = sum / static_cast<double>(used.size());
-        }
-    }
+    if (support) r.backed_fraction = support->backed_fraction;
     const bool noise_aware = support && cfg.noise_aware;
-    if (noise_aware && !used.empty()) {  // up to the first ordinate the sampling no longer resolves
-        std::size_t keep = 0;
+    std::size_t keep = used.size();  // up to the first ordinate the sampling no longer resolves
+    if (noise_aware) {
+        keep = 0;
         while (keep < used.size() && support->resolved[used[keep]] >= cfg.min_resolved_fraction) ++keep;
-        if (keep < used.size()) {
-            hi = keep > 0 ? sp.n[used[keep - 1]] : lo;
-            used.resize(keep);
-            r.band_limit = BandLimit::Sampling;
-        }
+    }
+    if (support && support->noise_known) {  // over the band the fit uses; the requested one when none is left
+        r.noise_psd.assign(support->noise.begin(), support->noise.end());
+        const std::size_t over = keep > 0 ? keep : used.size();
+        double sum = 0.0;
+        for (std::size_t j = 0; j < over; ++j) sum += r.noise_psd[used[j]];
+        if (over > 0) r.noise_floor = sum / static_cast<double>(over);
+    }
+    if (keep < used.size()) {
+        hi = keep > 0 ? sp.n[used[keep - 1]] : lo;
+        used.resize(keep);
+        r.band_limit = BandLimit::Sampling;
     }
     if (lo >= hi || static_cast<int>(used.size()) < cfg.min_band_points) {
         r.reason = RoughnessReason::TooFewOrdinates;

@@ -172,7 +172,7 @@ std::optional<Pose2> RouteBuilder::pose_at(double distance_m) const {
         const auto& [d1, p1] = track_[i];
         if (distance_m <= d1) return d1 > d0 ? interpolate(p0, p1, (distance_m - d0) / (d1 - d0)) : p1;
     }
-    return track_.back().second;  // the road ahead of the last frame: where the drive was last seen
+    return std::nullopt;  // the road ahead of the last frame: the drive was never there
 }
 
 void RouteBuilder::check_segment_length(double length_m) const {
@@ -203,7 +203,9 @@ std::vector<RouteSegment> RouteBuilder::segments(double length_m) const {
         const Profile pl = segment_profile(l, j0, j1), pr = segment_profile(r, j0, j1);
         s.left = {analyze_roughness(pl, cfg_.roughness), segment_iri(slope_l, pl, j0, j1), backed_fraction(pl)};
         s.right = {analyze_roughness(pr, cfg_.roughness), segment_iri(slope_r, pr, j0, j1), backed_fraction(pr)};
-        s.vehicle = {vehicle_roughness(pl, pr, cfg_.roughness), vehicle_iri(s.left.iri, s.right.iri),
+        Roughness vehicle = vehicle_roughness(pl, pr, cfg_.roughness);
+        reconcile_vehicle(vehicle, s.left.roughness, s.right.roughness);  // as a frame's (method.md §4, "Vehicle")
+        s.vehicle = {vehicle, vehicle_iri(s.left.iri, s.right.iri),
                      0.5 * (s.left.backed_fraction + s.right.backed_fraction)};
         out.push_back(std::move(s));
     }

@@ -229,16 +229,17 @@ def classify_psd(n: np.ndarray, psd: np.ndarray, length: float, ds: float, cfg: 
     centers, octave_gd = octave_bands(n, psd)
     result = Roughness(n=n, psd=psd, octave_centers=centers, octave_gd=octave_gd, band_limit=limit)
     used = np.flatnonzero(in_band(n, lo, hi))
+    noise_aware = support is not None and cfg.roughness.noise_aware
+    # The band the sampling resolves: the ordinates up to the first one it no longer does.
+    resolved = _leading(used, support.resolved[used] >= cfg.roughness.min_resolved_fraction) if noise_aware else used
     if support is not None:
         result.backed_fraction, result.noise_psd = support.backed, support.noise
-        if support.noise is not None and len(used):
-            result.noise_floor = float(np.mean(support.noise[used]))
-    noise_aware = support is not None and cfg.roughness.noise_aware
-    if noise_aware and len(used):
-        resolved = _leading(used, support.resolved[used] >= cfg.roughness.min_resolved_fraction)
-        if len(resolved) < len(used):
-            hi = float(n[resolved[-1]]) if len(resolved) else lo
-            used, result.band_limit = resolved, "sampling"
+        floor_band = resolved if len(resolved) else used  # the band the fit uses; the requested one if none is left
+        if support.noise is not None and len(floor_band):
+            result.noise_floor = float(np.mean(support.noise[floor_band]))
+    if len(resolved) < len(used):
+        hi = float(n[resolved[-1]]) if len(resolved) else lo
+        used, result.band_limit = resolved, "sampling"
     if lo >= hi or len(used) < cfg.roughness.min_band_points:
         result.reason = TOO_FEW_ORDINATES
         return result

@@ -14,7 +14,7 @@ import numpy as np
 from ..config import Config
 from .iri import Iri, noise_iri, rectified_slope, vehicle_iri
 from .profile import fill_gaps
-from .roughness import analyze_roughness, vehicle_roughness
+from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
 
 MIN_SHARED_BINS = 10  #: a frame is shifted onto the drive's profile only over at least this many shared bins
 MAX_FRAME_STEP_M = 1000.0  #: a frame moves the drive on by at most this
@@ -185,7 +185,7 @@ class Route:
                 t = (distance - d0) / (d1 - d0)
                 dyaw = math.remainder(p1[2] - p0[2], 2 * math.pi)
                 return (p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1]), p0[2] + t * dyaw)
-        return poses[-1]
+        return None  # the road ahead of the last frame: the drive was never there
 
     def segments(self, length_m: float) -> list[dict]:
         """One dict per segment [k·L, (k+1)·L) (the last may end short): start_m, end_m, start/end pose and,
@@ -209,8 +209,9 @@ class Route:
                           "iri": _segment_iri(slopes[w], j0, j1, ds, count, spread),
                           "backed_fraction": float(np.mean(count > 0))}
             (zl, cl, sl), (zr, cr, sr) = parts["left"], parts["right"]
-            vehicle = vehicle_roughness(zl, zr, ds, self.cfg, count_left=cl, spread_left=sl, count_right=cr,
-                                        spread_right=sr)
+            vehicle = vehicle_from_wheels(vehicle_roughness(zl, zr, ds, self.cfg, count_left=cl, spread_left=sl,
+                                                            count_right=cr, spread_right=sr),
+                                          row["left"]["roughness"], row["right"]["roughness"])
             row["vehicle"] = {"roughness": vehicle, "iri": vehicle_iri(row["left"]["iri"], row["right"]["iri"]),
                               "backed_fraction": (row["left"]["backed_fraction"] + row["right"]["backed_fraction"]) / 2}
             out.append(row)
