@@ -301,9 +301,11 @@ TEST(Realtime, AViewNoBufferHoldsIsRefused) {
         EXPECT_EQ(std::string(s.message()), "points: each row must hold x, y, z, so its stride must be at least 3 "
                                             "floats (got " + std::to_string(stride) + ")");
     }
+#ifdef NDEBUG  // with assertions on (the sanitizer build), Eigen itself refuses to make a view of negative rows
     const rp::Status s = est.try_process(rp::points_view(road.data(), -1, 3), 5.0, 0.0, out);
     EXPECT_EQ(s.code(), rp::StatusCode::InvalidArgument);
     EXPECT_STREQ(s.message(), "points: a negative row count (-1)");
+#endif
     EXPECT_THROW(est.process(rp::points_view(road.data(), road.rows(), 2), 5.0, 0.0, out), std::invalid_argument);
     EXPECT_TRUE(est.try_process(rp::points_view(nullptr, 0, 0), 5.0, 0.0, out).ok());  // no rows: nothing to read
 }
