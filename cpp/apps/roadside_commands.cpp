@@ -23,6 +23,7 @@
 #include "roadpreview/roadside/sick.hpp"
 
 namespace rs = roadpreview::roadside;
+using roadpreview::cli::UsageError;
 
 namespace {
 
@@ -72,13 +73,13 @@ std::vector<Input> resolve_inputs(const std::vector<std::string>& args, const rs
             const std::string name = a.substr(0, eq);
             for (std::size_t i = 0; i < site->scanners.size(); ++i)
                 if (site->scanners[i].name == name) in = {a.substr(eq + 1), static_cast<int>(i)};
-            if (in.scanner < 0) throw roadpreview::cli::UsageError(a + ": no scanner named '" + name + "' in " + site->path);
+            if (in.scanner < 0) throw UsageError(a + ": no scanner named '" + name + "' in " + site->path);
         }
         if (in.scanner < 0 && !ends_with(in.path, ".csv")) in.scanner = next++;
         if (site && in.scanner >= static_cast<int>(site->scanners.size()))
-            throw roadpreview::cli::UsageError(in.path + ": the site file " + site->path + " has " +
-                                      std::to_string(site->scanners.size()) + " scanner(s), and this is scan file " +
-                                      std::to_string(in.scanner + 1) + " (name each file's scanner: NAME=FILE)");
+            throw UsageError(in.path + ": the site file " + site->path + " has " +
+                             std::to_string(site->scanners.size()) + " scanner(s), and this is scan file " +
+                             std::to_string(in.scanner + 1) + " (name each file's scanner: NAME=FILE)");
         out.push_back(in);
     }
     return out;
@@ -285,7 +286,7 @@ int extrinsics(const RoadsideOptions& o) {
     const rs::Site site = rs::read_site(o.site);
     const auto inputs = resolve_inputs(o.inputs, &site);
     if (inputs.size() != 2)
-        throw roadpreview::cli::UsageError("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
+        throw UsageError("extrinsics takes two scan files: the fixed scanner's, then the moving one's");
     std::vector<std::vector<rs::LaserScan>> scans;
     for (const auto& in : inputs) scans.push_back(read_all({in}, o, true));
     for (std::size_t k = 0; k < 2; ++k)

@@ -256,10 +256,10 @@ void validate(const Config& c) {
 
     const GroundConfig& g = c.ground;
     // An enum set from an integer (a cast, a config of another version) names no method: it would run one unsaid.
-    require(std::string_view(to_string(g.method)) != "?",
-            "ground.method must be pca, ransac or zones, got the value " + std::to_string(static_cast<int>(g.method)));
-    require(std::string_view(to_string(c.fusion.method)) != "?", "fusion.method must be none, ema or kalman, got the "
-                                                                  "value " + std::to_string(static_cast<int>(c.fusion.method)));
+    const auto value = [](auto method) { return ", got the value " + std::to_string(static_cast<int>(method)); };
+    require(std::string_view(to_string(g.method)) != "?", "ground.method must be pca, ransac or zones" + value(g.method));
+    require(std::string_view(to_string(c.fusion.method)) != "?",
+            "fusion.method must be none, ema or kalman" + value(c.fusion.method));
     require(std::isfinite(g.roi_x_min_m) && std::isfinite(g.roi_x_max_m) && g.roi_x_min_m < g.roi_x_max_m,
             "ground.roi_x_min_m must be < ground.roi_x_max_m");
     require(positive(g.roi_y_abs_max_m), "ground.roi_y_abs_max_m must be > 0");

@@ -41,7 +41,7 @@ struct SegmentWheel {
 struct RouteSegment {
     double length_m = 0.0;                ///< the segment length asked for
     double start_m = 0.0, end_m = 0.0;    ///< drive distance; the last segment may end short
-    std::optional<Pose2> start, end;      ///< where the drive was there (only when poses were given)
+    std::optional<Pose2> start, end;      ///< where the drive was there (with poses; none ahead of its last frame)
     SegmentWheel left, right, vehicle;
 };
 
