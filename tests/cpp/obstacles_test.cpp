@@ -162,6 +162,33 @@ TEST(Obstacles, ToleranceSizeLimitsAndVoxels) {
     for (int i = 0; i < 13; ++i) EXPECT_EQ(capped[i], i < 10 ? -1 : 0) << i;  // 10 > max_cluster_points
 }
 
+// Without voxels, copies of one point share one representative: the same clusters, their sizes still in points
+// (copies count), and a cloud of 200,000 copies of one point is one cluster (it once took 40 s: every pair met).
+TEST(Obstacles, CopiesOfAPointAreClusteredOnceAndCountedEach) {
+    const auto view = [](const scenes::Cloud& c) { return rp::points_view(c.data(), c.rows(), 3); };
+    rp::ObstaclesConfig cfg;
+    cfg.voxel_m = 0.0;
+    const scenes::Cloud boxes = with(scenes::box(10.0, 0.0, 0.5, 0.5, 0.5), scenes::box(11.5, 0.0, 0.5, 0.5, 0.5));
+    const scenes::Cloud twice = with(boxes, boxes);
+    const std::vector<std::int32_t> once = rp::cluster_labels(view(boxes), cfg);
+    const std::vector<std::int32_t> doubled = rp::cluster_labels(view(twice), cfg);
+    ASSERT_EQ(doubled.size(), 2 * once.size());
+    for (std::size_t i = 0; i < once.size(); ++i) EXPECT_EQ(doubled[i], once[i]) << i;
+    EXPECT_TRUE(std::equal(once.begin(), once.end(), doubled.begin() + static_cast<std::ptrdiff_t>(once.size())));
+    cfg.min_cluster_points = static_cast<int>(once.size());  // each box holds half of `boxes`' points: too few alone
+    const std::vector<std::int32_t> small = rp::cluster_labels(view(boxes), cfg);
+    EXPECT_EQ(*std::max_element(small.begin(), small.end()), -1);
+    const std::vector<std::int32_t> sized = rp::cluster_labels(view(twice), cfg);  // copies count: big enough now
+    EXPECT_EQ(*std::max_element(sized.begin(), sized.end()), 1);
+
+    const scenes::Cloud copies = scenes::Cloud::Constant(200000, 3, 2.0f);
+    cfg = rp::ObstaclesConfig{};
+    cfg.voxel_m = 0.0;
+    cfg.max_cluster_points = 1000000;
+    const std::vector<std::int32_t> one = rp::cluster_labels(view(copies), cfg);
+    EXPECT_TRUE(std::all_of(one.begin(), one.end(), [](std::int32_t l) { return l == 0; }));
+}
+
 TEST(Obstacles, BoxesAndHeightAboveTheLocalGround) {
     // A 4 × 2 m car turned by 30°, on a 6 × 6 m patch raised 0.1 m (still ground by the 0.2 m threshold).
     scenes::Cloud ground = flat_ground();

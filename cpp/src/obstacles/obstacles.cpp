@@ -2,6 +2,7 @@
 #include "roadpreview/obstacles/obstacles.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -90,17 +91,44 @@ void voxel_centroids(PointsView pts, const pcl::Indices& candidates, double edge
     }
 }
 
-// What is clustered: the centroid of each occupied voxel (each candidate itself when the voxel edge is 0),
+// Each distinct candidate, the first of its copies representing them all: identical points lie within any
+// tolerance of each other, so the clusters are the same, and a degenerate cloud of 200,000 copies of one point no
+// longer has the search meet 2·10¹⁰ pairs (40 s a frame).
+void distinct_points(PointsView pts, const pcl::Indices& candidates, ObstacleScratch& s) {
+    const auto at = [&](std::int32_t k) {
+        const auto i = candidates[static_cast<std::size_t>(k)];
+        return std::array<float, 3>{pts(i, 0), pts(i, 1), pts(i, 2)};
+    };
+    const std::size_t n = candidates.size();
+    s.order.resize(n);
+    for (std::size_t k = 0; k < n; ++k) s.order[k] = static_cast<std::int32_t>(k);
+    std::sort(s.order.begin(), s.order.end(), [&](std::int32_t a, std::int32_t b) {
+        return std::pair(at(a), a) < std::pair(at(b), b);
+    });
+    auto& first_copy = s.sorted;  // of each candidate: the first candidate at its place (the smallest index)
+    first_copy.resize(n);
+    for (std::size_t a = 0, b = 0; a < n; a = b)
+        for (b = a; b < n && at(s.order[b]) == at(s.order[a]); ++b)
+            first_copy[static_cast<std::size_t>(s.order[b])] = s.order[a];
+    for (std::size_t k = 0; k < n; ++k) {
+        const auto first = static_cast<std::size_t>(first_copy[k]);
+        if (first < k) {
+            s.representative_of[k] = s.representative_of[first];
+            continue;
+        }
+        const auto i = candidates[k];
+        s.representative_of[k] = static_cast<std::int32_t>(s.representatives->size());
+        s.representatives->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
+    }
+}
+
+// What is clustered: the centroid of each occupied voxel (each distinct candidate when the voxel edge is 0),
 // and the representative of each candidate (by its position in the candidate list).
 void representatives(PointsView pts, const pcl::Indices& candidates, double voxel_edge, ObstacleScratch& s) {
     s.representatives->clear();
     s.representative_of.resize(candidates.size());
     if (voxel_edge > 0.0) return voxel_centroids(pts, candidates, voxel_edge, s);
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-        const auto i = candidates[k];
-        s.representative_of[k] = static_cast<std::int32_t>(s.representatives->size());
-        s.representatives->push_back(pcl::PointXYZ(pts(i, 0), pts(i, 1), pts(i, 2)));
-    }
+    distinct_points(pts, candidates, s);
 }
 
 // Cluster id per candidate (−1: none) in s.candidate_label: the Euclidean clusters of the representatives
