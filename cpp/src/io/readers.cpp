@@ -290,13 +290,13 @@ std::string find_ouster_metadata(const std::string& pcap_path) {
 
 namespace {
 
-// Split recordings of one drive, read in the order given as one stream of frames. A sweep cut by the split
-// comes out as two partial frames; a recording that starts before the previous one ended is an error.
 // "ouster OS-1-128", or the format alone while the model is not known (a Velodyne's, before its first packet).
 std::string kind_of(const SourceInfo& info) {
     return info.sensor_model.empty() ? info.format : info.format + " " + info.sensor_model;
 }
 
+// Split recordings of one drive, read in the order given as one stream of frames. A sweep cut by the split
+// comes out as two partial frames; a recording that starts before the previous one ended is an error.
 class PcapSequenceSource : public FrameSource {
 public:
     PcapSequenceSource(std::vector<std::string> paths, const SourceOptions& options)

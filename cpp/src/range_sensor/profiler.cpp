@@ -35,18 +35,15 @@ double sample_std(const std::vector<double>& v) {
     return std::sqrt(ss / static_cast<double>(v.size() - 1));
 }
 
-// The highest frequency (cycles/m) the readings' spacing resolves over a profile's longest stretch: Φ ≥
-// min_resolved_fraction up to it (docs/noise-aware-roughness.md §3); infinite when every ordinate is resolved.
-double resolved_band_max(const Profile& p, double min_resolved_fraction) {
+// The highest frequency (cycles/m) of `n` (the grid of the PSD of the profile's longest stretch, as the roughness
+// has it) up to which the readings' spacing resolves the road: Φ ≥ min_resolved_fraction, the rule by which the
+// noise-aware fit ends its band (docs/noise-aware-roughness.md §3); infinite when every ordinate is resolved.
+double resolved_band_max(const Profile& p, const std::vector<double>& n, double min_resolved_fraction) {
     const auto [first, last] = longest_valid_stretch(p.z);
-    const std::size_t bins = last - first;
-    std::vector<double> n;
-    for (std::size_t k = 1; k <= bins / 2; ++k)  // the grid of the stretch's PSD
-        n.push_back(static_cast<double>(k) / (static_cast<double>(bins) * p.ds));
-    if (n.empty()) return std::numeric_limits<double>::infinity();
-    const std::vector<double> phi = resolved_fraction(p.count.data() + first, bins, p.ds, n);
-    for (std::size_t k = 0; k < n.size(); ++k)
-        if (phi[k] < min_resolved_fraction) return k > 0 ? n[k - 1] : 0.0;
+    if (n.size() < 2 || last <= first) return std::numeric_limits<double>::infinity();
+    const std::vector<double> phi = resolved_fraction(p.count.data() + first, last - first, p.ds, n);
+    for (std::size_t k = 1; k < n.size(); ++k)  // n[0] = 0: the mean, not in any band
+        if (phi[k] < min_resolved_fraction) return n[k - 1];
     return std::numeric_limits<double>::infinity();
 }
 
@@ -68,8 +65,9 @@ Roughness plain_fit_over_resolved_band(const RoughnessConfig& cfg, double resolv
 Roughness wheel_roughness(const Profile& p, const RangeProfilerConfig& cfg) {
     Roughness r = analyze_roughness(p, cfg.roughness);
     if (r.reason == RoughnessReason::NoiseUnknown)
-        r = plain_fit_over_resolved_band(cfg.roughness, resolved_band_max(p, cfg.roughness.min_resolved_fraction),
-                                         [&](const RoughnessConfig& plain) { return analyze_roughness(p, plain); });
+        r = plain_fit_over_resolved_band(
+            cfg.roughness, resolved_band_max(p, r.spectrum.n, cfg.roughness.min_resolved_fraction),
+            [&](const RoughnessConfig& plain) { return analyze_roughness(p, plain); });
     r.iri = wheel_iri(p, r, cfg.iri);  // backed fraction, noise, and declined where too sparse
     return r;
 }
@@ -164,8 +162,10 @@ RangeWindow RangeProfiler::close_window() {
     w.vehicle = vehicle_roughness(w.left, w.right, cfg_.roughness);
     if (w.vehicle.reason == RoughnessReason::NoiseUnknown) {
         const double f = cfg_.roughness.min_resolved_fraction;
+        const double resolved = std::min(resolved_band_max(w.left, w.vehicle.spectrum.n, f),
+                                         resolved_band_max(w.right, w.vehicle.spectrum.n, f));
         w.vehicle = plain_fit_over_resolved_band(
-            cfg_.roughness, std::min(resolved_band_max(w.left, f), resolved_band_max(w.right, f)),
+            cfg_.roughness, resolved,
             [&](const RoughnessConfig& plain) { return vehicle_roughness(w.left, w.right, plain); });
     }
     w.vehicle.iri = vehicle_iri(w.left.roughness.iri, w.right.roughness.iri);
