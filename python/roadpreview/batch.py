@@ -5,7 +5,8 @@ One task per recording (a long recording of frame files is split into frame rang
 ``--overlap-frames`` early, so fusion has settled where each range's kept frames begin), then one task per
 recording that writes its summary and segment table. Output (docs/output.md, "Batch outputs"):
 
-    OUT_DIR/frames/recording=ID/part-00000.parquet   per-frame results, Hive-partitioned by recording
+    OUT_DIR/frames/recording=ID/part-00000.parquet   per-frame results, Hive-partitioned by recording (the key is
+                                                     the folder's: not a column of the parts)
     OUT_DIR/recordings/ID/summary.json               frames, classes, median IRI, declined reasons
     OUT_DIR/recordings/ID/segments.parquet           class, G_d(n0), IRI per wheel per 10 / 100 m
     OUT_DIR/summary.csv, OUT_DIR/segments.parquet    all recordings, rewritten at the end of every batch
@@ -256,6 +257,7 @@ def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) 
             index = chunk.first + k
             if index >= chunk.keep_from:
                 rows.append(frame_row(rid, index, result, poses[index] if poses else None))
+                del rows[-1]["recording"]  # the partition key: the folder holds it (docs/output.md)
                 row_bytes += len(rows[-1]["line"])
             if len(rows) == ROW_GROUP_FRAMES or row_bytes >= ROW_GROUP_BYTES:
                 writer.write_table(pa.Table.from_pylist(rows, schema=schema))
@@ -266,9 +268,11 @@ def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) 
 
 
 def FRAME_SCHEMA():  # noqa: N802 (a constant built lazily: pyarrow is imported only where it is used)
+    """The columns of a per-frame part. Not ``recording``: a Hive reader (pandas, pyarrow, Polars, DuckDB) takes
+    the partition key from the folder name and refuses a file column of the same name but another type."""
     import pyarrow as pa
 
-    cols = [("recording", pa.string()), ("frame", pa.int64()), ("source", pa.string()), ("timestamp", pa.float64()),
+    cols = [("frame", pa.int64()), ("source", pa.string()), ("timestamp", pa.float64()),
             ("speed_mps", pa.float64()), ("yaw_rate_rps", pa.float64()), ("reason", pa.string())]
     for side in ("left", "right", "vehicle"):
         cols += [(f"{side}_class", pa.string()), (f"{side}_gd_n0_m3", pa.float64()),
@@ -305,9 +309,14 @@ def read_frames(out_dir, rid: Optional[str] = None, columns: Optional[Sequence[s
     import pyarrow as pa
 
     keys = ["recording", "frame"]
-    wanted = None if columns is None else list(dict.fromkeys(keys + list(columns)))
-    table = pa.concat_tables([pq.read_table(p, schema=FRAME_SCHEMA(), columns=wanted) for p in paths])
-    table = table.sort_by([(k, "ascending") for k in keys])
+    stored = None if columns is None else list(dict.fromkeys(["frame"] + [c for c in columns if c != "recording"]))
+
+    def part(path: Path):
+        table = pq.read_table(path, schema=FRAME_SCHEMA(), columns=stored)
+        recording = path.parent.name.removeprefix("recording=")
+        return table.add_column(0, "recording", pa.array([recording] * table.num_rows, pa.string()))
+
+    table = pa.concat_tables([part(p) for p in paths]).sort_by([(k, "ascending") for k in keys])
     return table if columns is None else table.select(list(columns))
 
 

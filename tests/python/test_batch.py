@@ -101,6 +101,22 @@ def test_split_recordings_killed_worker_and_corrupt_input_leave_the_others_equal
     assert "000000.bin" in errors[0]["error"]
     summary = (tmp_path / "out" / "summary.csv").read_text().splitlines()
     assert [line.split(",")[0] for line in summary[1:]] == ["a", "b", "c"]
+    assert_hive_readers_agree(tmp_path / "out")
+
+
+def assert_hive_readers_agree(out):
+    """The folder of per-frame parts as a Hive dataset, read as users read one: pandas and pyarrow take the
+    recording from the folder name (a file column of that name, of another type, made pandas refuse it)."""
+    import pandas as pd
+    import pyarrow.dataset as ds
+
+    expected = sorted((r["recording"], r["frame"]) for r in batch.read_frames(out, columns=["recording", "frame"])
+                      .to_pylist())
+    assert len({rid for rid, _ in expected}) > 1
+    frame = pd.read_parquet(out / "frames", columns=["recording", "frame"])
+    assert sorted(zip(frame["recording"].astype(str), frame["frame"])) == expected
+    table = ds.dataset(out / "frames", partitioning="hive").to_table(columns=["recording", "frame"])
+    assert sorted(zip(table.column("recording").to_pylist(), table.column("frame").to_pylist())) == expected
 
 
 def test_resume_redoes_only_what_is_missing(client, recordings, tmp_path):
