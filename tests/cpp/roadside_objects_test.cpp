@@ -13,6 +13,7 @@
 
 #include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
+#include "track_layout.hpp"
 
 namespace rs = roadpreview::roadside;
 
@@ -228,6 +229,15 @@ TEST(RoadsideTracking, KeepsIdsAndEstimatesVelocity) {
     tracker.update(3.0, {});  // long silence: both dropped
     EXPECT_TRUE(tracker.tracks().empty());
 }
+
+#ifdef ROADPREVIEW_TEST_AVX_LAYOUT
+// A program built with -mavx sees the library's Track as the library does (its Eigen members were 32-byte aligned
+// there: the state at byte 32, not 16, and every later member moved).
+TEST(RoadsideTracking, TrackHasOneLayoutWhateverTheVectorInstructions) {
+    EXPECT_TRUE(track_layout_here() == track_layout_avx());
+    EXPECT_EQ(track_layout_here().align, alignof(double));
+}
+#endif
 
 TEST(RoadsideProcessor, TracksACarFromTwoScannersAndReportsADropout) {
     rs::Site site = rs::parse_site(kSite, "site.yaml");

@@ -220,7 +220,7 @@ void Processor::associate_camera(double t0_s, double t1_s, Cycle& cycle) {
     std::vector<std::vector<double>> cost(ground.size(), std::vector<double>(tracks.size()));
     for (std::size_t i = 0; i < ground.size(); ++i)
         for (std::size_t j = 0; j < tracks.size(); ++j) {
-            const Eigen::Vector4d x = tracker_.predicted(tracks[j], ground[i].d->t_s);
+            const TrackState x = tracker_.predicted(tracks[j], ground[i].d->t_s);
             const double d = std::hypot(x(0) - ground[i].x_m, x(1) - ground[i].y_m);
             cost[i][j] = d > s.camera_gate_m ? INFINITY : s.camera_weight_position * d / s.camera_gate_m;
         }
@@ -257,7 +257,7 @@ void Processor::associate_camera(double t0_s, double t1_s, Cycle& cycle) {
 
 OutputObject Processor::output(const Track& t, double t_s) const {
     OutputObject o;
-    const Eigen::Vector4d x = tracker_.predicted(t, t_s);
+    const TrackState x = tracker_.predicted(t, t_s);
     o.id = t.id;
     o.x_m = x(0), o.y_m = x(1), o.vx_mps = x(2), o.vy_mps = x(3);
     o.speed_mps = std::hypot(x(2), x(3));

@@ -64,7 +64,7 @@ void Tracker::predict(Track& t, double t_s) const {
     t.t_s = t_s;
 }
 
-Eigen::Vector4d Tracker::predicted(const Track& track, double t_s) const {
+TrackState Tracker::predicted(const Track& track, double t_s) const {
     Track copy = track;
     predict(copy, t_s);
     return copy.x;

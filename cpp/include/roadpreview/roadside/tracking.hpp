@@ -24,16 +24,23 @@ struct Measurement {
     std::vector<Pose2> viewpoints;  ///< positions of the scanners that saw it (for the L-shape correction)
 };
 
+/// A track's state x, y, vx, vy (site frame, m and m/s), its covariance, and a 2D offset, stored unaligned: under
+/// AVX Eigen aligns a 32-byte fixed-size matrix to 32 bytes, so a Track of aligned types would lay out differently
+/// in a program built with -mavx than in the library built without it.
+using TrackState = Eigen::Matrix<double, 4, 1, Eigen::DontAlign>;
+using TrackCovariance = Eigen::Matrix<double, 4, 4, Eigen::DontAlign>;
+using TrackOffset = Eigen::Matrix<double, 2, 1, Eigen::DontAlign>;
+
 struct Track {
     int id = 0;
-    Eigen::Vector4d x = Eigen::Vector4d::Zero();      ///< x, y, vx, vy (site frame, m and m/s)
-    Eigen::Matrix4d P = Eigen::Matrix4d::Identity();
+    TrackState x = TrackState::Zero();      ///< x, y, vx, vy (site frame, m and m/s)
+    TrackCovariance P = TrackCovariance::Identity();
     double t_s = 0.0;                                  ///< time of the state
     double last_update_s = 0.0, first_seen_s = 0.0;
     int hits = 0;
     double length_m = 0.0, width_m = 0.0, box_heading_rad = 0.0;  ///< learned extent and last box orientation
     Box last_box;
-    Eigen::Vector2d visible_offset = Eigen::Vector2d::Zero();      ///< centre − visible box centre, last update
+    TrackOffset visible_offset = TrackOffset::Zero();              ///< centre − visible box centre, last update
     bool corrected = false;                                        ///< the visible-corner correction is on
     ScanObject last_object;
     std::string camera_class;                                     ///< from the camera, "" when none
@@ -75,7 +82,7 @@ public:
     /// Predicts every track to the measurements' time, assigns, updates, starts and drops tracks.
     void update(double t_s, const std::vector<Measurement>& measurements);
     /// A track's state predicted to `t_s` (not stored).
-    Eigen::Vector4d predicted(const Track& track, double t_s) const;
+    TrackState predicted(const Track& track, double t_s) const;
     std::vector<Track>& tracks() { return tracks_; }
     const std::vector<Track>& tracks() const { return tracks_; }
     bool confirmed(const Track& t) const { return t.hits >= s_.confirm_hits; }
