@@ -2,6 +2,22 @@
 #include "common.hpp"
 
 #include <cmath>
+#include <unordered_set>
+
+namespace {
+std::unordered_set<const void*>& objects_in_use() {
+    static std::unordered_set<const void*> in_use;
+    return in_use;
+}
+}  // namespace
+
+InUse::InUse(const void* object, const char* what) : object_(object) {
+    if (!objects_in_use().insert(object_).second)
+        throw std::runtime_error(std::string("this ") + what + " is in use by another thread: it is not thread-safe, "
+                                 "give each thread its own");
+}
+
+InUse::~InUse() { objects_in_use().erase(object_); }
 
 py::array read_only(py::array a) {
     a.attr("setflags")(false);

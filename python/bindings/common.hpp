@@ -30,18 +30,19 @@ void bind_route(py::module_& m);      // route.cpp
 void bind_roadside(py::module_& m);   // roadside.cpp
 void bind_ouster_packets(py::module_& m);  // ouster_packets.cpp
 
-// An Estimator is not thread-safe, and process() runs without the GIL: another thread's call on the same one would
-// corrupt it (a crash). While a call uses it, another call's guard raises RuntimeError instead. Made and destroyed
-// with the GIL held, which keeps the set of estimators in use consistent.
-class EstimatorInUse {
+// No bound object with state (Estimator, FrameSource, DriveRunner, roadside Processor) is thread-safe, and their
+// long calls run without the GIL: another thread's call on the same object would corrupt it (a crash). While a call
+// uses an object, another call's guard on it raises RuntimeError naming `what` instead. Made and destroyed with the
+// GIL held, which keeps the set of objects in use consistent.
+class InUse {
 public:
-    explicit EstimatorInUse(const rp::Estimator& est);
-    ~EstimatorInUse();
-    EstimatorInUse(const EstimatorInUse&) = delete;
-    EstimatorInUse& operator=(const EstimatorInUse&) = delete;
+    InUse(const void* object, const char* what);
+    ~InUse();
+    InUse(const InUse&) = delete;
+    InUse& operator=(const InUse&) = delete;
 
 private:
-    const rp::Estimator* est_;
+    const void* object_;
 };
 
 // A 1-D (or any) float64 array, converted once when the caller passes another dtype or layout.

@@ -100,10 +100,12 @@ struct Note {
     std::string text;
 };
 
-// The runner and the notes it made since Python last looked (the runner works without the GIL).
+// The runner and the notes it made since Python last looked (the runner works without the GIL), and the rp.io
+// source it reads, if it was given one (a call on that source from another thread meanwhile is refused).
 struct PyDriveRunner {
     std::shared_ptr<std::vector<Note>> notes = std::make_shared<std::vector<Note>>();
     std::unique_ptr<rp::DriveRunner> runner;
+    const rp::FrameSource* lent = nullptr;
 };
 
 void emit_notes(std::vector<Note>& notes, py::list& kept) {
@@ -186,6 +188,7 @@ void bind_drive(py::module_& m) {
                  o.on_note = [notes = r.notes](bool warning, const std::string& text) {
                      notes->push_back({warning, text});
                  };
+                 if (py::isinstance<rp::FrameSource>(source)) r.lent = &source.cast<const rp::FrameSource&>();
                  r.runner = std::make_unique<rp::DriveRunner>(source_from(source),
                                                               rp::config_from_json(config_json, "config"), o);
                  return r;
@@ -199,6 +202,9 @@ void bind_drive(py::module_& m) {
         .def("next", [](PyDriveRunner& r, py::list notes) -> py::object {
             std::optional<rp::DriveStep> step;
             {
+                const InUse in_use(&r, "DriveRunner");
+                const std::optional<InUse> source_in_use =
+                    r.lent ? std::optional<InUse>(std::in_place, r.lent, "FrameSource") : std::nullopt;
                 py::gil_scoped_release release;
                 step = r.runner->next();
             }
@@ -206,9 +212,16 @@ void bind_drive(py::module_& m) {
             if (!step) return py::none();
             return py::make_tuple(std::move(step->input.frame), std::move(step->result));
         }, "(frame, result) of the next frame, or None at the end; notes made meanwhile are appended to `notes`")
-        .def_property_readonly("config_json", [](const PyDriveRunner& r) { return rp::config_to_json(r.runner->config()); },
-                               "the config in force: the mounting the first frame gave, once it did")
-        .def_property_readonly("mounting_disagreements",
-                               [](const PyDriveRunner& r) { return r.runner->mounting_disagreements(); })
-        .def_property_readonly("frames_read", [](const PyDriveRunner& r) { return r.runner->frames_read(); });
+        .def_property_readonly("config_json", [](const PyDriveRunner& r) {
+            const InUse in_use(&r, "DriveRunner");
+            return rp::config_to_json(r.runner->config());
+        }, "the config in force: the mounting the first frame gave, once it did")
+        .def_property_readonly("mounting_disagreements", [](const PyDriveRunner& r) {
+            const InUse in_use(&r, "DriveRunner");
+            return r.runner->mounting_disagreements();
+        })
+        .def_property_readonly("frames_read", [](const PyDriveRunner& r) {
+            const InUse in_use(&r, "DriveRunner");
+            return r.runner->frames_read();
+        });
 }

@@ -2,23 +2,6 @@
 // rp.Estimator: the pipeline, one frame per process() call; the GIL is released while it runs.
 #include "common.hpp"
 
-#include <unordered_set>
-
-namespace {
-std::unordered_set<const rp::Estimator*>& estimators_in_use() {
-    static std::unordered_set<const rp::Estimator*> in_use;
-    return in_use;
-}
-}  // namespace
-
-EstimatorInUse::EstimatorInUse(const rp::Estimator& est) : est_(&est) {
-    if (!estimators_in_use().insert(est_).second)
-        throw std::runtime_error("this Estimator is in use by another thread: an Estimator is not thread-safe, give "
-                                 "each thread its own");
-}
-
-EstimatorInUse::~EstimatorInUse() { estimators_in_use().erase(est_); }
-
 void bind_estimator(py::module_& m) {
     py::class_<rp::Estimator>(m, "Estimator")
         .def(py::init([](const std::string& config_json) { return rp::Estimator(config_from(config_json)); }), py::arg("config_json"))
@@ -61,7 +44,7 @@ void bind_estimator(py::module_& m) {
             }
             rp::Result r;
             {
-                const EstimatorInUse in_use(est);
+                const InUse in_use(&est, "Estimator");
                 py::gil_scoped_release release;
                 r = est.process(view, speed, yaw_rate, source, motion, errors);
             }
@@ -71,7 +54,7 @@ void bind_estimator(py::module_& m) {
            py::arg("yaw_rate_source") = "", py::arg("pose") = py::none(), py::arg("range_variances") = py::none(),
            py::arg("error_groups") = py::none(), py::arg("beams") = py::none())
         .def("reset", [](rp::Estimator& est) {
-            const EstimatorInUse in_use(est);
+            const InUse in_use(&est, "Estimator");
             est.reset();
         }, "Forgets the fused map, the pose and the clock");
 }

@@ -203,13 +203,17 @@ void bind_io(py::module_& m) {
         .def("__next__", [](rp::FrameSource& s) {
             std::optional<rp::Frame> f;
             {
+                const InUse in_use(&s, "FrameSource");
                 py::gil_scoped_release release;
                 f = s.next();
             }
             if (!f) throw py::stop_iteration();
             return std::move(*f);
         })
-        .def_property_readonly("info", [](const rp::FrameSource& s) { return info_dict(s.info()); })
+        .def_property_readonly("info", [](const rp::FrameSource& s) {
+            const InUse in_use(&s, "FrameSource");
+            return info_dict(s.info());
+        })
         .def("__repr__", [](const rp::FrameSource& s) {
             const rp::SourceInfo i = s.info();
             std::string out = "<roadpreview.FrameSource " + i.format;

@@ -186,7 +186,7 @@ void bind_range_sensor(py::module_& m) {
         return lines;
     });
     m.def("fusion_map_cells", [](const rp::Estimator& est, DoubleArray x, DoubleArray y) {
-        const EstimatorInUse in_use(est);
+        const InUse in_use(&est, "Estimator");
         const rp::TemporalFusion* fusion = est.fusion();
         if (!fusion) throw std::invalid_argument("the estimator has no fusion map (fusion.method is \"none\")");
         if (x.size() != y.size()) throw std::invalid_argument("x and y must have the same length");
@@ -209,7 +209,7 @@ void bind_range_sensor(py::module_& m) {
        "fused points' offset) and the height, m; NaN rows where empty");
     m.def("fuse_map_samples", [](rp::Estimator& est, DoubleArray x, DoubleArray y, DoubleArray z,
         DoubleArray variance) {
-        const EstimatorInUse in_use(est);
+        const InUse in_use(&est, "Estimator");
         if (x.size() != y.size() || x.size() != z.size() || x.size() != variance.size())
             throw std::invalid_argument("x, y, z and variance must have the same length");
         std::vector<rp::MapSample> samples(static_cast<std::size_t>(x.size()));

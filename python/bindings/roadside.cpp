@@ -9,6 +9,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "common.hpp"
 #include "roadpreview/roadside/processor.hpp"
 #include "roadpreview/roadside/sick.hpp"
 
@@ -18,7 +19,6 @@ namespace rs = roadpreview::roadside;
 namespace {
 
 using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 py::dict scan_dict(const rs::LaserScan& s) {
     py::dict d;
@@ -104,18 +104,22 @@ public:
     explicit PyProcessor(const std::string& site_yaml, const std::string& where) : p_(rs::parse_site(site_yaml, where)) {}
     std::vector<std::string> push(const py::dict& scan) {
         const rs::LaserScan s = scan_from_dict(scan);
+        const InUse in_use(this, kWhat);
         py::gil_scoped_release release;
         return lines(p_.push(s));
     }
     void learn_world(const py::list& scans) {
         std::vector<rs::LaserScan> all;
         for (const auto& d : scans) all.push_back(scan_from_dict(d.cast<py::dict>()));
+        const InUse in_use(this, kWhat);
         py::gil_scoped_release release;
         p_.learn_world(all);
     }
     // Foreground flags of a scan with a pose against the learned world background.
     py::array_t<bool> world_foreground(const py::dict& scan) {
-        const std::vector<bool> fg = p_.world_foreground(scan_from_dict(scan));
+        const rs::LaserScan s = scan_from_dict(scan);
+        const InUse in_use(this, kWhat);
+        const std::vector<bool> fg = p_.world_foreground(s);
         py::array_t<bool> out(static_cast<py::ssize_t>(fg.size()));
         for (std::size_t i = 0; i < fg.size(); ++i) out.mutable_data()[i] = fg[i];
         return out;
@@ -123,11 +127,16 @@ public:
     void add_detections(const std::vector<std::tuple<double, double, double, double, double, std::string, double>>& d) {
         std::vector<rs::CameraDetection> out;
         for (const auto& [t, x, y, w, h, cls, score] : d) out.push_back({t, x, y, w, h, cls, score});
+        const InUse in_use(this, kWhat);
         p_.add_detections(out);
     }
-    std::vector<std::string> finish() { return lines(p_.finish()); }
+    std::vector<std::string> finish() {
+        const InUse in_use(this, kWhat);
+        return lines(p_.finish());
+    }
 
 private:
+    static constexpr const char* kWhat = "roadside Processor";
     static std::vector<std::string> lines(const std::vector<rs::Cycle>& cycles) {
         std::vector<std::string> out;
         for (const auto& c : cycles) out.push_back(rs::cycle_to_json(c));

@@ -86,6 +86,9 @@ def run(inputs: Union[PathLike, Sequence[PathLike], object], config: Optional[Co
     first, last = frames if frames is not None else (0, None)
     source = inputs if drive.is_source(inputs) else drive.open_source(inputs, **source_options)
     in_memory = motion is not None and not isinstance(motion, (str, os.PathLike))
+    if in_memory and not isinstance(motion, core().MotionTable):
+        raise TypeError(f"motion must be a CSV path or an rp.drive.MotionTable, got {type(motion).__name__} "
+                        "(a constant motion is speed= and yaw_rate=)")
     runner = core().DriveRunner(
         source, cfg.to_json(), speed_mps=None if speed is None else float(speed),
         yaw_rate_rps=None if yaw_rate is None else float(yaw_rate), motion_file="" if in_memory else _path(motion),

@@ -215,6 +215,20 @@ TEST(Fusion, ALargeTimeGapResetsTheMapAndSaysSo) {
     EXPECT_EQ(after_reset.fusion->frames, 1);
 }
 
+// dt is the difference of consecutive frames' timestamps, 1/frame_rate_hz when one is missing: a frame without one
+// between two with them moved the vehicle by the timestamps' whole step again (0.75 m for 0.5 at 2.5 m/s, 10 Hz).
+TEST(Fusion, AFrameWithoutATimestampMovesTheVehicleByOneFrameInterval) {
+    rp::Estimator est(fusion_config(rp::FusionMethod::Ema));
+    const auto cloud = road_frame({}, 20000, 0.02, 7);
+    const auto pose_x = [&](std::optional<double> t) {
+        return est.process(cloud, 2.5, 0.0, "", rp::FrameMotion{t, std::nullopt}).fusion->pose.x_m;
+    };
+    EXPECT_EQ(pose_x(10.0), 0.0);
+    EXPECT_NEAR(pose_x(std::nullopt), 0.25, 1e-12);
+    EXPECT_NEAR(pose_x(10.2), 0.5, 1e-12);   // 1/frame_rate_hz again: the previous frame had no timestamp
+    EXPECT_NEAR(pose_x(10.4), 1.0, 1e-12);   // both timestamped: 0.2 s
+}
+
 TEST(Fusion, NoGroundStopsAndReversalsDoNotCorruptTheMap) {
     rp::Estimator est(fusion_config(rp::FusionMethod::Kalman));
     const rp::Result before = drive(est, 8.0, 10, 60000, 0.02);

@@ -85,6 +85,14 @@ def test_missing_or_contradicting_options_are_value_errors(kwargs, message, tmp_
         rp.run(KITTI_FRAMES[:1], **kwargs)
 
 
+def test_a_motion_that_is_neither_a_file_nor_a_table_is_a_type_error_saying_what_is():
+    """(speed, yaw rate), as rp.drive.run takes it, reached the C++ constructor: a TypeError listing its signature
+    and the whole config as JSON."""
+    with pytest.raises(TypeError, match=r"^motion must be a CSV path or an rp.drive.MotionTable, got tuple \(a "
+                                        r"constant motion is speed= and yaw_rate=\)$"):
+        rp.run(KITTI_FRAMES[:1], motion=(5.0, 0.0))
+
+
 def test_a_missing_file_names_it():
     with pytest.raises(RuntimeError, match="no_such.pcap"):
         list(rp.run("no_such.pcap", speed=1.0))

@@ -120,6 +120,19 @@ def test_ema_with_alpha_one_is_the_latest_frame_where_it_looks():
     assert again.fusion["frames"] == 1
 
 
+def test_a_frame_without_a_timestamp_moves_both_maps_by_one_frame_interval():
+    """dt is the difference of consecutive frames' timestamps, 1/frame_rate_hz when one is missing (method.md §7):
+    the frame after an untimed one moved the vehicle by the whole step from the last timestamp again."""
+    cfg = fusion_cfg("ema")
+    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    for t, x in [(10.0, 0.0), (None, 0.25), (10.2, 0.5), (10.4, 1.0)]:
+        points = noisy_road((x, 0, 0), 3000, 1)
+        cpp = est.process(points, 2.5, 0.0, timestamp=t)
+        ref = rp.reference.process_fused(state, points, 2.5, 0.0, timestamp=t)
+        assert cpp.fusion["pose"][0] == pytest.approx(x, abs=1e-12)
+        assert ref.fusion["pose"][0] == pytest.approx(x, abs=1e-12)
+
+
 def test_python_interface_and_output_line():
     est = rp.Estimator(fusion_cfg("kalman"))
     res = est.process(noisy_road((0, 0, 0), 5000, 1), 8.0, 0.0, timestamp=10.0)

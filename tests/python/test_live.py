@@ -174,3 +174,43 @@ def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):
 def test_cli_replay_refuses_bad_options(args, message):
     proc = run_cli("replay", OS1_128_PCAP, *args, check=False)
     assert proc.returncode == 2 and message in proc.stderr  # usage errors
+
+
+def calling_on_a_thread(call):
+    """Starts `call` on a thread (it waits for datagrams that never come, then fails) and returns the thread and
+    the list its error lands in, once the call is under way."""
+    errors, started = [], threading.Event()
+
+    def run():
+        started.set()
+        try:
+            call()
+        except RuntimeError as e:
+            errors.append(str(e))
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    started.wait(5)
+    thread.join(0.5)  # the call has begun its wait (it holds the object until the timeout)
+    return thread, errors
+
+
+def test_a_source_or_a_drive_used_by_two_threads_at_once_refuses_the_second():
+    """A FrameSource's next() and a drive's run without the GIL: another thread's call on the same object meanwhile
+    corrupted it (a crash, a frame given twice, a false "file truncated"); now it raises RuntimeError naming it."""
+    source = rp.io.open_live(f"udp://127.0.0.1:{free_port_pair()}", timeout_s=3.0)  # no sender: it waits 3 s
+    thread, errors = calling_on_a_thread(lambda: next(source))
+    with pytest.raises(RuntimeError, match="this FrameSource is in use by another thread"):
+        next(source)
+    thread.join()
+    assert len(errors) == 1 and "in use" not in errors[0]  # the first call's own end: no datagram
+
+    live = rp.io.open_live(f"udp://127.0.0.1:{free_port_pair()}", timeout_s=3.0)
+    drive = rp.run(live, speed=5.0)
+    thread, errors = calling_on_a_thread(lambda: next(drive))
+    with pytest.raises(RuntimeError, match="this DriveRunner is in use by another thread"):
+        next(drive)
+    with pytest.raises(RuntimeError, match="this FrameSource is in use by another thread"):
+        next(live)  # the source the drive reads, taken while it does
+    thread.join()
+    assert len(errors) == 1 and "in use" not in errors[0]

@@ -208,7 +208,7 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
             dt = 0.0;
         }
     }
-    if (motion.timestamp_s) last_time_ = motion.timestamp_s;
+    last_time_ = motion.timestamp_s;  // none: the next frame's dt is 1/frame_rate_hz too (one of the two is missing)
     if (motion.pose) {
         pose_ = *motion.pose;
     } else if (started_) {

@@ -124,8 +124,7 @@ class FusedMap:
             if reset:
                 self.reset()
                 dt = 0.0
-        if timestamp is not None:
-            self.last_time = timestamp
+        self.last_time = timestamp  # dt is t − t_prev of consecutive frames, both timestamped
         if pose is not None:
             self.pose = tuple(pose)
         elif self.started:
