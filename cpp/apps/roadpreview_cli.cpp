@@ -292,7 +292,9 @@ void prepare_profile_dir(const RunOptions& o) {
 }
 
 void export_profiles(const RunOptions& o, const rp::RouteBuilder& route) {
-    const std::string title = "roadpreview " + std::filesystem::path(input_label(o)).filename().string();
+    std::filesystem::path input(input_label(o));
+    if (!input.has_filename()) input = input.parent_path();  // a folder given as "drive/"
+    const std::string title = "roadpreview " + input.filename().string();
     for (const auto& [wheel, profile] : {std::pair{"left", route.left()}, std::pair{"right", route.right()}}) {
         const auto base = std::filesystem::path(o.profile_dir) / wheel;
         std::ofstream csv = open_for_writing(base.string() + ".csv");

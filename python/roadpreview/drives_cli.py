@@ -121,26 +121,36 @@ def _progress(line: dict) -> str:
 
 
 class _Summary:
-    """The run's last line, as the C++ CLI's: frames, pipeline times, vehicle classes and IRI."""
+    """The run's last line, as the C++ CLI's: frames, pipeline times, vehicle classes and IRI (with the IRI of the
+    bins' errors alone, when known), the reasons of every declined class."""
 
     def __init__(self):
-        self.frames, self.ms, self.classes, self.iri = 0, [], {}, []
+        self.frames, self.ms, self.classes, self.iri, self.iri_noise, self.declined = 0, [], {}, [], [], {}
 
     def add(self, line: dict) -> None:
         self.frames += 1
         self.ms.append(line["timing_ms"]["total"])
-        vehicle = line["roughness"]["vehicle"]
-        self.classes[_class(vehicle)] = self.classes.get(_class(vehicle), 0) + 1
-        iri = (vehicle.get("iri") or {}).get("value")
-        if iri is not None:
-            self.iri.append(iri)
+        rough = line["roughness"]
+        self.classes[_class(rough["vehicle"])] = self.classes.get(_class(rough["vehicle"]), 0) + 1
+        for side in ("left", "right", "vehicle"):
+            if not rough[side].get("class"):
+                reason = rough[side].get("reason") or "no reason given"
+                self.declined[reason] = self.declined.get(reason, 0) + 1
+        iri = rough["vehicle"].get("iri") or {}
+        if iri.get("value") is not None:
+            self.iri.append(iri["value"])
+            if iri.get("noise") is not None:
+                self.iri_noise.append(iri["noise"])
 
     def __str__(self) -> str:
         classes = " ".join(f"{c}×{n}" for c, n in sorted(self.classes.items()))
-        iri = (f"vehicle IRI median {statistics.median(self.iri):.2f} m/km ({len(self.iri)} of {self.frames} frames)"
-               if self.iri else "vehicle IRI: none")
+        noise = f"; the bins' errors alone {statistics.median(self.iri_noise):.2f}" if self.iri_noise else ""
+        iri = (f"vehicle IRI median {statistics.median(self.iri):.2f} m/km ({len(self.iri)} of {self.frames} "
+               f"frames{noise})" if self.iri else "vehicle IRI: none")
+        declined = ("; declined classes (L, R, vehicle): " +
+                    ", ".join(f"{r} ×{n}" for r, n in sorted(self.declined.items()))) if self.declined else ""
         return (f"{self.frames} frame(s), pipeline median {statistics.median(self.ms):.2f} ms, max "
-                f"{max(self.ms):.2f} ms; vehicle classes: {classes}; {iri}")
+                f"{max(self.ms):.2f} ms; vehicle classes: {classes}; {iri}{declined}")
 
 
 def info(argv: Sequence[str]) -> int:

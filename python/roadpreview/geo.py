@@ -8,8 +8,10 @@ Two ways to place a drive on the earth:
   equidistant projection about the origin turns them into lat/lon);
 * a GNSS CSV (``t,lat,lon[,alt]``, s in the frames' clock, degrees, m): each segment end's distance along the
   drive gives a time (the frames' distance driven against their timestamps) and the fix is interpolated there.
-  A drive that starts before or ends after the GNSS file's span is an error naming the file. Road seen ahead of
-  the last frame is placed at the last frame's position, as the route's poses place it.
+  A drive that starts before or ends after the GNSS file's span is an error naming the file.
+
+Road seen ahead of the drive's last frame (previewed but never reached) is not placed: its lat/lon are None and
+its segment has no geometry on the map.
 """
 
 from __future__ import annotations

@@ -168,7 +168,7 @@ def test_segments_of_a_recording_match_the_cli(client, recordings, tmp_path):
     header = rows[0].split(",")
     cli = [dict(zip(header, r.split(","))) for r in rows[1:]]
     assert len(seg) == len(cli) > 0
-    for mine, theirs in zip(seg, cli):  # the numpy Route over the batch's lines against the CLI's RouteBuilder
+    for mine, theirs in zip(seg, cli):  # the RouteBuilder fed the batch's lines against the CLI's own run
         assert mine["segment_length_m"] == pytest.approx(float(theirs["segment_length_m"]))
         assert mine["start_m"] == pytest.approx(float(theirs["start_m"])), theirs
         for side in ("left", "right", "vehicle"):

@@ -11,7 +11,7 @@ pytest.importorskip("rosbags")
 
 import roadpreview as rp  # noqa: E402
 from roadpreview import drive  # noqa: E402
-from paths import KITTI_FRAMES, run_cli  # noqa: E402
+from paths import KITTI_FRAMES, OS1_128_HEIGHT, OS1_128_PCAP, VELODYNE, run_cli  # noqa: E402
 from test_bags import FLOAT32, cloud, write_bag  # noqa: E402
 
 FRAMES = [p for p in KITTI_FRAMES if p.name.startswith("0000")][:3]
@@ -101,3 +101,21 @@ def test_frames_from_python_are_checked_like_arrays_given_to_the_estimator():
     runner = rp._native.core().DriveRunner(Frames(), rp.Config(sensor_height=1.8).to_json(), speed_mps=1.0)
     with pytest.raises(ValueError, match="frame 0 of odd.bag: points needs at least 3 columns"):
         runner.next([])
+
+
+@pytest.mark.parametrize("args", [
+    [OS1_128_PCAP, "--sensor-height", OS1_128_HEIGHT, "--speed", 2.5],  # IRI with the errors' IRI
+    [VELODYNE / "hdl32_example.pcap", "--speed", 5],                      # every class declined
+])
+def test_the_python_runs_summary_line_is_the_cli_ones(args):
+    """Runs the Python package makes (bags, --motion-from lidar) end with the C++ run's summary line: its
+    classes, IRI, the IRI of the bins' errors alone and every declined reason (the last two were missing)."""
+    from roadpreview.drives_cli import _Summary
+
+    proc = run_cli("run", *args, "--quiet")
+    summary = _Summary()
+    for line in proc.stdout.splitlines():
+        summary.add(json.loads(line))
+    (cli_line,) = [line for line in proc.stderr.splitlines() if " frame(s), pipeline median " in line]
+    assert "declined classes" in cli_line or "errors alone" in cli_line  # the parts once missing are there to match
+    assert f"roadpreview: {summary}" == cli_line

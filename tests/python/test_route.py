@@ -6,6 +6,8 @@ known road, and by reading the ERD file back with an independent reader."""
 import csv
 import json
 import math
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -117,6 +119,18 @@ def test_erd_export_reads_back_as_the_stitched_profile(kitti_route):
         first, last = rp.reference.longest_valid_stretch(z)
         np.testing.assert_allclose(values[:, 0], z[first:last] * 1000, atol=6e-3)  # mm, written to 1 µm
         assert f"{(first + 0.5) * 0.1:.2f} m along the drive" in keywords["TITLE"]
+
+
+def test_the_erd_title_names_the_input_even_a_folder_given_with_a_slash(kitti_route, tmp_path):
+    out, _ = kitti_route
+    assert read_erd(out / "profiles" / "left.erd")[0]["TITLE"].startswith(f"roadpreview {Path(KITTI_FRAMES[0]).name}: ")
+    drive = tmp_path / "drive"
+    drive.mkdir()
+    for frame in KITTI_FRAMES[:2]:
+        shutil.copy(frame, drive)
+    run("run", f"{drive}/", "--speed", KITTI_SPEED, "--frame-rate", 10, "--sensor-height", KITTI_SENSOR_HEIGHT,
+        "--export-profile", tmp_path / "profiles", "-o", tmp_path / "run.jsonl")
+    assert read_erd(tmp_path / "profiles" / "left.erd")[0]["TITLE"].startswith("roadpreview drive: ")  # was "roadpreview : "
 
 
 def test_a_known_road_is_stitched_whole_whatever_each_frame_s_offset():
