@@ -12,3 +12,10 @@ else()
   set(ROADPREVIEW_INSTALL_BINDIR ${CMAKE_INSTALL_BINDIR})
 endif()
 set(ROADPREVIEW_INSTALL_CMAKEDIR ${ROADPREVIEW_INSTALL_LIBDIR}/cmake/roadpreview)
+# The shared libraries' version properties. A wheel cannot hold symlinks: versioned, each library would be there
+# three times (libX.so, libX.so.0, libX.so.0.1.0, full copies), so in a wheel each is one file without a version.
+if(SKBUILD)
+  set(ROADPREVIEW_LIBRARY_VERSION)
+else()
+  set(ROADPREVIEW_LIBRARY_VERSION VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
+endif()

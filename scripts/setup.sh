@@ -6,7 +6,7 @@
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-DEBIAN_PACKAGES=(g++ make pkg-config python3-venv libpcl-dev libboost-dev libeigen3-dev nlohmann-json3-dev
+DEBIAN_PACKAGES=(g++ make pkg-config python3-venv python3-dev libpcl-dev libboost-dev libeigen3-dev nlohmann-json3-dev
                  rapidjson-dev libtbb-dev libyaml-cpp-dev libcli11-dev libgtest-dev libpcap-dev libtins-dev liblz4-dev
                  time libopencv-dev opencv-data libpng-dev libgeographiclib-dev libdlib-dev zlib1g-dev)
 

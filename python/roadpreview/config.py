@@ -235,10 +235,13 @@ class Config(_Fields):
             raise ValueError(f"{path}: cannot read config file ({err.strerror})") from None
         except UnicodeDecodeError:
             raise ValueError(f"{path}: not a config file: not UTF-8 text") from None
+        if path.suffix.lower() in (".yaml", ".yml"):
+            try:
+                import yaml
+            except ImportError:
+                raise ImportError(f"{path}: a YAML config needs pyyaml: pip install 'roadpreview[yaml]'") from None
         try:
             if path.suffix.lower() in (".yaml", ".yml"):
-                import yaml
-
                 data = yaml.safe_load(text)
             else:
                 data = json.loads(text)

@@ -207,10 +207,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"usage: roadpreview-drives {{{','.join(COMMANDS)}}} ...", file=sys.stderr)
         return 2
     command, rest = argv[0], argv[1:]
-    if command == "batch":
-        return batch.main(rest)
     try:
+        if command == "batch":
+            return batch.main(rest)
         return COMMANDS[command](rest)
+    except ModuleNotFoundError as err:  # an optional dependency of these commands
+        package = (err.name or "").partition(".")[0] or str(err)
+        print(f"roadpreview: error: `{command}` needs the Python package {package!r}, which is not installed: "
+              "pip install 'roadpreview[drives]'", file=sys.stderr)
+        return 1
     except (ValueError, RuntimeError, OSError) as err:
         print(f"roadpreview: error: {err}", file=sys.stderr)
         return 2 if isinstance(err, ValueError) else 1

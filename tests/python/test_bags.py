@@ -186,6 +186,18 @@ def test_a_bag_run_on_the_command_line_speaks_as_every_run_does(tmp_path):
     assert err[-1].startswith("roadpreview: 1 frame(s), pipeline median ") and "vehicle classes: -×1" in err[-1]
 
 
+@pytest.mark.parametrize("command, missing", [("run", "rosbags"), ("batch", "distributed")])
+def test_a_missing_optional_package_is_named_with_its_extra(command, missing, monkeypatch, capsys, tmp_path):
+    """Without the [drives] extra a bag run or a batch ended in a 33-line traceback."""
+    from roadpreview import drives_cli
+
+    monkeypatch.setitem(sys.modules, missing, None)  # `import missing` now fails as if it were not installed
+    args = [str(OUSTER_BAG), "--speed", "2.5"] + (["-o", str(tmp_path / "out")] if command == "batch" else [])
+    assert drives_cli.main([command, *args]) == 1
+    assert capsys.readouterr().err == (f"roadpreview: error: `{command}` needs the Python package '{missing}', "
+                                       "which is not installed: pip install 'roadpreview[drives]'\n")
+
+
 def test_a_two_dimensional_scan_made_a_cloud_is_noted(tmp_path):
     """A 2-D scanner's LaserScan made a PointCloud2 (every z = 0) holds no road heights: the run says so once
     (before, every point of it in the region was ground, silently)."""

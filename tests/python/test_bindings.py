@@ -1,6 +1,7 @@
 """The Python API over the C++ core: inputs, outputs, errors, config."""
 
 import json
+import sys
 import tracemalloc
 
 import numpy as np
@@ -135,6 +136,13 @@ def test_config_keywords_nested_dicts_and_files(tmp_path):
     (tmp_path / "c.yaml").write_text("tire_width: 0.25\nprofile:\n  ds_m: 0.05\n")
     assert rp.Config.from_file(tmp_path / "c.json") == rp.Config.from_file(tmp_path / "c.yaml")
     assert rp.Config.from_file(tmp_path / "c.json").profile.ds_m == 0.05
+
+
+def test_a_yaml_config_without_pyyaml_names_the_extra_not_a_bad_file(tmp_path, monkeypatch):
+    (tmp_path / "c.yaml").write_text("tire_width: 0.25\n")
+    monkeypatch.setitem(sys.modules, "yaml", None)  # as if pyyaml were not installed
+    with pytest.raises(ImportError, match=r"c.yaml: a YAML config needs pyyaml: pip install 'roadpreview\[yaml\]'"):
+        rp.Config.from_file(tmp_path / "c.yaml")
 
 
 @pytest.mark.parametrize(

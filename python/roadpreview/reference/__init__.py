@@ -1,4 +1,6 @@
-"""Pure-numpy reference implementation of docs/method.md: the independent test oracle for the C++ core.
+"""Pure-numpy reference implementation of docs/method.md: the independent test oracle for the C++ core. Its beam
+calibration and roadside modules use scipy too (sparse least squares, image labelling, assignment):
+``pip install 'roadpreview[reference]'``.
 
 Written for clarity, not speed; every stage function below has a C++ twin with the same name.
 """
