@@ -50,7 +50,7 @@ class GroundConfig(_Fields):
     roi_x_max_m: float = 40.0
     roi_y_abs_max_m: float = 10.0
     pca_iterations: int = 3
-    pca_threshold_m: float = 0.20  #: points farther than this above the plane are not ground
+    pca_threshold_m: float = 0.20  #: points farther than this above the plane are not ground (≥ 0.001)
     #: points farther than this below the ground model (pca: the last plane; zones: the patch's reference and
     #: planes; ransac's band is two-sided) are not ground — returns from under the road (a reflection, multipath)
     max_depth_m: float = 2.0
@@ -117,7 +117,7 @@ class ObstaclesConfig(_Fields):
 
     enabled: bool = True
     voxel_m: float = 0.25  #: points are clustered by the centroids of voxels this wide; 0: every point
-    cluster_tolerance_m: float = 0.5  #: centroids closer than this are in the same cluster
+    cluster_tolerance_m: float = 0.5  #: centroids closer than this are in the same cluster (≥ 0.01)
     min_cluster_points: int = 5  #: smaller clusters are dropped (isolated returns, noise)
     max_cluster_points: int = 1000000  #: larger clusters are dropped; the default keeps every one
     ground_search_m: float = 1.0  #: ground points this far around a cluster give its local ground
@@ -132,14 +132,16 @@ class FusionConfig(_Fields):
 
     method: str = "none"  #: "none" (each frame alone), "ema" (the paper's moving average) or "kalman"
     alpha: float = 0.5  #: EMA weight of the new frame, (0, 1]; 1 = the latest frame's cells
-    cell_m: float = 0.1  #: square map cells
-    map_length_m: float = 100.0  #: side of the square map around the vehicle
+    cell_m: float = 0.1  #: square map cells (0.01–10 m)
+    #: side of the square map around the vehicle (≥ 2 × (preview + behind) with fusion on; ≤ 4000 cells)
+    map_length_m: float = 100.0
     point_noise_m: float = 0.03  #: σ of one point's height when no cell of a frame holds two points
-    frame_rate_hz: float = 10.0  #: frames without timestamps are 1/frame_rate_hz apart
+    frame_rate_hz: float = 10.0  #: frames without timestamps are 1/frame_rate_hz apart (0.01–10000)
     max_time_gap_s: float = 0.5  #: a longer step between timestamps, or one back in time, resets the map
     behind_m: float = 0.0  #: fused profiles start this far behind the wheels (already-driven road)
     align: bool = True  #: remove the plane between a frame's heights and the map's before fusing
-    align_tilt_sigma: float = 1e-4  #: rad, prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
+    #: rad (1e-9–1), prior σ of that plane's slopes: scarce shared cells cannot tilt a frame
+    align_tilt_sigma: float = 1e-4
     #: m, the excess disagreement is measured on the shared cells this close to the line ahead (the lane, not verges)
     align_excess_half_width_m: float = 2.0
 

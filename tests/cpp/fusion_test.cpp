@@ -215,6 +215,24 @@ TEST(Fusion, ALargeTimeGapResetsTheMapAndSaysSo) {
     EXPECT_EQ(after_reset.fusion->frames, 1);
 }
 
+// A given pose 150 m from the last (another origin, a GNSS jump) leaves the 100 m map behind: it was cleared
+// silently and `frames` went on counting.
+TEST(Fusion, APoseThatJumpsPastTheMapClearsItAndSaysSo) {
+    rp::Estimator est(fusion_config(rp::FusionMethod::Ema));
+    const auto cloud = road_frame({}, 20000, 0.02, 7);
+    const auto at = [&](double x) {
+        return *est.process(cloud, 5.0, 0.0, "", rp::FrameMotion{std::nullopt, rp::Pose2{x, 0.0, 0.0}}).fusion;
+    };
+    EXPECT_EQ(at(0.0).frames, 1);
+    const rp::FusionStatus near = at(0.5);
+    EXPECT_EQ(near.frames, 2);
+    EXPECT_EQ(near.reset, "");
+    const rp::FusionStatus far = at(150.0);
+    EXPECT_EQ(far.reset, "moved beyond the map");
+    EXPECT_EQ(far.frames, 1);  // this frame only
+    EXPECT_EQ(at(150.5).frames, 2);
+}
+
 // dt is the difference of consecutive frames' timestamps, 1/frame_rate_hz when one is missing: a frame without one
 // between two with them moved the vehicle by the timestamps' whole step again (0.75 m for 0.5 at 2.5 m/s, 10 Hz).
 TEST(Fusion, AFrameWithoutATimestampMovesTheVehicleByOneFrameInterval) {

@@ -133,6 +133,18 @@ def test_a_frame_without_a_timestamp_moves_both_maps_by_one_frame_interval():
         assert ref.fusion["pose"][0] == pytest.approx(x, abs=1e-12)
 
 
+def test_a_pose_that_jumps_past_the_map_clears_both_maps_and_says_so():
+    cfg = fusion_cfg("ema")
+    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    for x, frames, reset in [(0.0, 1, None), (0.5, 2, None), (150.0, 1, "moved beyond the map"), (150.5, 2, None)]:
+        points = noisy_road((x, 0, 0), 3000, 1)
+        cpp = est.process(points, 5.0, 0.0, pose=(x, 0.0, 0.0))
+        ref = rp.reference.process_fused(state, points, 5.0, 0.0, pose=(x, 0.0, 0.0))
+        assert (cpp.fusion["frames"], cpp.fusion["reset"]) == (frames, reset)
+        assert (ref.fusion["frames"], ref.fusion["reset"]) == (frames, reset)
+        assert_profiles_agree(cpp, ref)
+
+
 def test_python_interface_and_output_line():
     est = rp.Estimator(fusion_cfg("kalman"))
     res = est.process(noisy_road((0, 0, 0), 5000, 1), 8.0, 0.0, timestamp=10.0)
@@ -153,11 +165,21 @@ def test_python_interface_and_output_line():
     ("method", "average", "fusion.method"), ("alpha", 0.0, "fusion.alpha"), ("alpha", 1.5, "fusion.alpha"),
     ("map_length_m", 50.0, "fusion.map_length_m"), ("max_time_gap_s", -1.0, "fusion.max_time_gap_s"),
     ("behind_m", -1.0, "fusion.behind_m"), ("cell_m", 0.0, "fusion.cell_m"),
-    ("align_tilt_sigma", 0.0, "fusion.align_tilt_sigma"),
+    ("align_tilt_sigma", 0.0, "fusion.align_tilt_sigma"), ("align_tilt_sigma", 1e-300, "fusion.align_tilt_sigma"),
+    ("cell_m", 11.0, "fusion.cell_m"), ("frame_rate_hz", 0.001, "fusion.frame_rate_hz"),
     ("align_excess_half_width_m", 0.0, "fusion.align_excess_half_width_m")])
 def test_bad_fusion_config_names_the_field(field, value, message):
     with pytest.raises(ValueError, match=message):
-        rp.Estimator(rp.Config(fusion={field: value}))
+        rp.Estimator(rp.Config(fusion={"method": "ema", field: value}))
+
+
+def test_the_map_holds_the_profiles_only_with_fusion_on():
+    """A preview of 60 m needs a map of 120 m to fuse: without fusion, the 100 m default map is no error (it
+    was, naming a map that was never made)."""
+    rp.Estimator(rp.Config(profile={"preview_length_m": 60.0}))
+    with pytest.raises(ValueError, match=r"fusion.map_length_m \(100 m\) must be >= 2 x \(profile.preview_length_m \+ "
+                                         r"fusion.behind_m\) = 120 m with fusion on"):
+        rp.Estimator(rp.Config(profile={"preview_length_m": 60.0}, fusion={"method": "ema"}))
 
 
 @pytest.mark.parametrize("method", ["ema", "kalman"])

@@ -295,3 +295,23 @@ def test_stereo_roadside_and_simulator_misuse_is_an_error_naming_the_input(tmp_p
         sim.vlp_16(height_m=-1.8)
     with pytest.raises(ValueError, match=r"need 0 <= dropout < 1, got 1.0"):
         sim.os1_128(dropout=1.0)
+
+
+@pytest.mark.parametrize("profile", [{"ds_m": 40.0}, {"ds_m": 20.0, "preview_length_m": 20.0}])
+def test_a_stretch_of_one_bin_is_too_short_not_an_error(profile):
+    """A bin as long as roughness.min_length_m: the C++ core raised "displacement_psd needs at least 2 samples"
+    (the CLI stopped the run); the reference declined it. Both decline it now."""
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, profile=profile)
+    points = rp.io.read(KITTI_FRAMES[0])
+    for res in (rp.Estimator(cfg).process(points, 5.0, 0.0), rp.reference.process(points, 5.0, 0.0, cfg)):
+        assert res.left.roughness.iso_class is None
+        assert res.left.roughness.reason == "valid stretch too short"
+
+
+def test_a_profile_of_forty_thousand_bins_costs_no_quadratic_memory():
+    """A legal ds_m of 1 mm: the Estimator planned an FFT for every length up to 40,000 bins — 12.9 GB and 28 s
+    before the first frame (bad_alloc under a 4 GB limit). Lengths beyond 1,024 bins are planned as they come."""
+    cfg = rp.Config(sensor_height=KITTI_SENSOR_HEIGHT, profile={"ds_m": 0.001})
+    res = rp.Estimator(cfg).process(rp.io.read(KITTI_FRAMES[0]), 5.0, 0.0)
+    assert len(res.left.z) == 40_000
+    assert res.left.roughness.iso_class is not None or res.left.roughness.reason

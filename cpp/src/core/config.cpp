@@ -270,7 +270,9 @@ void validate(const Config& c) {
                 number_text(g.roi_y_abs_max_m) + " m)");
     require(g.pca_iterations >= 1 && g.pca_iterations <= kMaxFitIterations,
             "ground.pca_iterations must be in [1, " + std::to_string(kMaxFitIterations) + "]");
-    require(positive(g.pca_threshold_m), "ground.pca_threshold_m must be > 0");
+    // A histogram of heights a quarter of it apart finds the root's slab: 1 µm asked for 160 million bins a frame.
+    require(std::isfinite(g.pca_threshold_m) && g.pca_threshold_m >= 0.001,
+            "ground.pca_threshold_m must be >= 0.001 m");
     require(positive(g.max_depth_m), "ground.max_depth_m must be > 0");
     require(positive(g.ransac_distance_m), "ground.ransac_distance_m must be > 0");
     require(positive(g.max_tilt_deg) && g.max_tilt_deg < 90.0, "ground.max_tilt_deg must be in (0, 90)");
@@ -309,7 +311,8 @@ void validate(const Config& c) {
     const ObstaclesConfig& o = c.obstacles;
     require(std::isfinite(o.voxel_m) && (o.voxel_m == 0.0 || o.voxel_m >= 0.01),
             "obstacles.voxel_m must be 0 (no voxels) or >= 0.01");
-    require(positive(o.cluster_tolerance_m), "obstacles.cluster_tolerance_m must be > 0");
+    require(std::isfinite(o.cluster_tolerance_m) && o.cluster_tolerance_m >= 0.01,
+            "obstacles.cluster_tolerance_m must be >= 0.01 m");
     require(o.min_cluster_points >= 1, "obstacles.min_cluster_points must be >= 1");
     require(o.max_cluster_points >= o.min_cluster_points,
             "obstacles.max_cluster_points must be >= obstacles.min_cluster_points");
@@ -329,15 +332,20 @@ void validate(const Config& c) {
 
     const FusionConfig& f = c.fusion;
     require(std::isfinite(f.alpha) && f.alpha > 0.0 && f.alpha <= 1.0, "fusion.alpha must be in (0, 1]");
-    require(std::isfinite(f.cell_m) && f.cell_m >= 0.01, "fusion.cell_m must be >= 0.01");
-    require(std::isfinite(f.map_length_m) && f.map_length_m >= 2.0 * (p.preview_length_m + f.behind_m) &&
-                f.map_length_m / f.cell_m <= 4000.0,
-            "fusion.map_length_m must be >= 2 x (profile.preview_length_m + fusion.behind_m) and <= 4000 cells");
+    require(std::isfinite(f.cell_m) && f.cell_m >= 0.01 && f.cell_m <= 10.0, "fusion.cell_m must be in [0.01, 10] m");
+    require(std::isfinite(f.map_length_m) && f.map_length_m > 0.0 && f.map_length_m / f.cell_m <= 4000.0,
+            "fusion.map_length_m must be > 0 and <= 4000 cells");
+    // The map must hold the profiles ahead in every heading and those behind: a rule of the fusion only.
+    require(f.method == FusionMethod::None || f.map_length_m >= 2.0 * (p.preview_length_m + f.behind_m),
+            "fusion.map_length_m (" + number_text(f.map_length_m) + " m) must be >= 2 x (profile.preview_length_m + "
+            "fusion.behind_m) = " + number_text(2.0 * (p.preview_length_m + f.behind_m)) + " m with fusion on");
     require(positive(f.point_noise_m), "fusion.point_noise_m must be > 0");
-    require(positive(f.frame_rate_hz), "fusion.frame_rate_hz must be > 0");
+    require(std::isfinite(f.frame_rate_hz) && f.frame_rate_hz >= 0.01 && f.frame_rate_hz <= 10000.0,
+            "fusion.frame_rate_hz must be in [0.01, 10000]");
     require(positive(f.max_time_gap_s), "fusion.max_time_gap_s must be > 0");
     require(std::isfinite(f.behind_m) && f.behind_m >= 0.0, "fusion.behind_m must be >= 0");
-    require(positive(f.align_tilt_sigma), "fusion.align_tilt_sigma must be > 0");
+    require(std::isfinite(f.align_tilt_sigma) && f.align_tilt_sigma >= 1e-9 && f.align_tilt_sigma <= 1.0,
+            "fusion.align_tilt_sigma must be in [1e-9, 1] rad");
     require(positive(f.align_excess_half_width_m), "fusion.align_excess_half_width_m must be > 0");
     validate_stereo(c.stereo);
 }

@@ -134,9 +134,10 @@ void ElevationMap::clear_rows(std::int64_t first, std::int64_t last, bool along_
     }
 }
 
-void ElevationMap::move_to(double x_m, double y_m) {
+bool ElevationMap::move_to(double x_m, double y_m) {
     const std::int64_t i0 = floor_index(x_m, cell_) - n_ / 2, j0 = floor_index(y_m, cell_) - n_ / 2;
-    if (std::abs(i0 - i0_) >= n_ || std::abs(j0 - j0_) >= n_) {
+    const bool beyond = std::abs(i0 - i0_) >= n_ || std::abs(j0 - j0_) >= n_;
+    if (beyond) {
         clear();
     } else {  // the rows and columns that enter take the slots of those that leave
         if (i0 > i0_) clear_rows(i0_ + n_, i0 + n_, true);
@@ -146,6 +147,7 @@ void ElevationMap::move_to(double x_m, double y_m) {
     }
     i0_ = i0;
     j0_ = j0;
+    return beyond;
 }
 
 std::int64_t ElevationMap::slot(double x_m, double y_m) const {
@@ -216,7 +218,12 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
     }
     started_ = true;
     ++frame_;
-    map_.move_to(pose_.x_m, pose_.y_m);
+    if (map_.move_to(pose_.x_m, pose_.y_m) && fused_ > 0) {  // a jump of the pose past the whole map
+        fused_ = 0;
+        map_has_excess_ = false;
+        readout_.set = false;
+        status.reset = "moved beyond the map";
+    }
     status.pose = pose_;
     status.frames = fused_;
 }

@@ -104,7 +104,12 @@ void displacement_psd(const double* z, std::size_t count, double ds, RoughnessSc
         power += w * w;
     }
     std::vector<std::complex<double>>& X = s.transform;
-    s.fft.fwd(X, x);
+    if (count <= RoughnessScratch::kPlannedLength) {
+        s.fft.fwd(X, x);
+    } else {  // a plan this long is made for this transform only: kept, every length would cost O(length²) in all
+        s.unplanned.fwd(X, x);
+        s.unplanned.impl().clear();
+    }
 
     const std::size_t half = count / 2;
     sp.n.resize(half + 1);
@@ -130,7 +135,7 @@ void RoughnessScratch::plan_ffts(std::size_t bins) {
     power_by_interval.reserve(bins);
     detrended.reserve(bins);
     transform.reserve(bins);
-    for (std::size_t n = 2; n <= bins; ++n) fft.impl().plan_real_forward(static_cast<int>(n));
+    for (std::size_t n = 2; n <= std::min(bins, kPlannedLength); ++n) fft.impl().plan_real_forward(static_cast<int>(n));
 }
 
 Spectrum displacement_psd(const double* z, std::size_t count, double ds) {
@@ -415,7 +420,8 @@ std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<doub
 namespace {
 RoughnessReason stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
     if (samples == 0) return RoughnessReason::NoValidProfile;
-    if (static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return RoughnessReason::StretchTooShort;
+    // One bin has no spectrum, however long it is (a ds_m as long as min_length_m)
+    if (samples < 2 || static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return RoughnessReason::StretchTooShort;
     return RoughnessReason::None;
 }
 

@@ -50,7 +50,12 @@ struct PlannedKissFft : Eigen::internal::kissfft_impl<double> {
 };
 
 struct RoughnessScratch {
-    Eigen::FFT<double, PlannedKissFft> fft;  // a plan per length, made by plan_ffts
+    /// Stretches of up to this many bins have their FFT planned ahead. A length's plan holds O(length) twiddles,
+    /// so planning every length up to N costs O(N²): 1.6 MB for the default 400 bins, 10 MB for 1,024, but 633 MB
+    /// for 8,000 and more than the machine for 40,000 (a legal ds_m of 1 mm).
+    static constexpr std::size_t kPlannedLength = 1024;
+    Eigen::FFT<double, PlannedKissFft> fft;  // a plan per length up to kPlannedLength, made by plan_ffts
+    Eigen::FFT<double> unplanned;  // longer stretches: planned as they come, the plan dropped after the transform
     std::vector<double> detrended;
     std::vector<std::complex<double>> transform;
     Spectrum right;                 // the right wheel's PSD over the vehicle's stretch
@@ -67,8 +72,8 @@ struct RoughnessScratch {
     std::vector<double> x, y, shape, floor, share, corrected;
     std::vector<double> iri_noise;  // the IRI's: the unwindowed noise PSD
 
-    /// Plans the FFT of every stretch length up to `bins`, so that no frame pays (or allocates) for a plan, and
-    /// reserves the transform's and the fits' buffers for that many bins.
+    /// Plans the FFT of every stretch length up to `bins` (at most kPlannedLength), so that no frame pays (or
+    /// allocates) for a plan, and reserves the transform's and the fits' buffers for that many bins.
     void plan_ffts(std::size_t bins);
 };
 

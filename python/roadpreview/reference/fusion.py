@@ -105,6 +105,8 @@ class FusedMap:
     #: pose, its alignment plane (offset, x slope, y slope about the vehicle), its levelling rotation); None: the
     #: profiles read the map's heights.
     readout_ground: Optional[tuple] = None
+    #: The cell of the pose at the last frame (the map's window is centred there; the origin's before any frame).
+    pose_cell: tuple = (0, 0)
 
     def reset(self):
         self.cells, self.pose, self.last_time, self.fused, self.started = {}, (0.0, 0.0, 0.0), None, 0, False
@@ -131,6 +133,14 @@ class FusedMap:
             self.pose = integrate_motion(self.pose, speed, yaw_rate, dt)
         self.started = True
         self.frame += 1
+        # The map is a window `map_length_m` wide about the pose: a jump of the pose by as much clears it.
+        cell, side = self.cfg.fusion.cell_m, math.ceil(self.cfg.fusion.map_length_m / self.cfg.fusion.cell_m - 1e-9)
+        pose_cell = (math.floor(self.pose[0] / cell), math.floor(self.pose[1] / cell))
+        beyond = any(abs(a - b) >= side for a, b in zip(pose_cell, self.pose_cell))
+        self.pose_cell = pose_cell
+        if beyond and self.fused:
+            self.cells, self.fused, self.map_has_excess, self.readout_ground = {}, 0, False, None
+            reset = "moved beyond the map"
         return reset
 
     def to_odometry(self, xy: np.ndarray) -> np.ndarray:

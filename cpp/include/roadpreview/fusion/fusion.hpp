@@ -77,8 +77,9 @@ class ElevationMap {
 public:
     ElevationMap(double cell_m, double length_m);
 
-    /// Centres the window on (x, y); cells that leave it are forgotten.
-    void move_to(double x_m, double y_m);
+    /// Centres the window on (x, y); cells that leave it are forgotten. True when the window moved by its side or
+    /// more: every cell left it.
+    bool move_to(double x_m, double y_m);
     void clear();
 
     /// The cell at (x, y), nullptr outside the window. An empty cell has observations == 0.
