@@ -56,7 +56,8 @@ def test_a_single_frame_index_selects_that_frame():
     (("--speed", "fast"), "Could not convert: --speed = fast"),
     (("--speed", 5, "--ground", "magic"), "--ground: magic not in {zones,pca,ransac}"),
     (("--speed", 5, "--speed", 6), "--speed: At Most 1 required but received 2"),
-], ids=["unknown flag", "speed not a number", "unknown ground method", "speed twice"])
+    (("--speed", 5, "--frame-rate", 0.001), "--frame-rate: Value 0.001 not in range 0.010000 to 10000.000000"),
+], ids=["unknown flag", "speed not a number", "unknown ground method", "speed twice", "frame rate out of range"])
 def test_usage_errors_exit_with_status_2(args, message):
     proc = run("run", KITTI_FRAMES[0], *args, check=False)
     assert proc.returncode == 2, proc.stderr
