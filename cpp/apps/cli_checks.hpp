@@ -31,14 +31,14 @@ inline CLI::Validator positive_finite() {
         "> 0");
 }
 
-/// A number in (lo, hi].
-inline CLI::Validator above_and_at_most(double lo, double hi) {
+/// A number in (lo, hi], or in [lo, hi] when `lo_included`.
+inline CLI::Validator above_and_at_most(double lo, double hi, bool lo_included = false) {
     char range[64];
-    std::snprintf(range, sizeof range, "(%g, %g]", lo, hi);
+    std::snprintf(range, sizeof range, "%c%g, %g]", lo_included ? '[' : '(', lo, hi);
     return CLI::Validator(
         [=](std::string& text) -> std::string {
             double v = 0.0;
-            if (!CLI::detail::lexical_cast(text, v) || !(v > lo && v <= hi))
+            if (!CLI::detail::lexical_cast(text, v) || !((lo_included ? v >= lo : v > lo) && v <= hi))
                 return std::string("expected a number in ") + range + ", got " + text;
             return {};
         },

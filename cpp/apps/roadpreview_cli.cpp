@@ -720,8 +720,7 @@ int main(int argc, char** argv) {
     run_cmd->add_option("--threads", o.threads, "Threads one frame may use; the same answer for any number (default 1)")
         ->check(CLI::Range(1, rp::kMaxThreads));
     run_cmd->add_option("--frame-rate", o.frame_rate, "File inputs: frames per second; adds timestamps frame/rate")
-        ->check(CLI::Range(0.01, 10000.0))
-        ->check(rp::cli::positive_finite());  // pcap frames carry their own timestamps
+        ->check(rp::cli::above_and_at_most(0.01, 10000.0, true));  // fusion.frame_rate_hz's range
     run_cmd->add_option("--fusion", o.fusion, "Temporal fusion of the frames into an elevation map (default none)")
         ->check(CLI::IsMember({"none", "ema", "kalman"}));
     run_cmd->add_option("--alpha", o.alpha, "EMA fusion (--fusion ema): weight of the newest frame (default 0.5)")
@@ -771,7 +770,7 @@ int main(int argc, char** argv) {
     cal_cmd->add_option("--poses", c.poses_file, "KITTI poses file, one 3x4 row-major pose per frame of the input");
     cal_cmd->add_option("--frames", c.frames, "Frames A:B of the input (0-based, B excluded; A: or :B)");
     cal_cmd->add_option("--frame-rate", c.frame_rate, "File inputs: frames per second (default 10)")
-        ->check(CLI::Range(0.01, 10000.0));
+        ->check(rp::cli::above_and_at_most(0.01, 10000.0, true));
     auto* cal_height = cal_cmd->add_option("--sensor-height", c.sensor_height, "Sensor height above the ground, m");
     cal_cmd->add_option("--extrinsics", c.extrinsics, "Sensor pose in the base frame: x,y,z,roll,pitch,yaw (m, rad)")
         ->expected(6)->delimiter(',')->excludes(cal_height);
