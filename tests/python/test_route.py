@@ -130,7 +130,8 @@ def test_the_erd_title_names_the_input_even_a_folder_given_with_a_slash(kitti_ro
         shutil.copy(frame, drive)
     run("run", f"{drive}/", "--speed", KITTI_SPEED, "--frame-rate", 10, "--sensor-height", KITTI_SENSOR_HEIGHT,
         "--export-profile", tmp_path / "profiles", "-o", tmp_path / "run.jsonl")
-    assert read_erd(tmp_path / "profiles" / "left.erd")[0]["TITLE"].startswith("roadpreview drive: ")  # was "roadpreview : "
+    title = read_erd(tmp_path / "profiles" / "left.erd")[0]["TITLE"]
+    assert title.startswith("roadpreview drive: ")  # was "roadpreview : "
 
 
 def test_a_known_road_is_stitched_whole_whatever_each_frame_s_offset():

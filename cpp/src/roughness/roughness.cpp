@@ -421,7 +421,8 @@ namespace {
 RoughnessReason stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
     if (samples == 0) return RoughnessReason::NoValidProfile;
     // One bin has no spectrum, however long it is (a ds_m as long as min_length_m)
-    if (samples < 2 || static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9) return RoughnessReason::StretchTooShort;
+    if (samples < 2 || static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9)
+        return RoughnessReason::StretchTooShort;
     return RoughnessReason::None;
 }
 
