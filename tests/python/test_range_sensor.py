@@ -133,6 +133,53 @@ def test_a_single_speed_is_a_clear_error(bench, tmp_path):
     assert "two or more distinct speeds" in proc.stderr and "laser_left" in proc.stderr
 
 
+def test_a_flat_reference_is_an_error_not_a_calibration(bench, tmp_path):
+    """A reference without relief leaves each run's shift undetermined (σ infinite): b2 came out 0.3 m off and
+    was written, exit 0."""
+    (r0, m0), (r1, m1) = bench["runs"]
+    (tmp_path / "flat.csv").write_text("x,z\n" + "".join(f"{x:.2f},0.0\n" for x in np.arange(-1.0, 4.0, 0.01)))
+    proc = run_cli("range", "calibrate-offset", "--reference", tmp_path / "flat.csv", "--sensors",
+                   bench["dir"] / "sensors.yaml", r0, r1, "--motion", m0, m1, "-o", tmp_path / "cal.yaml", check=False)
+    assert proc.returncode != 0 and not (tmp_path / "cal.yaml").exists()
+    assert f"{r0}: the reference profile is flat where the run's samples lie" in proc.stderr
+
+
+@pytest.mark.parametrize("calibration, fragment", [
+    ("sensors:\n  laser_left:\n    offset: {b1_s: -12, b2_m: 0.3}\n",
+     "sensors.laser_left.offset: b1_s, the sensor's latency, must lie within ±1 s, got -12 (milliseconds given as "
+     "seconds?)"),
+    ("sensors:\n  laser_left:\n    offset: {b1_s: -0.012, b2_m: 0.3, b3_m: 1}\n",
+     "sensors.laser_left.offset: unknown field 'b3_m'"),
+    ("distance: {a1: 0.0002, a2: 0.005, temprature_c: 20}\n", "distance: unknown field 'temprature_c'"),
+    ("sensors:\n  nobody:\n    offset: {b1_s: -0.012, b2_m: 0.3}\n",
+     "the calibration names sensor 'nobody', which the layout does not hold"),
+], ids=["latency in ms", "unknown offset field", "unknown distance field", "sensor of another layout"])
+def test_a_calibration_file_that_cannot_be_meant_is_an_error(bench, tmp_path, calibration, fragment):
+    """Each was taken silently: a sensor of another layout left the real ones on their geometric foot, a latency in
+    milliseconds dropped every sample (blaming the motion), a misspelt field kept its default."""
+    (tmp_path / "cal.yaml").write_text(calibration)
+    readings, motion = bench["runs"][0]
+    proc = run_cli("range", "run", readings, "--sensors", bench["dir"] / "sensors.yaml", "--calibration",
+                   tmp_path / "cal.yaml", "--motion", motion, "-o", tmp_path / "out.jsonl", check=False)
+    assert proc.returncode != 0 and fragment in proc.stderr, proc.stderr
+
+
+def test_a_byte_order_mark_before_a_csv_header_is_no_part_of_it(bench, tmp_path):
+    """A spreadsheet writes one before the first cell: the header "t,sensor,distance" was refused as not one."""
+    readings, motion = bench["runs"][0]
+    bom = "\ufeff"
+    (tmp_path / "readings.csv").write_text(bom + readings.read_text(), encoding="utf-8")
+    (tmp_path / "motion.csv").write_text(bom + motion.read_text(), encoding="utf-8")
+    args = ["--sensors", bench["dir"] / "sensors.yaml", "--frame-length-m", 2]
+    plain = run_cli("range", "run", readings, *args, "--motion", motion).stdout
+    assert run_cli("range", "run", tmp_path / "readings.csv", *args, "--motion", tmp_path / "motion.csv").stdout == \
+        plain.replace(str(readings), str(tmp_path / "readings.csv"))
+    rows = sim.bench_counts(sim.ultrasonic(), np.linspace(0.15, 0.6, 8), repeats=2)
+    (tmp_path / "bench.csv").write_text(bom + "count,distance\n" + "".join(f"{c:.0f},{d:.4f}\n" for c, d in rows),
+                                        encoding="utf-8")
+    run_cli("range", "calibrate-distance", tmp_path / "bench.csv", "-o", tmp_path / "cal.yaml")
+
+
 # --- samples, windows, C++ against the reference -------------------------------------------------------------
 
 def test_samples_and_bins_agree_with_the_reference(bench):

@@ -10,13 +10,19 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/text.hpp"
 
 namespace roadpreview::csv {
 
-inline std::vector<std::string> split(const std::string& line) {
+/// The UTF-8 byte order mark a spreadsheet writes before a CSV's first cell.
+constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+
+/// The line's cells, trimmed; a byte order mark before the first is dropped.
+inline std::vector<std::string> split(std::string line) {
+    if (line.compare(0, kByteOrderMark.size(), kByteOrderMark) == 0) line.erase(0, kByteOrderMark.size());
     std::vector<std::string> cells;
     std::stringstream in(line);
     std::string cell;

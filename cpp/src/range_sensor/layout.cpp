@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include <yaml-cpp/yaml.h>
 
@@ -18,6 +20,7 @@ namespace roadpreview {
 namespace {
 
 constexpr double kMaxSensorOffsetM = 20.0;  // a point sensor's place on the vehicle, m
+constexpr double kMaxLatencyS = 1.0;        // a sensor's processing latency (b1), s: milliseconds in practice
 
 double finite_field(const YAML::Node& node, const char* key, const std::string& where, std::optional<double> fallback) {
     if (!node[key]) {
@@ -30,19 +33,24 @@ double finite_field(const YAML::Node& node, const char* key, const std::string& 
     return v;
 }
 
+// A misspelt field (pitch_degree, temprature_c) would leave its default standing, silently.
+void refuse_unknown_fields(const YAML::Node& node, std::initializer_list<std::string_view> keys,
+                           const std::string& where) {
+    if (!node.IsMap()) throw std::runtime_error(where + ": expected a mapping of fields");
+    for (const auto& field : node) {
+        const auto key = field.first.as<std::string>();
+        if (std::find(keys.begin(), keys.end(), key) == keys.end())
+            throw std::runtime_error(where + ": unknown field '" + key + "'");
+    }
+}
+
 RangeSensor sensor_from(const YAML::Node& node, const std::string& where) {
     RangeSensor s;
     if (!node["id"]) throw std::runtime_error(where + ": missing field 'id'");
     s.id = node["id"].as<std::string>();
     const std::string at = where + " (sensor '" + s.id + "')";
-    // A misspelt field (pitch_degree) would leave its default standing, silently.
-    static const char* const kKeys[] = {"id", "kind", "wheel", "x_m", "y_m", "height_m", "pitch_deg",
-                                        "beam_half_angle_deg", "min_count", "max_count", "max_distance_m"};
-    for (const auto& field : node) {
-        const auto key = field.first.as<std::string>();
-        if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys))
-            throw std::runtime_error(at + ": unknown field '" + key + "'");
-    }
+    refuse_unknown_fields(node, {"id", "kind", "wheel", "x_m", "y_m", "height_m", "pitch_deg", "beam_half_angle_deg",
+                                 "min_count", "max_count", "max_distance_m"}, at);
     const std::string kind = node["kind"] ? node["kind"].as<std::string>() : "";
     if (kind != "ultrasonic" && kind != "laser") throw std::runtime_error(at
         + ": kind must be ultrasonic or laser, got '" + kind + "'");
@@ -88,6 +96,8 @@ YAML::Node distance_node(const DistanceCalibration& d) {
 }
 
 DistanceCalibration distance_from(const YAML::Node& n, const std::string& where) {
+    refuse_unknown_fields(n, {"a1", "a2", "temperature_c", "rms_m", "r_squared", "used", "rejected", "a1_sigma",
+                              "a2_sigma"}, where);
     DistanceCalibration d;
     d.a1 = finite_field(n, "a1", where, std::nullopt);
     d.a2 = finite_field(n, "a2", where, std::nullopt);
@@ -126,14 +136,24 @@ YAML::Node offset_node(const OffsetCalibration& o) {
 }
 
 OffsetCalibration offset_from(const YAML::Node& n, const std::string& where) {
+    refuse_unknown_fields(n, {"b1_s", "b2_m", "b1_sigma_s", "b2_sigma_m", "b1_xcorr_s", "b2_xcorr_m", "runs"}, where);
     OffsetCalibration o;
     o.b1_s = finite_field(n, "b1_s", where, std::nullopt);
     o.b2_m = finite_field(n, "b2_m", where, std::nullopt);
+    // A latency of seconds is milliseconds written as seconds (every sample then lands behind the axle and is lost)
+    if (!(std::abs(o.b1_s) <= kMaxLatencyS))
+        throw std::runtime_error(where + ": b1_s, the sensor's latency, must lie within ±" + number_text(kMaxLatencyS) +
+                                 " s, got " + number_text(o.b1_s) + " (milliseconds given as seconds?)");
+    if (!(std::abs(o.b2_m) <= kMaxSensorOffsetM))
+        throw std::runtime_error(where + ": b2_m must lie within ±" + number_text(kMaxSensorOffsetM) + " m, got " +
+                                 number_text(o.b2_m));
     o.b1_sigma_s = finite_field(n, "b1_sigma_s", where, 0.0);
     o.b2_sigma_m = finite_field(n, "b2_sigma_m", where, 0.0);
     o.b1_xcorr_s = finite_field(n, "b1_xcorr_s", where, 0.0);
     o.b2_xcorr_m = finite_field(n, "b2_xcorr_m", where, 0.0);
     for (const YAML::Node& run : n["runs"]) {
+        refuse_unknown_fields(run, {"source", "speed_mps", "shift_m", "shift_sigma_m", "z_offset_m", "rms_m",
+                                    "xcorr_shift_m", "samples"}, where + ".runs");
         RunShift r;
         r.source = run["source"] ? run["source"].as<std::string>() : "";
         r.speed_mps = finite_field(run, "speed_mps", where, std::nullopt);
@@ -194,10 +214,12 @@ RangeCalibration read_range_calibration(const std::string& path) {
     try {
         const YAML::Node root = YAML::LoadFile(path);
         if (!root.IsMap()) throw std::runtime_error(path + ": expected a mapping with 'distance' and/or 'sensors'");
+        refuse_unknown_fields(root, {"distance", "sensors"}, path);
         if (root["distance"]) cal.distance = distance_from(root["distance"], path + ": distance");
         for (const auto& item : root["sensors"]) {
             const std::string id = item.first.as<std::string>();
             const std::string where = path + ": sensors." + id;
+            refuse_unknown_fields(item.second, {"distance", "offset"}, where);
             SensorCalibration s;
             if (item.second["distance"]) s.distance = distance_from(item.second["distance"], where + ".distance");
             if (item.second["offset"]) s.offset = offset_from(item.second["offset"], where + ".offset");

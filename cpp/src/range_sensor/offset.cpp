@@ -318,6 +318,10 @@ OffsetCalibration calibrate_offset(const std::vector<std::vector<RangeSample>>& 
         } catch (const std::invalid_argument& e) {
             throw std::invalid_argument(run_names[r] + ": " + e.what());
         }
+        if (!std::isfinite(shift.shift_sigma_m))
+            throw std::invalid_argument(run_names[r] + ": the reference profile is flat where the run's samples lie: "
+                                        "no slope to register on, the run's shift cannot be determined (give a "
+                                        "reference with relief: bumps, ramps)");
         shift.source = run_names[r];
         shift.speed_mps = speeds[r];
         out.runs.push_back(shift);

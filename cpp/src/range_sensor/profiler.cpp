@@ -106,6 +106,10 @@ RangeProfiler::RangeProfiler(std::vector<RangeSensor> layout, RangeCalibration c
         throw std::invalid_argument("frame_length_m / ds_m must be at most " + std::to_string(kMaxWindowBins) +
                                     " bins per window, got " + number_text(cfg_.frame_length_m) + " m / " +
                                     number_text(cfg_.ds_m) + " m");
+    // A calibration of another layout's sensors would leave these on their geometric foot, silently.
+    for (const auto& [id, calibration] : cal_.sensors)
+        if (std::none_of(layout_.begin(), layout_.end(), [&](const RangeSensor& s) { return s.id == id; }))
+            throw std::invalid_argument("the calibration names sensor '" + id + "', which the layout does not hold");
     latest_.assign(layout_.size(), -std::numeric_limits<double>::infinity());
 }
 
