@@ -148,7 +148,8 @@ int run_readings(const RangeOptions& o, bool with_motion) {
                  static_cast<long long>(readings), static_cast<long long>(windows), s, readings / std::max(s, 1e-9));
     if (profiler.dropped_behind() > 0)
         std::fprintf(stderr, "roadpreview: warning: %s: %lld samples fell behind the start of their window and were "
-                     "dropped: the track ran backwards (reversing, or a negative speed in the motion)\n",
+                     "dropped: the track ran backwards (reversing, or a negative speed in the motion), or samples lay "
+                     "behind the axle (b1·v + b2 < 0: at that speed the latency b1 outruns the lead b2)\n",
                      o.readings.c_str(), static_cast<long long>(profiler.dropped_behind()));
     if (windows == 0)  // as `roadpreview run` does: a run that writes nothing fails
         throw std::runtime_error(o.readings + ": no window was written (" + std::to_string(readings) +

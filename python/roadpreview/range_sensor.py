@@ -40,6 +40,9 @@ def calibrate_distance(counts, distances, *, output: Optional[PathLike] = None,
     """
     c = np.asarray(counts, dtype=float).ravel()
     d = np.asarray(distances, dtype=float).ravel()
+    bad = np.flatnonzero(~(np.isfinite(c) & np.isfinite(d)))
+    if bad.size:  # as the CLI refuses such a bench line
+        raise ValueError(f"counts and distances must be finite: pair {bad[0]} is ({c[bad[0]]}, {d[bad[0]]})")
     if output is not None:
         return core().range_write_distance_calibration(c, d, os.fspath(keep) if keep else "", os.fspath(output))
     return core().range_calibrate_distance(c, d)
@@ -51,6 +54,7 @@ def samples(readings: PathLike, sensors: PathLike, *, calibration: Optional[Path
     """Every reading as a height sample: {t, sensor (layout index), s (m along the wheel's track), z (m),
     ahead (m ahead of the axle), speed, time_to_wheel (s)} arrays. raw: place with b1 = b2 = 0 (s is where the
     axle was), as the offset calibration does."""
+    _one_motion(motion, speed)
     return core().range_samples(os.fspath(readings), os.fspath(sensors), _path(calibration), _path(motion),
                                 speed, float(yaw_rate), raw)
 
@@ -106,9 +110,16 @@ def process(readings: PathLike, sensors: PathLike, *, calibration: Optional[Path
             motion: Optional[PathLike] = None, speed: Optional[float] = None, yaw_rate: float = 0.0,
             frame_length_m: float = 40.0) -> list[dict]:
     """The CLI's `range run`: one dict per window of frame_length_m (docs/output.md, "Range sensors")."""
+    _one_motion(motion, speed)
     lines = core().range_process(os.fspath(readings), os.fspath(sensors), _path(calibration), _path(motion), speed,
                                  float(yaw_rate), float(frame_length_m))
     return [json.loads(line) for line in lines]
+
+
+def _one_motion(motion, speed) -> None:
+    """As the CLI's --motion and --speed: one of them (with both, the table won and the speed was ignored)."""
+    if motion is not None and speed is not None:
+        raise ValueError("give the motion as a table (motion=) or a constant speed (speed=), not both")
 
 
 def _path(p: Optional[PathLike]) -> str:

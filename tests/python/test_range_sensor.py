@@ -164,6 +164,17 @@ def test_a_calibration_file_that_cannot_be_meant_is_an_error(bench, tmp_path, ca
     assert proc.returncode != 0 and fragment in proc.stderr, proc.stderr
 
 
+def test_the_python_api_refuses_what_the_cli_refuses(bench):
+    """A motion table with a speed beside it (the table won, silently) and a bench pair that is not a number (the
+    pair was dropped, silently): the CLI refuses both."""
+    readings, motion = bench["runs"][0]
+    with pytest.raises(ValueError, match=r"^give the motion as a table \(motion=\) or a constant speed \(speed=\), "
+                                         r"not both$"):
+        rp.range_sensor.process(readings, bench["dir"] / "sensors.yaml", motion=motion, speed=25.0)
+    with pytest.raises(ValueError, match=r"pair 1 is \(nan, 0.2\)"):
+        rp.range_sensor.calibrate_distance([1000.0, np.nan, 3000.0], [0.1, 0.2, 0.3])
+
+
 def test_a_byte_order_mark_before_a_csv_header_is_no_part_of_it(bench, tmp_path):
     """A spreadsheet writes one before the first cell: the header "t,sensor,distance" was refused as not one."""
     readings, motion = bench["runs"][0]
