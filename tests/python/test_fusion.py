@@ -145,6 +145,16 @@ def test_a_pose_that_jumps_past_the_map_clears_both_maps_and_says_so():
         assert_profiles_agree(cpp, ref)
 
 
+def test_a_step_back_of_a_microsecond_says_how_much():
+    """It read "time went back by 0.000 s"."""
+    cfg = fusion_cfg("ema")
+    est, state = rp.Estimator(cfg), rp.reference.FusedMap(cfg)
+    for t, reset in [(10.0, None), (10.1, None), (10.1 - 1e-6, "time went back by 1e-06 s")]:
+        points = noisy_road((0, 0, 0), 2000, 1)
+        assert est.process(points, 0.0, 0.0, timestamp=t).fusion["reset"] == reset
+        assert rp.reference.process_fused(state, points, 0.0, 0.0, timestamp=t).fusion["reset"] == reset
+
+
 def test_python_interface_and_output_line():
     est = rp.Estimator(fusion_cfg("kalman"))
     res = est.process(noisy_road((0, 0, 0), 5000, 1), 8.0, 0.0, timestamp=10.0)

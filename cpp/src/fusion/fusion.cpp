@@ -202,7 +202,9 @@ void TemporalFusion::advance(double speed_mps, double yaw_rate_rps, const FrameM
     if (motion.timestamp_s && last_time_) {
         dt = *motion.timestamp_s - *last_time_;
         char text[96] = "";
-        if (dt < 0.0) std::snprintf(text, sizeof text, "time went back by %.3f s", -dt);
+        // to the millisecond; a step back of less (a clock's jitter) in three digits, not as "0.000"
+        if (dt < 0.0)
+            std::snprintf(text, sizeof text, -dt >= 5e-4 ? "time went back by %.3f s" : "time went back by %.3g s", -dt);
         if (dt > cfg_.fusion.max_time_gap_s) std::snprintf(text, sizeof text, "time gap of %.3f s", dt);
         if (text[0]) {
             reset();

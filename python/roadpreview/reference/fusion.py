@@ -120,7 +120,7 @@ class FusedMap:
         if timestamp is not None and self.last_time is not None:
             dt = timestamp - self.last_time
             if dt < 0:
-                reset = f"time went back by {-dt:.3f} s"
+                reset = f"time went back by {-dt:.3f} s" if -dt >= 5e-4 else f"time went back by {-dt:.3g} s"
             elif dt > self.cfg.fusion.max_time_gap_s:
                 reset = f"time gap of {dt:.3f} s"
             if reset:
