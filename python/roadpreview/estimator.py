@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Optional
 
 import numpy as np
@@ -21,11 +22,25 @@ def _number(value, name: str) -> float:
         raise TypeError(f"{name} must be a number, got {value!r:.60}") from None
 
 
+def _mounting_disagrees(mounting: dict) -> str:
+    """What the CLI says of the first frame whose ground disagrees with the mounting, in the API's words."""
+    offset = mounting["ground_offset"]
+    text = (f"the fitted ground is {abs(offset):.2f} m {'below' if offset >= 0 else 'above'} the base origin and "
+            f"tilted {mounting['ground_tilt_deg']:.1f}°: ")
+    if mounting["source"] == "none":
+        return text + ("the points are not base-frame points, as they were taken to be; give "
+                       "Config(sensor_height=...) or Config(extrinsics=...)")
+    height = mounting["extrinsics"][2]
+    return text + f"the sensor is about {height + offset:.2f} m up, not {height:.2f} m; check sensor_height / extrinsics"
+
+
 class Estimator:
     """Runs the C++ pipeline frame by frame; keeps its work buffers between calls (not thread-safe: a call while
     another thread's call on the same estimator runs raises RuntimeError; give each thread its own).
 
-    ``Estimator(cfg)`` raises ValueError for an invalid config, naming the field.
+    ``Estimator(cfg)`` raises ValueError for an invalid config, naming the field. The first frame whose fitted
+    ground disagrees with the mounting (``result.mounting["disagrees"]``: points in the sensor frame without
+    ``sensor_height``/``extrinsics``, or a wrong height) issues a RuntimeWarning saying by how much; once.
     """
 
     def __init__(self, cfg: Optional[Config] = None):
@@ -33,6 +48,7 @@ class Estimator:
         if not isinstance(self.config, Config):
             raise TypeError(f"cfg must be a roadpreview.Config, got {type(self.config).__name__}")
         self._impl = core().Estimator(self.config.to_json())
+        self._mounting_warned = False
 
     def process(self, points, speed: float, yaw_rate: float = 0.0, *, source: str = "",
                 timestamp: Optional[float] = None, yaw_rate_source: str = "", pose=None, range_variances=None,
@@ -68,8 +84,12 @@ class Estimator:
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
         error_groups, beams = _int32_ids(error_groups, "error_groups"), _int32_ids(beams, "beams")
-        return self._impl.process(points, speed, yaw_rate, source, timestamp, yaw_rate_source, pose,
-                                  range_variances, error_groups, beams)
+        result = self._impl.process(points, speed, yaw_rate, source, timestamp, yaw_rate_source, pose,
+                                    range_variances, error_groups, beams)
+        if not self._mounting_warned and result.plane is not None and result.mounting["disagrees"]:
+            self._mounting_warned = True
+            warnings.warn(_mounting_disagrees(result.mounting), RuntimeWarning, stacklevel=2)
+        return result
 
     def reset(self):
         """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""

@@ -4,6 +4,7 @@ is given and checked against a given one; heights and source options that cannot
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -122,3 +123,20 @@ def test_a_first_frame_without_road_ahead_leaves_the_mounting_to_the_next_frame(
     assert lines[1]["fusion"]["reset"] == "mounting estimated"
     assert "#12072 to estimate the mounting from" in proc.stderr
     assert "mounting estimated from the ground in" in proc.stderr and "#12073" in proc.stderr
+
+
+def test_an_estimator_warns_once_when_the_ground_disagrees_with_the_mounting():
+    """Sensor-frame points without a mounting: the result said so (mounting.disagrees) and classed the road, but
+    nothing told a Python user, as the CLI and rp.run do."""
+    points = rp.io.read(KITTI_FRAMES[0])
+    est = rp.Estimator(rp.Config())
+    with pytest.warns(RuntimeWarning, match=r"^the fitted ground is 1\.75 m below the base origin and tilted 1\.8°: "
+                                            r"the points are not base-frame points, as they were taken to be; give "
+                                            r"Config\(sensor_height=\.\.\.\) or Config\(extrinsics=\.\.\.\)$"):
+        est.process(points, 5.0, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per estimator; none with the mounting given
+        est.process(points, 5.0, 0.0)
+        rp.Estimator(rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)).process(points, 5.0, 0.0)
+    with pytest.warns(RuntimeWarning, match=r"the sensor is about 1\.75 m up, not 1\.20 m; check sensor_height"):
+        rp.Estimator(rp.Config(sensor_height=1.2)).process(points, 5.0, 0.0)
