@@ -215,7 +215,10 @@ void bind_io(py::module_& m) {
             return info_dict(s.info());
         })
         .def("__repr__", [](const rp::FrameSource& s) {
-            const rp::SourceInfo i = s.info();
+            const rp::SourceInfo i = [&] {
+                const InUse in_use(&s, "FrameSource");
+                return s.info();
+            }();
             std::string out = "<roadpreview.FrameSource " + i.format;
             for (const std::string* part : {&i.sensor_model, &i.profile, &i.metadata})
                 if (!part->empty()) out += ", " + *part;
