@@ -156,6 +156,22 @@ def test_png_files_any_bit_depth_and_open_stereo(tmp_path, calib):
                                atol=0.01)
 
 
+def test_folders_whose_names_stop_matching_say_where(tmp_path, calib):
+    """Folders pair by position in name order: with an image missing on one side every later pair matched other
+    instants, silently. Files named one by one pair as given, whatever their names."""
+    left, right = textured_ground_pair()
+    for side, names in (("left", ("000000", "000001")), ("right", ("000000", "000002"))):
+        (tmp_path / side).mkdir()
+        for name in names:
+            cv2.imwrite(str(tmp_path / side / f"{name}.png"), left if side == "left" else right)
+    cfg = cfg_for(num_disparities=64)
+    notes = rp.io.open_stereo(tmp_path / "left", tmp_path / "right", calib, config=cfg).info["notes"]
+    assert notes == [f"{tmp_path / 'left' / '000001.png'} is paired with {tmp_path / 'right' / '000002.png'}: folders "
+                     "pair by position in name order, and from here the names differ (an image missing on one side?)"]
+    files = rp.io.open_stereo(tmp_path / "left" / "000000.png", tmp_path / "right" / "000002.png", calib, config=cfg)
+    assert files.info["notes"] == []
+
+
 # ------------------------------------------------------------------------------------------- pipeline
 @pytest.mark.parametrize("grouped", [False, True])
 def test_range_variances_cpp_against_reference(calib, grouped):

@@ -117,6 +117,7 @@ private:
     Extrinsics camera_;
     std::size_t index_ = 0;
     Timing timing_;
+    std::vector<std::string> notes_;  // SourceInfo::notes
 };
 
 /// The camera's pose in the base frame for a stereo run: the config's when it sets one, else the calibration's.

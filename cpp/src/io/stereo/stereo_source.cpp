@@ -39,6 +39,22 @@ std::vector<std::string> expand_all(const std::vector<std::string>& paths, const
     return out;
 }
 
+// Folders of pairs go by position in name order: a first pair whose names differ (an image missing on one side)
+// pairs other instants from there on. Files named one by one pair as given.
+std::vector<std::string> pairing_notes(const StereoInputs& given, const StereoInputs& expanded) {
+    std::error_code ec;
+    const auto folder = [&](const std::string& p) { return fs::is_directory(p, ec); };
+    if (given.left.empty() || !std::all_of(given.left.begin(), given.left.end(), folder) ||
+        !std::all_of(given.right.begin(), given.right.end(), folder))
+        return {};
+    for (std::size_t i = 0; i < expanded.left.size(); ++i)
+        if (fs::path(expanded.left[i]).filename() != fs::path(expanded.right[i]).filename())
+            return {expanded.left[i] + " is paired with " + expanded.right[i] +
+                    ": folders pair by position in name order, and from here the names differ (an image missing on "
+                    "one side?)"};
+    return {};
+}
+
 GreyImage grey_levels(const StereoImages& pair) {
     return pair.left.cast<float>() / 255.0f;
 }
@@ -64,7 +80,7 @@ StereoInputs expand_stereo_inputs(const StereoInputs& in) {
 
 StereoSource::StereoSource(const StereoInputs& inputs, const Config& config)
     : inputs_(expand_stereo_inputs(inputs)), cfg_(config.stereo), calib_(read_stereo_calibration(inputs.calibration)),
-      camera_(stereo_camera_pose(config, calib_)) {}
+      camera_(stereo_camera_pose(config, calib_)), notes_(pairing_notes(inputs, inputs_)) {}
 
 std::optional<Frame> StereoSource::next() {
     const std::size_t count = inputs_.disparity.empty() ? inputs_.left.size() : inputs_.disparity.size();
@@ -111,6 +127,7 @@ SourceInfo StereoSource::info() const {
     s.sensor_model = model;
     s.profile = inputs_.disparity.empty() ? "StereoSGBM " + cfg_.mode : "precomputed disparity";
     s.metadata = calib_.source;
+    s.notes = notes_;
     return s;
 }
 
