@@ -114,6 +114,22 @@ int calibrate_offset(const RangeOptions& o) {
     return 0;
 }
 
+// Streams the readings' windows to `out` as JSON lines (progress on stderr), counting them in `windows`; returns
+// the readings read.
+std::int64_t run_windows(rp::RangeProfiler& profiler, const RangeOptions& o, rp::RangeMotion motion,
+                         std::ostream& out, std::int64_t& windows) {
+    return profiler.run(o.readings, std::move(motion), [&](const rp::RangeWindow& w) {
+        out << rp::range_window_to_json(w, profiler.layout(), o.readings) << '\n';
+        ++windows;
+        if (!o.quiet) {
+            const auto cls = [](const rp::Roughness& r) { return r.iso_class ? std::string(1, *r.iso_class) : "-"; };
+            std::fprintf(stderr, "window %lld: s %.1f-%.1f m, %zu samples, class L %s R %s\n",
+                         static_cast<long long>(w.index), w.s_start_m, w.s_end_m, w.samples.size(),
+                         cls(w.left.roughness).c_str(), cls(w.right.roughness).c_str());
+        }
+    });
+}
+
 int run_readings(const RangeOptions& o, bool with_motion) {
     auto layout = rp::read_range_layout(o.sensors);
     rp::RangeCalibration cal = o.calibration.empty()
@@ -131,16 +147,19 @@ int run_readings(const RangeOptions& o, bool with_motion) {
     std::ostream& out = o.output.empty() ? std::cout : file;
     std::int64_t windows = 0;
     const auto start = std::chrono::steady_clock::now();
-    const std::int64_t readings = profiler.run(o.readings, std::move(motion), [&](const rp::RangeWindow& w) {
-        out << rp::range_window_to_json(w, profiler.layout(), o.readings) << '\n';
-        ++windows;
-        if (!o.quiet) {
-            const auto cls = [](const rp::Roughness& r) { return r.iso_class ? std::string(1, *r.iso_class) : "-"; };
-            std::fprintf(stderr, "window %lld: s %.1f-%.1f m, %zu samples, class L %s R %s\n",
-                         static_cast<long long>(w.index), w.s_start_m, w.s_end_m, w.samples.size(),
-                         cls(w.left.roughness).c_str(), cls(w.right.roughness).c_str());
-        }
-    });
+    // A run that writes no window leaves no empty output file behind, as `roadpreview run` leaves none.
+    const auto no_empty_output = [&] {
+        if (windows > 0 || o.output.empty()) return;
+        file.close();
+        std::remove(o.output.c_str());
+    };
+    std::int64_t readings = 0;
+    try {
+        readings = run_windows(profiler, o, std::move(motion), out, windows);
+    } catch (...) {
+        no_empty_output();
+        throw;
+    }
     out.flush();  // a full disk shows here
     if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -151,9 +170,11 @@ int run_readings(const RangeOptions& o, bool with_motion) {
                      "dropped: the track ran backwards (reversing, or a negative speed in the motion), or samples lay "
                      "behind the axle (b1·v + b2 < 0: at that speed the latency b1 outruns the lead b2)\n",
                      o.readings.c_str(), static_cast<long long>(profiler.dropped_behind()));
-    if (windows == 0)  // as `roadpreview run` does: a run that writes nothing fails
+    if (windows == 0) {  // as `roadpreview run` does: a run that writes nothing fails
+        no_empty_output();
         throw std::runtime_error(o.readings + ": no window was written (" + std::to_string(readings) +
                                  " readings); nothing was written");
+    }
     return 0;
 }
 

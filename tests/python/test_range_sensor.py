@@ -292,6 +292,16 @@ def test_bad_readings_name_the_file_and_line(bench, tmp_path, body, fragment):
     assert f"{bad}:3" in proc.stderr and fragment in proc.stderr
 
 
+def test_a_run_that_fails_before_its_first_window_leaves_no_empty_output(bench, tmp_path):
+    bad, out = tmp_path / "bad.csv", tmp_path / "out.jsonl"
+    bad.write_text("t,sensor,distance\n0.0,laser_left,0.25\n0.1,laser_left,-1\n")
+    out.write_text("an earlier run's lines\n")
+    proc = run_cli("range", "run", bad, "--sensors", bench["dir"] / "sensors.yaml", "--motion", bench["runs"][0][1],
+                   "-o", out, check=False)
+    assert proc.returncode != 0 and f"{bad}:3" in proc.stderr
+    assert not out.exists()  # it was left empty
+
+
 def test_counts_without_a_distance_calibration_are_an_error(bench, tmp_path):
     bad = tmp_path / "counts.csv"
     bad.write_text("t,sensor,count\n0.0,laser_left,1500\n")
