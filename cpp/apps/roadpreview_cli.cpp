@@ -224,11 +224,24 @@ std::string input_label(const RunOptions& o) {
 
 // A run that writes nothing fails, and leaves no empty output file behind.
 
-[[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
+void remove_if_empty(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
-    if (!o.output.empty() && fs::is_regular_file(o.output, ec) && fs::file_size(o.output, ec) == 0)
-        fs::remove(o.output, ec);
+    if (!path.empty() && fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0) fs::remove(path, ec);
+}
+
+// Also when the run fails before its first frame (a capture truncated at its start): on leaving the run, an output
+// no frame was written to is removed.
+struct NoEmptyOutput {
+    const std::string& path;
+    const RunSummary& summary;
+    ~NoEmptyOutput() {
+        if (summary.ms.empty()) remove_if_empty(path);
+    }
+};
+
+[[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
+    remove_if_empty(o.output);
     std::string where = first > 0 ? " from index " + std::to_string(first) + " on (the input has " +
                                         std::to_string(frames_seen) + ")"
                                   : " in the input";
@@ -442,6 +455,7 @@ int run(const RunOptions& o, const CLI::App& app) {
     std::optional<rp::RouteBuilder> route;
     std::optional<rp::ProfileReadout> readout;
     RunSummary summary;
+    const NoEmptyOutput no_empty_output{o.output, summary};
     LiveStats live_stats;
     while (std::optional<rp::DriveStep> step = runner.next()) {
         const rp::DriveFrame& in = step->input;

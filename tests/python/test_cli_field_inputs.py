@@ -10,7 +10,7 @@ import pytest
 
 import roadpreview as rp
 
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, NUSCENES_BIN, OS1_128_PCAP
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, NUSCENES_BIN, OS1_128_PCAP, VELODYNE
 from paths import run_cli as run
 
 
@@ -42,6 +42,16 @@ def test_frames_beyond_the_input_write_nothing_say_so_and_fail(tmp_path):
                "-o", out, check=False)
     assert proc.returncode == 1
     assert "no frames from index 5 on (the input has 1)" in proc.stderr and "nothing was written" in proc.stderr
+    assert not out.exists()
+
+
+def test_a_run_that_fails_before_its_first_frame_leaves_no_empty_output(tmp_path):
+    """A capture truncated before its first frame completes: the run failed, as it should, but left its output
+    file empty (the documented rule is no empty file behind)."""
+    truncated, out = tmp_path / "truncated.pcap", tmp_path / "out.jsonl"
+    truncated.write_bytes((VELODYNE / "velodyne_example.pcap").read_bytes()[:3000])
+    proc = run("run", truncated, "--speed", 5, "-o", out, check=False)
+    assert proc.returncode == 1 and "truncated or corrupt" in proc.stderr
     assert not out.exists()
 
 
