@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "cli_checks.hpp"
+#include "output_file.hpp"
 
 #include "roadpreview/roadpreview.hpp"
 
@@ -149,9 +150,8 @@ int run_readings(const RangeOptions& o, bool with_motion) {
     const auto start = std::chrono::steady_clock::now();
     // A run that writes no window leaves no empty output file behind, as `roadpreview run` leaves none.
     const auto no_empty_output = [&] {
-        if (windows > 0 || o.output.empty()) return;
         file.close();
-        std::remove(o.output.c_str());
+        rp::cli::remove_if_empty(o.output);
     };
     std::int64_t readings = 0;
     try {

@@ -19,6 +19,7 @@
 #include "bounded_sample.hpp"
 #include "cli_checks.hpp"
 #include "live_commands.hpp"
+#include "output_file.hpp"
 #include "python_commands.hpp"
 #include "range_commands.hpp"
 #include "roadside_commands.hpp"  // roadside perception (its own library)
@@ -28,6 +29,7 @@ namespace rp = roadpreview;
 
 namespace {
 
+using rp::cli::remove_if_empty;
 using rp::cli::UsageError;
 
 struct RunOptions {
@@ -223,12 +225,6 @@ std::string input_label(const RunOptions& o) {
 }
 
 // A run that writes nothing fails, and leaves no empty output file behind.
-
-void remove_if_empty(const std::string& path) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!path.empty() && fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0) fs::remove(path, ec);
-}
 
 // Also when the run fails before its first frame (a capture truncated at its start): on leaving the run, an output
 // no frame was written to is removed.

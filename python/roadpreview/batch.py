@@ -182,12 +182,12 @@ def _write_atomically(path: Path, write):
 # ---------------------------------------------------------------------------------------------------------
 # Tasks (run on the Dask workers; plain functions of plain arguments).
 
-def frame_row(rid: str, index: int, result, pose=None) -> dict:
+def frame_row(index: int, result, pose=None) -> dict:
     """One Parquet row of a Result: the columns people filter on, and the whole output line (without timing: it
     must repeat from run to run) as JSON. ``frame`` is the frame's index in its recording, also where a task
     started the estimator later. Read from the Result's fields: parsing and re-encoding the ~60 kB line of a KITTI
     frame cost as much as a third of a batch task."""
-    row = {"recording": rid, "frame": index, "source": result.source, "timestamp": result.timestamp,
+    row = {"frame": index, "source": result.source, "timestamp": result.timestamp,
            "speed_mps": result.speed_mps, "yaw_rate_rps": result.yaw_rate_rps, "reason": result.reason}
     for side, rough in (("left", result.left.roughness), ("right", result.right.roughness),
                         ("vehicle", result.vehicle)):
@@ -233,7 +233,7 @@ def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, 
         opts["poses"] = drive.read_kitti_poses(opts["poses"])
     poses = opts.get("poses")
     path = part_path(Path(out_dir), rid, chunk)
-    written = _write_atomically(path, lambda tmp: _write_frames(tmp, rid, inputs, cfg, chunk, opts, poses))
+    written = _write_atomically(path, lambda tmp: _write_frames(tmp, inputs, cfg, chunk, opts, poses))
     if not written and chunk.index == 0:
         path.unlink()
         raise RuntimeError(f"{inputs[0]}: no frames in this recording")
@@ -244,7 +244,7 @@ ROW_GROUP_FRAMES = 128  # a Parquet row group holds at most this many frames,
 ROW_GROUP_BYTES = 2 << 20  # or this many bytes of output lines (a KITTI HDL-64E frame's line is ~59 kB: 36 frames)
 
 
-def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) -> int:
+def _write_frames(tmp: Path, inputs, cfg, chunk: Chunk, opts: dict, poses) -> int:
     """Streams the chunk's kept frames into a Parquet file, a row group at a time. A row group's rows, their
     Arrow table and its encoding are what a worker holds beyond one frame: bounding it by bytes keeps the
     worker's memory flat whatever the sensor (128 KITTI frames per group swung the RSS by 15 %, README "Drives")."""
@@ -256,8 +256,7 @@ def _write_frames(tmp: Path, rid, inputs, cfg, chunk: Chunk, opts: dict, poses) 
         for k, result in enumerate(drive.run(inputs, cfg, frames=(chunk.first, chunk.last), **opts)):
             index = chunk.first + k
             if index >= chunk.keep_from:
-                rows.append(frame_row(rid, index, result, poses[index] if poses else None))
-                del rows[-1]["recording"]  # the partition key: the folder holds it (docs/output.md)
+                rows.append(frame_row(index, result, poses[index] if poses else None))
                 row_bytes += len(rows[-1]["line"])
             if len(rows) == ROW_GROUP_FRAMES or row_bytes >= ROW_GROUP_BYTES:
                 writer.write_table(pa.Table.from_pylist(rows, schema=schema))

@@ -120,27 +120,20 @@ def _progress(line: dict) -> str:
             f"{line['timing_ms']['total']:.2f} ms")
 
 
-class _Summary:
-    """The run's last line, as the C++ CLI's: frames, pipeline times, vehicle classes and IRI (with the IRI of the
-    bins' errors alone, when known), the reasons of every declined class."""
+class _Summary(batch.Summary):
+    """The run's last line, as the C++ CLI's: a batch summary's counts (vehicle classes, IRI, the reasons of every
+    declined class) with the pipeline times and the IRI of the bins' errors alone, when known."""
 
     def __init__(self):
-        self.frames, self.ms, self.classes, self.iri, self.iri_noise, self.declined = 0, [], {}, [], [], {}
+        super().__init__("")
+        self.ms, self.iri_noise = [], []
 
     def add(self, line: dict) -> None:
-        self.frames += 1
+        super().add(line)
         self.ms.append(line["timing_ms"]["total"])
-        rough = line["roughness"]
-        self.classes[_class(rough["vehicle"])] = self.classes.get(_class(rough["vehicle"]), 0) + 1
-        for side in ("left", "right", "vehicle"):
-            if not rough[side].get("class"):
-                reason = rough[side].get("reason") or "no reason given"
-                self.declined[reason] = self.declined.get(reason, 0) + 1
-        iri = rough["vehicle"].get("iri") or {}
-        if iri.get("value") is not None:
-            self.iri.append(iri["value"])
-            if iri.get("noise") is not None:
-                self.iri_noise.append(iri["noise"])
+        iri = line["roughness"]["vehicle"].get("iri") or {}
+        if iri.get("value") is not None and iri.get("noise") is not None:
+            self.iri_noise.append(iri["noise"])
 
     def __str__(self) -> str:
         classes = " ".join(f"{c}×{n}" for c, n in sorted(self.classes.items()))

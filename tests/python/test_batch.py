@@ -78,7 +78,7 @@ def frames_of(out, rid):
 def serial_rows(path, rid):
     """The per-frame rows of one recording run serially in this process, unsplit."""
     results = drive.run([path], rp.Config.from_dict(CONFIG), motion=RUN["motion"], frame_rate=RUN["frame_rate"])
-    return [{k: v for k, v in batch.frame_row(rid, i, r).items() if not k.startswith("timing_")}
+    return [{"recording": rid, **{k: v for k, v in batch.frame_row(i, r).items() if not k.startswith("timing_")}}
             for i, r in enumerate(results)]
 
 

@@ -17,14 +17,16 @@
 
 namespace roadpreview::csv {
 
-/// The UTF-8 byte order mark a spreadsheet writes before a CSV's first cell.
-constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+/// The line without the UTF-8 byte order mark a spreadsheet writes before a CSV's first cell.
+inline std::string_view without_byte_order_mark(std::string_view line) {
+    constexpr std::string_view kMark = "\xEF\xBB\xBF";
+    return line.substr(0, kMark.size()) == kMark ? line.substr(kMark.size()) : line;
+}
 
 /// The line's cells, trimmed; a byte order mark before the first is dropped.
-inline std::vector<std::string> split(std::string line) {
-    if (line.compare(0, kByteOrderMark.size(), kByteOrderMark) == 0) line.erase(0, kByteOrderMark.size());
+inline std::vector<std::string> split(const std::string& line) {
     std::vector<std::string> cells;
-    std::stringstream in(line);
+    std::stringstream in{std::string(without_byte_order_mark(line))};
     std::string cell;
     while (std::getline(in, cell, ',')) {
         const auto first = cell.find_first_not_of(" \t\r");

@@ -59,9 +59,7 @@ RangeReadingReader::RangeReadingReader(const std::string& path, const std::vecto
     if (!file_) throw std::runtime_error(path + ": cannot open the readings file");
     const char *b = nullptr, *e = nullptr;
     while (next_line(b, e)) {
-        if (std::string_view(b, static_cast<std::size_t>(e - b)).substr(0, csv::kByteOrderMark.size()) ==
-            csv::kByteOrderMark)
-            b += csv::kByteOrderMark.size();  // a spreadsheet's byte order mark
+        b = csv::without_byte_order_mark(std::string_view(b, static_cast<std::size_t>(e - b))).data();
         const std::string_view line = trimmed(std::string_view(b, static_cast<std::size_t>(e - b)));
         if (line.empty() || line.front() == '#') continue;
         std::string_view cells[16];
