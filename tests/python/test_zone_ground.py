@@ -114,6 +114,14 @@ def returns_from_under_the_road():
     return with_extra(road_grid(grade), UNDER_THE_ROAD)
 
 
+def under_a_step_down():
+    """The road steps 0.25 m down at 13 m (a kerb's height: the outer patches accept their own planes) and one
+    return lies 2.1 m below the step's inner road, 1.85 m below its own patch's plane: deeper than max_depth_m
+    under the reference, it takes no part in the patch (method.md §1, zones step 4) — it once was ground."""
+    step_down = road_grid(lambda x, y: np.where(np.hypot(x, y) < 13.0, 0.0, -0.25), (1.0, 20.0), (-3.0, 3.0), 0.04)
+    return with_extra(step_down, [[15.0, 0.0, -2.1]])
+
+
 def surface_scene(height):
     road = road_grid(height)
     return road, np.ones(len(road), dtype=bool)
@@ -130,6 +138,7 @@ SCENES = {
     "rings of a sparse sensor": sparse_rings,
     "object beyond a crest, one ring per patch": object_beyond_a_crest,
     "returns from under the road": returns_from_under_the_road,
+    "a return from under a step down": under_a_step_down,
 }
 
 

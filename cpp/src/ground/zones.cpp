@@ -29,10 +29,11 @@ void group_by_patch(std::int32_t patches, ZoneScratch& z) {
 }
 
 // The paper's fit on a point set: fit, keep the points at most pca_threshold_m above (and max_depth_m below),
-// pca_iterations times.
+// pca_iterations times, of the points `eligible(i)` admits (a patch's: not under its reference's depth floor).
 // `kept` enters as the set the first fit uses and leaves as the points the last fit keeps.
+template <class Eligible>
 std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std::vector<std::uint8_t>& kept,
-                                    const GroundConfig& cfg) {
+                                    const GroundConfig& cfg, Eligible&& eligible) {
     Moments m;  // of the points kept so far
     for (std::size_t i = 0; i < pts.size(); ++i)
         if (kept[i]) m.add(pts[i]);
@@ -46,7 +47,7 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
         bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const double h = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z());
-            const bool keep = (h <= cfg.pca_threshold_m) & (h >= -cfg.max_depth_m);
+            const bool keep = (h <= cfg.pca_threshold_m) & (h >= -cfg.max_depth_m) && eligible(i);
             if (keep == static_cast<bool>(kept[i])) continue;
             changed = true;
             kept[i] = keep;
@@ -102,7 +103,7 @@ std::optional<Plane> root_reference(PointsView points, const GroundConfig& cfg, 
         if (p.x() * p.x() + p.y() * p.y() < r_sq) near.pts.push_back(p);
     }
     densest_slab(near.pts, cfg.pca_threshold_m, z.slab_counts, z.slab_bins, near.ground);
-    const auto fit = iterate_fit(near.pts, near.ground, cfg);
+    const auto fit = iterate_fit(near.pts, near.ground, cfg, [](std::size_t) { return true; });
     return fit && within_tilt(fit->plane, cfg.max_tilt_deg) ? std::optional<Plane>(fit->plane) : std::nullopt;
 }
 
@@ -159,7 +160,7 @@ PatchResult fit_patch(const Plane& reference, const GroundConfig& cfg, PatchScra
     z.ground.resize(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i)
         z.ground[i] = z.heights[i] <= low_mean + cfg.pca_threshold_m && z.heights[i] >= floor_h;
-    const auto fit = iterate_fit(pts, z.ground, cfg);
+    const auto fit = iterate_fit(pts, z.ground, cfg, [&](std::size_t i) { return z.heights[i] >= floor_h; });
     if (!fit) return inherit(false);
     const bool upright = within_tilt(fit->plane, cfg.max_tilt_deg);
 
