@@ -87,6 +87,26 @@ def test_cpp_equals_the_reference_on_a_simulated_os1_128_sequence():
     assert cpp.fusion["coverage"] == pytest.approx(ref.fusion["coverage"], abs=0.01)
 
 
+def test_a_cell_of_one_point_carries_the_variance_its_point_states():
+    """A cell of one point takes the height variance its point states (method.md §7, §12), with its band's pooled
+    variance as the floor: far bins of single, stated-noisy points are as noisy in the map as they say (they once
+    took the pool of the band's cells of several points, which state far less), in C++ and the reference alike."""
+    cfg = fusion_cfg("kalman")
+    cfg.sensor_height = 1.73
+    points = noisy_road((0.0, 0.0, 0.0), 3000, 7, noise=0.002) - np.float32([0, 0, 1.73])  # sensor frame
+    far = points[:, 0] > 20
+    range_variances = np.where(far, 4.0, 1e-6).astype(np.float32)  # σ_r 2 m far out, 1 mm near
+    cpp = rp.Estimator(cfg).process(points, 5.0, 0.0, timestamp=0.0, range_variances=range_variances)
+    ref = rp.reference.process_fused(rp.reference.FusedMap(cfg), points, 5.0, 0.0, timestamp=0.0,
+                                     range_variances=range_variances)
+    assert_profiles_agree(cpp, ref)
+    s, count, spread = np.asarray(cpp.left.s), np.asarray(cpp.left.count), np.asarray(cpp.left.spread)
+    single = (s > 25) & (count == 1)
+    assert single.sum() >= 5
+    # a height error of at least u_z·σ_r, u_z = 1.73 m / range ≥ 1.73 / 40 of the ray's elevation
+    assert (spread[single] >= 2.0 * 1.73 / 41).all() and (spread[(s > 3) & (s < 10) & (count >= 2)] < 0.01).all()
+
+
 def test_a_frame_without_ground_reads_its_profiles_from_the_map():
     cfg = fusion_cfg("kalman")
     poses = [(0.8 * i, 0.0, 0.0) for i in range(4)]

@@ -304,7 +304,9 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         measurements_[c] = static_cast<std::int32_t>(
             error_groups ? distinct_count(cell_groups_.begin(), cell_groups_.end()) : cell_z.size());
         const double n = counts_[c];
-        spreads[c] = n >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / n) : kNaN;
+        // One point: the variance its sensor states (as a profile bin of one point, docs/method.md §12), if any.
+        spreads[c] = n >= 2 ? noise_spread(sample_spread(cell_z.begin(), cell_z.end()), variance_sum / n)
+                            : variance_sum > 0.0 ? std::sqrt(variance_sum) : kNaN;
         medians[c] = median(cell_z.begin(), cell_z.end());
         const auto [x, y] = map_.centre(touched[c]);
         offsets_[c] = {x_sum / n - x, y_sum / n - y};
@@ -312,7 +314,8 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
         bands_[c] = static_cast<std::int32_t>(std::sqrt(dx * dx + dy * dy) / kPoolBandM);
     }
     // Each median's variance r as the roughness stage rates a bin's, with the pooled point variance of the cell's
-    // range band (pooled_variances) for a single point, and as a floor under a cell's own spread: r is a weight
+    // range band (pooled_variances) for a single point that states no variance, and as a floor under a cell's own
+    // spread (a single point's stated one included): r is a weight
     // in the Kalman gain and the alignment, where two points that happen to agree would outweigh a hundred. The
     // median counts as many measurements as the cell holds error groups (its points without groups).
     const bool pooled = pooled_variances(counts_.data(), spreads.data(), bands_.data(), cells, kPoolMaxSpread,
@@ -321,7 +324,7 @@ void TemporalFusion::fuse(PointsView points, const std::vector<std::uint8_t>& ma
     variances_.resize(cells);
     for (std::size_t c = 0; c < cells; ++c) {
         const double point = pooled ? pooled_[c] : single_point;
-        const double own = counts_[c] >= 2 ? std::max(point, spreads[c] * spreads[c]) : point;
+        const double own = std::isnan(spreads[c]) ? point : std::max(point, spreads[c] * spreads[c]);
         const double n = measurements_[c], of_median = n >= 3 ? kMedianVarianceFactor / n : 1.0 / n;  // 1, 2: mean
         variances_[c] = std::max(of_median * own, kMinVariance);
     }

@@ -163,6 +163,8 @@ class FusedMap:
         if variances is not None:
             mean_variance = np.bincount(inverse.ravel(), weights=variances, minlength=len(counts)) / counts
             spreads = np.sqrt(np.maximum(spreads ** 2, mean_variance))  # NaN stays NaN
+            single = (counts == 1) & (mean_variance > 0)  # one point: the variance its sensor states
+            spreads[single] = np.sqrt(mean_variance[single])
         # the median counts as one measurement per error group (per point without groups)
         measurements = counts if error_groups is None else groups_per_bin(inverse.ravel(), error_groups, len(counts))
         medians = np.array([np.median(z) for z in groups])
@@ -172,7 +174,7 @@ class FusedMap:
         pooled = pooled_variances(counts, spreads, np.floor(distance / _POOL_BAND_M), _POOL_MAX_SPREAD, _MIN_POOL_CELLS)
         if pooled is None:  # no cell with two points: the configured noise of one point
             pooled = np.full(len(counts), self.cfg.fusion.point_noise_m ** 2)
-        point = np.where(counts >= 2, np.fmax(pooled, spreads ** 2), pooled)
+        point = np.where(np.isnan(spreads), pooled, np.fmax(pooled, spreads ** 2))
         variances = np.where(measurements >= 3, _MEDIAN_VARIANCE_FACTOR / measurements, 1 / measurements) * point
         variances = np.maximum(variances, _MIN_VARIANCE)
         alignment = np.zeros(3)
