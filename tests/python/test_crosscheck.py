@@ -13,6 +13,7 @@ import roadpreview as rp
 from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT
 
 NEAR = 1e-4  # m: points this close to a decision threshold may fall either way
+STAGE_REL = 1e-9  # stage functions on the same float64 profile: measured worst 4.5e-13 (PSD), 2e-14 (confidence)
 
 
 def run_both(points, speed, yaw_rate, cfg):
@@ -68,27 +69,29 @@ def iri_bound(c, r) -> float:
     return 0.0 if difference is None else difference
 
 
-def assert_roughness_agrees(c, r, iri_bound: float = 0.0):
+def assert_roughness_agrees(c, r, iri_bound: float = 0.0, rel: float = 1e-4):
+    """``rel``: the relative room of the PSD, G_d and their kin — 1e-4 for pipeline runs (float32 points); stage
+    functions given the same float64 profile agree to ~1e-13 (measured), so their tests pass 1e-9."""
     assert c.reason == r.reason
     assert c.iso_class == r.iso_class or _on_a_class_limit(r.gd_n0)
-    assert_support_agrees(c, r)
+    assert_support_agrees(c, r, rel)
     assert_iri_agrees(c.iri, r.iri, iri_bound)
     if r.gd_n0 is None:
         assert c.gd_n0 is None
         return
     np.testing.assert_allclose(c.n, r.n, rtol=1e-12)
-    psd_atol = 1e-6 * np.max(r.psd)  # float32 points: rounding-level ordinates differ in relative terms
-    np.testing.assert_allclose(c.psd, r.psd, rtol=1e-4, atol=psd_atol)
-    assert c.gd_n0 == pytest.approx(r.gd_n0, rel=1e-4)
+    psd_atol = 1e-2 * rel * np.max(r.psd)  # float32 points: rounding-level ordinates differ in relative terms
+    np.testing.assert_allclose(c.psd, r.psd, rtol=rel, atol=psd_atol)
+    assert c.gd_n0 == pytest.approx(r.gd_n0, rel=rel)
     assert c.band == pytest.approx(r.band, rel=1e-12)
     assert c.band_limit == r.band_limit
-    assert c.confidence == pytest.approx(r.confidence, abs=1e-4)
-    np.testing.assert_allclose(c.octave_gd, r.octave_gd, rtol=1e-4, atol=psd_atol)  # means of psd ordinates
+    assert c.confidence == pytest.approx(r.confidence, abs=rel)
+    np.testing.assert_allclose(c.octave_gd, r.octave_gd, rtol=rel, atol=psd_atol)  # means of psd ordinates
     if r.waviness is not None:
-        assert c.waviness == pytest.approx(r.waviness, abs=1e-4)
+        assert c.waviness == pytest.approx(r.waviness, abs=rel)
 
 
-def assert_support_agrees(c, r):
+def assert_support_agrees(c, r, rel: float = 1e-4):
     """Backed fraction, noise PSD and noise floor of the analysed stretch (None when not known)."""
     assert (c.backed_fraction is None) == (r.backed_fraction is None)
     if r.backed_fraction is not None:
@@ -96,8 +99,8 @@ def assert_support_agrees(c, r):
     assert (c.noise_psd is None) == (r.noise_psd is None)
     if r.noise_psd is not None:
         # Spreads agree to float32 rounding of the points (1e-8 m of spreads down to 1e-5 m): 1e-3 relative.
-        np.testing.assert_allclose(c.noise_psd, r.noise_psd, rtol=1e-3, atol=1e-9 * np.max(r.noise_psd))
-        assert c.noise_floor == pytest.approx(r.noise_floor, rel=1e-3)
+        np.testing.assert_allclose(c.noise_psd, r.noise_psd, rtol=10 * rel, atol=1e-5 * rel * np.max(r.noise_psd))
+        assert c.noise_floor == pytest.approx(r.noise_floor, rel=10 * rel)
 
 
 def assert_iri_agrees(c, r, bound: float = 0.0):
@@ -211,10 +214,11 @@ def test_roughness_stage_agrees_on_random_profiles():
         np.testing.assert_array_equal(np.isnan(filled_cpp), np.isnan(filled_ref))
         np.testing.assert_allclose(filled_cpp, filled_ref, rtol=1e-14, atol=1e-15, equal_nan=True)  # rounding only
         assert rp.native.longest_valid_stretch(z) == rp.reference.longest_valid_stretch(z)
-        assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg))
+        assert_roughness_agrees(rp.native.analyze_roughness(z, ds, cfg), rp.reference.analyze_roughness(z, ds, cfg),
+                                rel=STAGE_REL)
         filled = rp.reference.fill_gaps(z, ds, cfg.profile.max_gap_m)  # gaps up to 1 m, as the pipeline's
         got = rp.native.analyze_roughness(filled, ds, cfg)
-        assert_roughness_agrees(got, rp.reference.analyze_roughness(filled, ds, cfg))
+        assert_roughness_agrees(got, rp.reference.analyze_roughness(filled, ds, cfg), rel=STAGE_REL)
         if count * ds >= cfg.roughness.min_length_m:
             classed.append(got.iso_class is not None)
 
@@ -244,7 +248,7 @@ def test_noise_aware_roughness_agrees_on_random_profiles(seed, count, gd_exponen
     cfg = rp.Config(roughness={"noise_aware": noise_aware})
     support = {"count": counts, "spread": spread}
     assert_roughness_agrees(rp.native.analyze_roughness(z, 0.1, cfg, **support),
-                            rp.reference.analyze_roughness(z, 0.1, cfg, **support))
+                            rp.reference.analyze_roughness(z, 0.1, cfg, **support), rel=STAGE_REL)
     np.testing.assert_allclose(rp.native.noise_psd(counts, spread, 0.1), rp.reference.noise_psd(counts, spread, 0.1),
                                rtol=1e-9)
     np.testing.assert_allclose(rp.native.resolved_fraction(counts, 0.1, n), rp.reference.resolved_fraction(counts, 0.1, n),
@@ -252,4 +256,4 @@ def test_noise_aware_roughness_agrees_on_random_profiles(seed, count, gd_exponen
     other = np.roll(z, 7)
     both = {"count_left": counts, "spread_left": spread, "count_right": counts[::-1].copy(), "spread_right": spread[::-1].copy()}
     assert_roughness_agrees(rp.native.vehicle_roughness(z, other, 0.1, cfg, **both),
-                            rp.reference.vehicle_roughness(z, other, 0.1, cfg, **both))
+                            rp.reference.vehicle_roughness(z, other, 0.1, cfg, **both), rel=STAGE_REL)

@@ -15,7 +15,7 @@ from .support import noise_psd
 # Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
 K1, K2, C, MU = 653.0, 63.3, 6.0, 0.15
 SPEED_MPS = 80.0 / 3.6
-BASE_LENGTH_M = 0.25  # the moving average that stands in for the tyre's envelope
+BASE_LENGTH_M = 0.25  # m, method.md §6 step 1: the smoothing before the car
 INIT_LENGTH_M = 11.0  # the initial state takes the profile's mean slope over this length
 TOO_SHORT = "valid stretch too short for IRI"
 TOO_SPARSE = "too few bins with points for IRI"
