@@ -155,14 +155,24 @@ def refines(fine, coarse):
 
 
 def assert_same_partition(xyz, cfg):
-    """The C++ clusters (PCL, float32) lie between the reference's with the tolerance − NEAR and + NEAR."""
+    """The C++ clusters are the reference's (both judge distances in float32), and lie between the reference's with
+    the tolerance − NEAR and + NEAR."""
     every = dataclasses.replace(cfg, obstacles=dataclasses.replace(cfg.obstacles, min_cluster_points=1))
     cpp = rp.native.cluster_labels(xyz, every)
+    np.testing.assert_array_equal(cpp, rp.reference.cluster_labels(xyz, every))
     tol = cfg.obstacles.cluster_tolerance_m
     tight, loose = (rp.reference.cluster_labels(xyz, dataclasses.replace(
         every, obstacles=dataclasses.replace(every.obstacles, cluster_tolerance_m=t))) for t in (tol - NEAR, tol + NEAR))
     assert refines(tight, cpp) and refines(cpp, loose)
     return cpp, np.array_equal(tight, loose)
+
+
+def test_a_pair_closer_than_the_tolerance_only_in_double_precision_is_two_clusters():
+    """0.49999999 m apart in float64, 0.5 m in float32: not closer than a 0.5 m tolerance (method.md §5)."""
+    xyz = np.array([[10.0, 0.0, 0.5], [10.49999999, 0.0, 0.5]])
+    cfg = Config(obstacles={"min_cluster_points": 1, "voxel_m": 0.0})
+    for impl in (rp.native, rp.reference):
+        assert list(impl.cluster_labels(xyz, cfg)) == [0, 1], impl.__name__
 
 
 @settings(max_examples=30, deadline=None)

@@ -94,12 +94,17 @@ def _pairs_with_cell(points, cell_first, cell_count, order, same):
 
 
 def _components(xyz: np.ndarray, tolerance: float) -> np.ndarray:
-    """Per point the lowest index in its connected component (edges join points closer than `tolerance`)."""
+    """Per point the lowest index in its connected component (edges join points closer than `tolerance`), judged
+    in single precision as method.md §5 says: the points rounded to float32, their squared distance summed x, then
+    y, then z in float32, against the squared tolerance rounded to float32."""
     labels = np.arange(len(xyz))
+    xyz = xyz.astype(np.float32)
     cells = np.floor(xyz / tolerance).astype(np.int64)
+    limit = np.float32(tolerance * tolerance)
     edges_i, edges_j = [], []
     for i, j in _candidate_pairs(cells):
-        close = np.sum((xyz[i] - xyz[j]) ** 2, axis=1) < tolerance**2
+        d = xyz[i] - xyz[j]
+        close = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2] < limit
         edges_i.append(i[close])
         edges_j.append(j[close])
     i, j = np.concatenate(edges_i), np.concatenate(edges_j)
