@@ -3,7 +3,11 @@
 #pragma once
 
 #include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace roadpreview::cli {
 
@@ -13,5 +17,33 @@ inline void remove_if_empty(const std::string& path) {
     std::error_code ec;
     if (!path.empty() && fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0) fs::remove(path, ec);
 }
+
+/// The stream a command writes its lines to: the file `path`, or stdout for "". On leaving its scope — a finished
+/// run, an error, a failure before the first line — the file is closed, and removed if nothing was written to it.
+class OutputFile {
+public:
+    explicit OutputFile(std::string path) : path_(std::move(path)) {
+        if (path_.empty()) return;
+        file_.open(path_);
+        if (!file_) throw std::runtime_error(path_ + ": cannot open the output file for writing");
+    }
+    OutputFile(const OutputFile&) = delete;
+    OutputFile& operator=(const OutputFile&) = delete;
+    ~OutputFile() {
+        if (path_.empty()) return;
+        file_.close();
+        remove_if_empty(path_);
+    }
+    std::ostream& stream() { return path_.empty() ? std::cout : file_; }
+    /// Flushes, and names the output in the error when the stream failed (a full disk shows here).
+    void check_written() {
+        stream().flush();
+        if (!stream()) throw std::runtime_error((path_.empty() ? "stdout" : path_) + ": write failed");
+    }
+
+private:
+    std::string path_;
+    std::ofstream file_;
+};
 
 }  // namespace roadpreview::cli

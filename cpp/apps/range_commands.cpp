@@ -140,28 +140,11 @@ int run_readings(const RangeOptions& o, bool with_motion) {
     rp::RangeProfiler profiler(std::move(layout), std::move(cal), cfg);
     rp::RangeMotion motion = with_motion ? rp::RangeMotion(rp::MotionTable::read_csv(o.motion_file))
                                          : rp::RangeMotion(o.speed, o.yaw_rate);
-    std::ofstream file;
-    if (!o.output.empty()) {
-        file.open(o.output);
-        if (!file) throw std::runtime_error(o.output + ": cannot write the output file");
-    }
-    std::ostream& out = o.output.empty() ? std::cout : file;
+    rp::cli::OutputFile output(o.output);  // a run that writes no window leaves no empty file, as `run` leaves none
     std::int64_t windows = 0;
     const auto start = std::chrono::steady_clock::now();
-    // A run that writes no window leaves no empty output file behind, as `roadpreview run` leaves none.
-    const auto no_empty_output = [&] {
-        file.close();
-        rp::cli::remove_if_empty(o.output);
-    };
-    std::int64_t readings = 0;
-    try {
-        readings = run_windows(profiler, o, std::move(motion), out, windows);
-    } catch (...) {
-        no_empty_output();
-        throw;
-    }
-    out.flush();  // a full disk shows here
-    if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
+    const std::int64_t readings = run_windows(profiler, o, std::move(motion), output.stream(), windows);
+    output.check_written();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "%s: %lld readings, %lld windows in %.2f s (%.0f readings/s)\n", o.readings.c_str(),
                  static_cast<long long>(readings), static_cast<long long>(windows), s, readings / std::max(s, 1e-9));
@@ -171,7 +154,6 @@ int run_readings(const RangeOptions& o, bool with_motion) {
                      "behind the axle (b1·v + b2 < 0: at that speed the latency b1 outruns the lead b2)\n",
                      o.readings.c_str(), static_cast<long long>(profiler.dropped_behind()));
     if (windows == 0) {  // as `roadpreview run` does: a run that writes nothing fails
-        no_empty_output();
         throw std::runtime_error(o.readings + ": no window was written (" + std::to_string(readings) +
                                  " readings); nothing was written");
     }

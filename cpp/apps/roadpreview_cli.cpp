@@ -29,7 +29,6 @@ namespace rp = roadpreview;
 
 namespace {
 
-using rp::cli::remove_if_empty;
 using rp::cli::UsageError;
 
 struct RunOptions {
@@ -224,20 +223,8 @@ std::string input_label(const RunOptions& o) {
     return o.stereo.empty() ? o.disparity : o.stereo[0];
 }
 
-// A run that writes nothing fails, and leaves no empty output file behind.
-
-// Also when the run fails before its first frame (a capture truncated at its start): on leaving the run, an output
-// no frame was written to is removed.
-struct NoEmptyOutput {
-    const std::string& path;
-    const RunSummary& summary;
-    ~NoEmptyOutput() {
-        if (summary.ms.empty()) remove_if_empty(path);
-    }
-};
-
+// A run that writes nothing fails (and its OutputFile leaves no empty file behind).
 [[noreturn]] void nothing_written(const RunOptions& o, std::int64_t first, std::int64_t frames_seen) {
-    remove_if_empty(o.output);
     std::string where = first > 0 ? " from index " + std::to_string(first) + " on (the input has " +
                                         std::to_string(frames_seen) + ")"
                                   : " in the input";
@@ -442,16 +429,11 @@ int run(const RunOptions& o, const CLI::App& app) {
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
     const rp::DriveOptions drive = drive_options(o, app);
     rp::DriveRunner runner(std::move(source), cfg, drive);
-    std::ofstream file;
-    if (!o.output.empty()) {
-        file.open(o.output);
-        if (!file) throw std::runtime_error(o.output + ": cannot open output file for writing");
-    }
-    std::ostream& out = o.output.empty() ? std::cout : file;
+    rp::cli::OutputFile output(o.output);  // a run that fails before its first frame leaves no empty file
+    std::ostream& out = output.stream();
     std::optional<rp::RouteBuilder> route;
     std::optional<rp::ProfileReadout> readout;
     RunSummary summary;
-    const NoEmptyOutput no_empty_output{o.output, summary};
     LiveStats live_stats;
     while (std::optional<rp::DriveStep> step = runner.next()) {
         const rp::DriveFrame& in = step->input;
@@ -474,8 +456,7 @@ int run(const RunOptions& o, const CLI::App& app) {
             line.readout = &*readout;
         }
         out << rp::result_to_json(r, line) << '\n';
-        out.flush();  // a live consumer reads each line as it comes
-        if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
+        output.check_written();  // a live consumer reads each line as it comes
         live_stats.add(in.frame, result_s);
         summary.add(r);
         if (!o.quiet) report_frame(static_cast<std::size_t>(in.index), total, in.frame, r);
