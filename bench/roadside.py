@@ -89,13 +89,11 @@ def evaluate(run: sr.Run, cycles: list[dict]) -> dict:
 def run_once(scenario: str, seed: int, offsets=(0.0, 0.0), camera_offset=0.0, estimate=False) -> tuple[dict, list]:
     run = sr.simulate(scenario, seed=seed, clock_offsets_s=offsets, camera_offset_s=camera_offset)
     site = run.site_yaml
-    sort_offsets = None
     est = None
-    if estimate:
+    if estimate:  # the estimated offsets go into the site file, whose clock the processor orders scans by
         est = rp.roadside.estimate_clock_offsets(run.scans, site)
         site = sr.site_yaml(run.scanners, [-o for o in est])
-        sort_offsets = [-o for o in est]
-    cycles = rp.roadside.Processor(site).run(run.scans, run.detections, time_offsets_s=sort_offsets)
+    cycles = rp.roadside.Processor(site).run(run.scans, run.detections)
     return evaluate(run, cycles), est
 
 

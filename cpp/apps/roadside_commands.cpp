@@ -18,6 +18,7 @@
 
 #include "cli_checks.hpp"
 #include "helper_programs.hpp"
+#include "output_file.hpp"
 #include "roadpreview/roadside/extrinsics.hpp"
 #include "roadpreview/roadside/processor.hpp"
 #include "roadpreview/roadside/sick.hpp"
@@ -57,7 +58,8 @@ bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// "NAME=FILE" names the site scanner of a file; a bare FILE is the next scanner in the site's order.
+// "NAME=FILE" names the site scanner of a file; a bare FILE is the next scanner, in the site's order, that no file
+// is named for.
 struct Input {
     std::string path;
     int scanner = -1;
@@ -65,22 +67,28 @@ struct Input {
 
 std::vector<Input> resolve_inputs(const std::vector<std::string>& args, const rs::Site* site) {
     std::vector<Input> out;
-    int next = 0;
+    std::vector<bool> named(site ? site->scanners.size() : 0, false);
     for (const auto& a : args) {
         Input in{a, -1};
         const auto eq = a.find('=');
         if (site && eq != std::string::npos) {
             const std::string name = a.substr(0, eq);
             for (std::size_t i = 0; i < site->scanners.size(); ++i)
-                if (site->scanners[i].name == name) in = {a.substr(eq + 1), static_cast<int>(i)};
+                if (site->scanners[i].name == name) in = {a.substr(eq + 1), static_cast<int>(i)}, named[i] = true;
             if (in.scanner < 0) throw UsageError(a + ": no scanner named '" + name + "' in " + site->path);
         }
-        if (in.scanner < 0 && !ends_with(in.path, ".csv")) in.scanner = next++;
+        out.push_back(in);
+    }
+    // A file without a name takes the next scanner no file is named for (s1=a.json b.json: b is s2, not s1 again).
+    std::size_t next = 0;
+    for (Input& in : out) {
+        if (in.scanner >= 0 || ends_with(in.path, ".csv")) continue;
+        while (next < named.size() && named[next]) ++next;
+        in.scanner = static_cast<int>(next++);
         if (site && in.scanner >= static_cast<int>(site->scanners.size()))
             throw UsageError(in.path + ": the site file " + site->path + " has " +
-                             std::to_string(site->scanners.size()) + " scanner(s), and this is scan file " +
-                             std::to_string(in.scanner + 1) + " (name each file's scanner: NAME=FILE)");
-        out.push_back(in);
+                             std::to_string(site->scanners.size()) + " scanner(s), and no scanner is left for this "
+                             "scan file (name each file's scanner: NAME=FILE)");
     }
     return out;
 }
@@ -189,6 +197,10 @@ int run(const RoadsideOptions& o) {
         for (const std::string& e : empty) why += (why.empty() ? "" : "; ") + e;
         throw std::runtime_error("no scans in the inputs: " + why);
     }
+    for (std::size_t i = 0; i < site.scanners.size(); ++i)  // a scanner named in the site but given no file
+        if (std::none_of(scans.begin(), scans.end(), [&](const rs::LaserScan& s) { return s.scanner == static_cast<int>(i); }))
+            std::fprintf(stderr, "roadpreview: warning: site scanner '%s' has no scans in the inputs\n",
+                         site.scanners[i].name.c_str());
     // Site clock: each scanner's offset applied before merging, so the cycles see one time line.
     std::stable_sort(scans.begin(), scans.end(), [&](const rs::LaserScan& a, const rs::LaserScan& b) {
         auto offset = [&](const rs::LaserScan& s) {
@@ -205,21 +217,24 @@ int run(const RoadsideOptions& o) {
             std::fprintf(stderr, "world background from the scans with poses: %d × %d cells of %.2f m, scan period %.3f s\n",
                          w.width_cells(), w.height_cells(), site.settings.world.cell_m, w.scan_period_s());
     }
-    if (!o.detections.empty()) processor.add_detections(rs::read_detections(o.detections));
-    if (!o.camera.video.empty()) processor.add_detections(detect_in_video(o.camera, site, o.quiet));
-    std::ofstream file;
-    if (!o.output.empty()) {
-        file.open(o.output);
-        if (!file) throw std::runtime_error(o.output + ": cannot write");
-    }
-    std::ostream& out = o.output.empty() ? std::cout : file;
+    std::size_t detections = 0;
+    const auto add_detections = [&](const std::vector<rs::CameraDetection>& d) {
+        processor.add_detections(d);
+        detections += d.size();
+    };
+    if (!o.detections.empty()) add_detections(rs::read_detections(o.detections));
+    if (!o.camera.video.empty()) add_detections(detect_in_video(o.camera, site, o.quiet));
+    roadpreview::cli::OutputFile output(o.output);  // a run that fails before its first cycle leaves no empty file
+    std::ostream& out = output.stream();
     std::vector<rs::Cycle> kept;  // for GeoJSON only
     long long cycles = 0, objects = 0, dropouts = 0;
-    double worst_ms = 0.0, total_ms = 0.0;
+    double worst_ms = 0.0, total_ms = 0.0, first_cycle_s = 0.0, last_cycle_s = 0.0;
     std::vector<bool> was_active(site.scanners.size(), true);
     auto emit = [&](const std::vector<rs::Cycle>& done) {
         for (const auto& c : done) {
             out << rs::cycle_to_json(c) << '\n';
+            if (cycles == 0) first_cycle_s = c.t_s;
+            last_cycle_s = c.t_s;
             ++cycles, objects += static_cast<long long>(c.objects.size());
             worst_ms = std::max(worst_ms, c.process_ms), total_ms += c.process_ms;
             for (std::size_t i = 0; i < c.scanners.size(); ++i) {
@@ -236,8 +251,13 @@ int run(const RoadsideOptions& o) {
     };
     for (const auto& s : scans) emit(processor.push(s));
     emit(processor.finish());
-    out.flush();  // a full disk shows here
-    if (!out) throw std::runtime_error((o.output.empty() ? "stdout" : o.output) + ": write failed");
+    if (const std::size_t outside = processor.detections_outside_scans(); outside > 0 && cycles > 0)
+        std::fprintf(stderr, "roadpreview: warning: %zu of %zu camera detections lie more than 1 s outside the scans' "
+                     "time (the cycles end at t = %.3f–%.3f s on the site clock) and are in no output: check the "
+                     "camera's time_offset_s in the site file (or --video-start)\n", outside, detections,
+                     first_cycle_s, last_cycle_s);
+    output.check_written();
+    if (cycles == 0) throw std::runtime_error("no cycle written: the inputs end within the background learning time");
     if (!o.geojson.empty()) {
         std::ofstream g(o.geojson);
         if (!g) throw std::runtime_error(o.geojson + ": cannot write");
@@ -245,7 +265,6 @@ int run(const RoadsideOptions& o) {
         g.flush();
         if (!g) throw std::runtime_error(o.geojson + ": write failed");
     }
-    if (cycles == 0) throw std::runtime_error("no cycle written: the inputs end within the background learning time");
     std::fprintf(stderr, "%lld scans, %lld cycles, %lld object reports, %lld scanner dropouts; cycle processing "
                  "mean %.3f ms, worst %.3f ms\n", static_cast<long long>(scans.size()), cycles, objects, dropouts,
                  total_ms / static_cast<double>(cycles), worst_ms);

@@ -134,6 +134,16 @@ public:
         const InUse in_use(this, kWhat);
         return lines(p_.finish());
     }
+    std::size_t detections_outside_scans() const {
+        const InUse in_use(this, kWhat);
+        return p_.detections_outside_scans();
+    }
+    // Each site scanner's clock offset (s), in the site file's order: what puts its scans on the site clock.
+    std::vector<double> time_offsets_s() const {
+        std::vector<double> out;
+        for (const auto& scanner : p_.site().scanners) out.push_back(scanner.time_offset_s);
+        return out;
+    }
 
 private:
     static constexpr const char* kWhat = "roadside Processor";
@@ -193,5 +203,7 @@ void bind_roadside(py::module_& parent) {
         .def("learn_world", &PyProcessor::learn_world)
         .def("world_foreground", &PyProcessor::world_foreground)
         .def("add_detections", &PyProcessor::add_detections)
-        .def("finish", &PyProcessor::finish);
+        .def("finish", &PyProcessor::finish)
+        .def_property_readonly("time_offsets_s", &PyProcessor::time_offsets_s)
+        .def_property_readonly("detections_outside_scans", &PyProcessor::detections_outside_scans);
 }

@@ -196,17 +196,36 @@ class Processor:
 
     def run(self, scans: Iterable[dict], detections: Optional[Sequence[tuple]] = None,
             time_offsets_s: Optional[Sequence[float]] = None) -> list[dict]:
-        """All cycles of time-ordered scans (sorted here on the site clock; `time_offsets_s` only for sorting
-        when the site file's offsets are not yet known)."""
+        """All cycles of the scans, pushed in the order of their times on the site clock — each scan's time plus
+        its scanner's `time_offset_s` from the site file, as the CLI orders them. `time_offsets_s` (one per site
+        scanner) orders by other offsets instead, for scans whose clocks the site file does not yet describe."""
         if detections:
             self.add_detections(detections)
         scans = list(scans)
         if any(s.get("pose") is not None for s in scans):
             self.learn_world(scans)
+        offsets = list(self._p.time_offsets_s if time_offsets_s is None else time_offsets_s)
+
+        def site_time(scan):  # an unknown scanner index sorts as is: push() names it
+            k = int(scan["scanner"])
+            return float(scan["time_s"]) + (offsets[k] if 0 <= k < len(offsets) else 0.0)
+
         cycles = []
-        for s in sorted(scans, key=lambda s: s["time_s"] + (time_offsets_s[s["scanner"]] if time_offsets_s else 0)):
+        for s in sorted(scans, key=site_time):
             cycles += self.push(s)
-        return cycles + self.finish()
+        cycles += self.finish()
+        outside = self.detections_outside_scans
+        if outside and cycles:
+            warnings.warn(f"{outside} camera detections lie more than 1 s outside the scans' time (the cycles end at "
+                          f"t = {cycles[0]['t_s']:.3f}–{cycles[-1]['t_s']:.3f} s on the site clock) and are in no "
+                          "output: check the camera's time_offset_s in the site file", RuntimeWarning, stacklevel=2)
+        return cycles
+
+    @property
+    def detections_outside_scans(self) -> int:
+        """How many of the camera detections given lie more than a second (the time a track keeps a detection)
+        before the first scan or after the last, on the site clock: on another clock, most likely; in no output."""
+        return self._p.detections_outside_scans
 
 
 def label_points(xy: np.ndarray, cell_m: float = 0.1, dilation_cells: int = 2) -> tuple[np.ndarray, int]:

@@ -366,6 +366,17 @@ def test_carmen_log_gives_moving_objects_against_its_world_background():
     assert untimed(json.loads(line) for line in done.stdout.splitlines()) == untimed(cycles)
 
 
+@pytest.mark.parametrize("beams, step_deg", [(181, 1.0), (180, 1.0), (361, 0.5), (360, 0.5), (401, 0.25), (91, 2.0)])
+def test_a_carmen_log_without_its_resolution_takes_carmen_s_step(tmp_path, beams, step_deg):
+    """Without `laser_front_laser_resolution`, the step CARMEN assumes for so many beams (a 181-beam scan once read
+    180°/181 = 0.9945°, its last beam 1° short of +90°)."""
+    log = tmp_path / "scan.log"
+    log.write_text("FLASER %d %s 0 0 0 0 0 0 10.0 host 10.0\n" % (beams, " ".join(["5.0"] * beams)))
+    (scan,) = rp.roadside.read_scans(log)
+    assert math.degrees(scan["start_angle_rad"]) == pytest.approx(-90.0)
+    assert math.degrees(scan["step_rad"]) == pytest.approx(step_deg, rel=1e-12)
+
+
 def test_a_carmen_log_without_times_says_at_what_rate_it_was_timed(tmp_path):
     log = tmp_path / "untimed.log"
     line = "FLASER 3 1.0 2.0 3.0 0 0 0 0 0 0 {t} host {t}\n"

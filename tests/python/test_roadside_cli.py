@@ -53,6 +53,50 @@ def test_run_writes_one_line_per_cycle_with_wgs84_and_geojson(sim_files):
     assert [without_timing(c) for c in py] == [without_timing(c) for c in lines]
 
 
+def test_python_orders_scans_by_the_site_file_s_clock_offsets_as_the_cli_does(tmp_path):
+    """Scanner s2's clock runs 0.1 s ahead and the site file says so: the Python processor once sorted the scans on
+    their own clocks (7 track ids for two cars, 263 cycles), the CLI on the site clock (2 ids, 394 cycles)."""
+    run = sr.simulate("two_cars_crossing", seed=2, clock_offsets_s=(0.0, 0.1))
+    (tmp_path / "site.yaml").write_text(sr.site_yaml(run.scanners, [0.0, -0.1]))
+    rp.roadside.write_scan_csv(run.scans, tmp_path / "scans.csv")
+    cli = [json.loads(line) for line in run_cli("roadside", "run", "--site", tmp_path / "site.yaml",
+                                                 tmp_path / "scans.csv", "-q").stdout.splitlines()]
+    py = rp.roadside.Processor(tmp_path / "site.yaml").run(rp.roadside.read_scans(tmp_path / "scans.csv"))
+    without_timing = [{k: v for k, v in c.items() if k != "process_ms"} for c in py]
+    assert without_timing == [{k: v for k, v in c.items() if k != "process_ms"} for c in cli]
+    assert len({o["id"] for c in cli for o in c["objects"] if o["id"] > 0}) == 2
+
+
+def test_detections_on_another_clock_are_said_to_be_in_no_output(sim_files, tmp_path):
+    """Detections 1.6e9 s off the scans' clock (a SICK capture's epoch times beside a video's) once vanished unsaid."""
+    d, run = sim_files
+    shifted = tmp_path / "det.csv"
+    shifted.write_text("t,x,y,w,h,class,score\n" + "".join(f"{t + 1.6e9},{x},{y},{w},{h},{c},{s}\n"
+                                                         for t, x, y, w, h, c, s in run.detections))
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", shifted, "-q")
+    assert f"{len(run.detections)} of {len(run.detections)} camera detections lie more than 1 s outside" in proc.stderr
+    assert "time_offset_s" in proc.stderr
+    processor = rp.roadside.Processor(d / "site.yaml")
+    with pytest.warns(RuntimeWarning, match=f"{len(run.detections)} camera detections lie more than 1 s outside"):
+        processor.run(rp.roadside.read_scans(d / "scans.csv"), [(t + 1.6e9, *rest) for t, *rest in run.detections])
+    assert processor.detections_outside_scans == len(run.detections)
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", d / "det.csv", "-q")
+    assert "camera detections lie" not in proc.stderr  # the simulated camera's detections fall in the scans' time
+
+
+@pytest.mark.parametrize("score", ["0", "-1", "1.5", "1e308"])
+def test_a_detection_score_outside_0_to_1_is_refused(sim_files, tmp_path, score):
+    """A score votes for its class: 0 voted nothing (a matched box left its track unclassed), 1e308 summed to an
+    infinite vote (a null score in the output), −1 was echoed back."""
+    d, _ = sim_files
+    det = tmp_path / "det.csv"
+    det.write_text(f"t,x,y,w,h,class,score\n1.0,100,200,30,60,pedestrian,{score}\n")
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", det, check=False)
+    assert proc.returncode == 1 and f"det.csv:2: detection score must be in (0, 1], got {float(score):g}" in proc.stderr
+    with pytest.raises(RuntimeError, match=r"camera detection 0 \(of 1\): detection score must be in \(0, 1\]"):
+        rp.roadside.Processor(d / "site.yaml").add_detections([(1.0, 100, 200, 30, 60, "pedestrian", float(score))])
+
+
 def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     d, _ = sim_files
     bad_site = tmp_path / "bad.yaml"
@@ -70,7 +114,12 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     three = [tmp_path / f"s{k}.json" for k in range(3)]
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", *three, check=False)
     assert proc.returncode == 2, proc.stderr
-    assert f"{three[2]}: the site file {d / 'site.yaml'} has 2 scanner(s), and this is scan file 3" in proc.stderr
+    no_scanner_left = f"the site file {d / 'site.yaml'} has 2 scanner(s), and no scanner is left for this scan file"
+    assert f"{three[2]}: {no_scanner_left}" in proc.stderr
+    # A file without a name takes the next scanner no file is named for: s2=a b c leaves none for c (b once became
+    # s1 and c s2 again, beside a, silently).
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", f"s2={three[0]}", three[1], three[2], check=False)
+    assert proc.returncode == 2 and f"{three[2]}: {no_scanner_left}" in proc.stderr, proc.stderr
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", f"s9={three[0]}", check=False)
     assert proc.returncode == 2 and f"s9={three[0]}: no scanner named 's9'" in proc.stderr
     # A LiDAR capture is not a SICK one: the error names it and what was looked for.
@@ -78,6 +127,12 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", velodyne, check=False)
     assert proc.returncode == 1
     assert f"no scans in the inputs: {velodyne}: no SICK telegram in a TCP stream on port 2112" in proc.stderr
+    # Scans that end within the background learning: an error, and no empty output files left behind.
+    short, out, geo = tmp_path / "short.csv", tmp_path / "out.jsonl", tmp_path / "out.geojson"
+    rp.roadside.write_scan_csv(rp.roadside.read_scans(d / "scans.csv")[:10], short)
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", short, "-o", out, "--geojson", geo, check=False)
+    assert proc.returncode == 1 and "no cycle written" in proc.stderr
+    assert not out.exists() and not geo.exists()
     huge = tmp_path / "det.jsonl"  # a number beyond a double: nlohmann's out_of_range once escaped without the file
     huge.write_text('{"t": 1e400, "x": 1, "y": 2, "w": 3, "h": 4, "class": "car"}\n')
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", huge, check=False)

@@ -9,6 +9,7 @@
 
 #include "core/csv.hpp"
 #include "core/input_file.hpp"
+#include "core/text.hpp"
 #include "roadpreview/roadside/processor.hpp"
 
 namespace roadpreview::roadside {
@@ -82,6 +83,17 @@ std::string cycles_to_geojson(const std::vector<Cycle>& cycles) {
     return nlohmann::json{{"type", "FeatureCollection"}, {"features", features}}.dump();
 }
 
+// A score votes for its class: 0 voted nothing (a matched box left its track unclassed), 1e308 summed to an
+// infinite vote and a null score in the output.
+void check_detection(const CameraDetection& d, const std::string& where) {
+    for (double v : {d.t_s, d.x_px, d.y_px, d.w_px, d.h_px, d.score})
+        if (!std::isfinite(v)) throw std::runtime_error(where + ": detection has a non-finite number");
+    if (d.w_px <= 0 || d.h_px <= 0) throw std::runtime_error(where + ": detection box w and h must be > 0");
+    if (d.cls.empty()) throw std::runtime_error(where + ": empty class");
+    if (!(d.score > 0.0 && d.score <= 1.0))
+        throw std::runtime_error(where + ": detection score must be in (0, 1], got " + number_text(d.score));
+}
+
 namespace {
 
 CameraDetection detection_from_json(const nlohmann::json& j, const std::string& where) {
@@ -89,9 +101,7 @@ CameraDetection detection_from_json(const nlohmann::json& j, const std::string& 
         CameraDetection d{j.at("t").get<double>(), j.at("x").get<double>(), j.at("y").get<double>(),
                           j.at("w").get<double>(), j.at("h").get<double>(), j.at("class").get<std::string>(),
                           j.value("score", 1.0)};
-        for (double v : {d.t_s, d.x_px, d.y_px, d.w_px, d.h_px, d.score})
-            if (!std::isfinite(v)) throw std::runtime_error(where + ": detection has a non-finite number");
-        if (d.w_px <= 0 || d.h_px <= 0) throw std::runtime_error(where + ": detection box w and h must be > 0");
+        check_detection(d, where);
         return d;
     } catch (const nlohmann::json::exception& e) {
         throw std::runtime_error(where + ": detection needs t, x, y, w, h, class[, score] (" + e.what() + ")");
@@ -143,8 +153,7 @@ std::vector<CameraDetection> read_detections(const std::string& path) {
         d.h_px = csv::finite_cell(cells, header.at("h"), where, "h");
         d.score = csv::finite_cell(cells, header.at("score"), where, "score");
         d.cls = header.at("class") < cells.size() ? cells[header.at("class")] : "";
-        if (d.cls.empty()) throw std::runtime_error(where + ": empty class");
-        if (d.w_px <= 0 || d.h_px <= 0) throw std::runtime_error(where + ": detection box w and h must be > 0");
+        check_detection(d, where);
         out.push_back(d);
     }
     return out;

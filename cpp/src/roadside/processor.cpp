@@ -187,8 +187,20 @@ Cycle Processor::run_cycle(double t_end_s) {
     return c;
 }
 
+std::size_t Processor::detections_outside_scans() const {
+    if (!started_) return detections_.size();
+    double last_scan_s = first_time_s_;
+    for (const auto& st : status_) last_scan_s = std::max(last_scan_s, st.last_scan_s);
+    return static_cast<std::size_t>(std::count_if(detections_.begin(), detections_.end(), [&](const CameraDetection& d) {
+        return d.t_s < first_time_s_ - kCameraMemoryS || d.t_s > last_scan_s + kCameraMemoryS;
+    }));
+}
+
 void Processor::add_detections(const std::vector<CameraDetection>& detections) {
     if (!site_.camera) throw std::runtime_error(site_.path + ": camera detections given but the site has no camera");
+    for (std::size_t i = 0; i < detections.size(); ++i)  // all or none: a bad one leaves the processor as it was
+        check_detection(detections[i], "camera detection " + std::to_string(i) + " (of " +
+                                           std::to_string(detections.size()) + ")");
     for (auto d : detections) {
         d.t_s += site_.camera->time_offset_s;
         detections_.push_back(d);

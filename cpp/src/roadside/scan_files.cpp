@@ -126,6 +126,16 @@ std::vector<LaserScan> read_scan_csv(const std::string& path) {
     return out;
 }
 
+// A log without `laser_front_laser_resolution`: the step CARMEN itself assumes for a SICK of n beams
+// (carmen_laser_guess_angle_increment): 1° for 180 or 181, 0.5° for 360 or 361, 0.25° for 400 or 401 (a last beam
+// may be left out), else 180° over the n − 1 steps. 180°/n gave a 181-beam scan 0.9945°, its last beam 1° short.
+double guessed_step_deg(std::size_t n) {
+    if (n == 180 || n == 181) return 1.0;
+    if (n == 360 || n == 361) return 0.5;
+    if (n == 400 || n == 401) return 0.25;
+    return n > 1 ? 180.0 / static_cast<double>(n - 1) : 1.0;
+}
+
 std::vector<LaserScan> read_carmen_log(const std::string& path, double rate_hz, double max_range_m,
                                        bool* timestamps_missing) {
     // A 2-D scanner turns 1–100 times a second; outside 0.001–100,000 Hz the times are a unit mixed up, or overflow.
@@ -159,7 +169,7 @@ std::vector<LaserScan> read_carmen_log(const std::string& path, double rate_hz, 
         const double max_m = max_range_m > 0.0 ? max_range_m : (log_max_m > 0.0 ? log_max_m : INFINITY);
         LaserScan s;
         s.source = where;
-        const double step_deg = resolution_deg > 0.0 ? resolution_deg : 180.0 / static_cast<double>(n);
+        const double step_deg = resolution_deg > 0.0 ? resolution_deg : guessed_step_deg(n);
         s.start_angle_rad = -90.0 * kDeg;
         s.step_rad = step_deg * kDeg;
         s.ranges_m.resize(n);

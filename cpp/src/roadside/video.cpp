@@ -64,7 +64,8 @@ void detect_frame(const cv::Mat& grey, double scale, double t_s, const VideoDete
         d.hog.detectMultiScale(grey, boxes, margins, o.people_threshold, cv::Size(8, 8), cv::Size(8, 8), 1.05, 2.0);
         for (std::size_t i = 0; i < boxes.size(); ++i) {
             const cv::Rect& b = boxes[i];
-            const double m = std::max(0.0, margins[i]);
+            const double m = margins[i];
+            if (!(m > 0.0)) continue;  // no margin: no vote (a detection's score lies in (0, 1])
             out.push_back({t_s, scale * (b.x + kHogMarginX * b.width), scale * (b.y + kHogMarginY * b.height),
                            scale * b.width * (1.0 - 2.0 * kHogMarginX), scale * b.height * (1.0 - 2.0 * kHogMarginY),
                            "pedestrian", m / (1.0 + m)});

@@ -25,6 +25,9 @@ struct CameraDetection {
     double score = 0.0;
 };
 
+/// Throws, naming `where`, unless the detection's numbers are finite, its box has w, h > 0, its class is not empty
+/// and its score (a detector's confidence, its vote for the class) lies in (0, 1].
+void check_detection(const CameraDetection& d, const std::string& where);
 /// Detections from a CSV `t,x,y,w,h,class,score` or a JSON array / JSON lines of objects with those keys.
 std::vector<CameraDetection> read_detections(const std::string& path);
 /// Writes detections as that CSV, every number round-tripping exactly.
@@ -54,7 +57,6 @@ struct ScannerStatus {
 
 struct Cycle {
     double t_s = 0.0;  ///< the common time every object is predicted to
-    bool learning = false;  ///< still learning the background (no objects yet)
     std::vector<OutputObject> objects;
     std::vector<ScannerStatus> scanners;
     int scan_objects = 0;  ///< components found in this cycle
@@ -79,6 +81,9 @@ public:
     void add_detections(const std::vector<CameraDetection>& detections);
     /// Completes the last cycle.
     std::vector<Cycle> finish();
+    /// How many of the camera detections given so far lie more than a second (the time a track keeps a detection)
+    /// before the first scan or after the last, on the site clock: on another clock, most likely; in no output.
+    std::size_t detections_outside_scans() const;
     const Site& site() const { return site_; }
 
 private:
