@@ -10,7 +10,8 @@ recording that writes its summary and segment table. Output (docs/output.md, "Ba
     OUT_DIR/recordings/ID/summary.json               frames, classes, median IRI, declined reasons
     OUT_DIR/recordings/ID/segments.parquet           class, G_d(n0), IRI per wheel per 10 / 100 m
     OUT_DIR/summary.csv, OUT_DIR/segments.parquet    all recordings, rewritten at the end of every batch
-    OUT_DIR/errors.jsonl                             one line per recording that failed
+    OUT_DIR/errors.jsonl                             one line per recording that failed (its frames removed)
+    OUT_DIR/options.json                             the options the results depend on: --resume refuses others
 
 Every file is written under a temporary name and renamed, so a killed task leaves nothing half-written and
 ``--resume`` redoes exactly the parts and summaries that are missing.
@@ -19,10 +20,13 @@ Every file is written under a temporary name and renamed, so a killed task leave
 from __future__ import annotations
 
 import argparse
+import contextlib
+import hashlib
 import json
 import math
 import os
 import re
+import shutil
 import sys
 import time
 from collections import Counter
@@ -71,7 +75,7 @@ def recording_id(path: str) -> str:
 
 def frame_count(path: str) -> Optional[int]:
     """Frames of a frame-file recording (a directory or file), None for recordings that must be decoded to count."""
-    if drive.is_bag(path) or path.lower().endswith((".pcap", ".pcapng")):
+    if input_kind(path) != "files":
         return None
     from . import io as rp_io
 
@@ -101,11 +105,37 @@ def drive_files(path: str) -> list[str]:
     return rp_io.expand([path])
 
 
+def input_kind(path: str) -> str:
+    if drive.is_bag(path):
+        return "bag"
+    return "pcap" if path.lower().endswith((".pcap", ".pcapng")) else "files"
+
+
+# The inputs each source option applies to, as `roadpreview run` has them.
+SOURCE_OPTION_INPUTS = {"topic": (("bag",), "ROS bags and MCAP files"), "meta": (("pcap",), "pcap recordings"),
+                        "sensor_model": (("pcap",), "pcap recordings"), "calibration": (("pcap",), "pcap recordings"),
+                        "columns": (("files",), "raw float32 .bin files"),
+                        "beam_calibration": (("pcap", "files"), "pcap recordings and frame files")}
+
+
+def check_source_options(inputs: Sequence[str], source_options: dict) -> None:
+    """Refuses a source option given with an input it does not apply to: the options apply to every recording, so
+    that is a usage error of the batch, not one error line per recording."""
+    for name, value in source_options.items():
+        kinds, what = SOURCE_OPTION_INPUTS.get(name, ((), ""))
+        if value in (None, "", 0) or not kinds:
+            continue
+        for path in map(os.fspath, inputs):
+            if input_kind(path) not in kinds:
+                raise ValueError(f"{path}: --{name.replace('_', '-')} applies to {what} only")
+
+
 def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_options: dict,
          unreadable: Optional[list] = None) -> list[Recording]:
     """One Recording per input, each with its chunks. Raises ValueError for a missing input, an input without
-    frames, or recordings from different sensors. A recording that cannot even be opened (a corrupt pcap or
-    bag) is appended to ``unreadable`` as (Recording, error) when that list is given, else raises."""
+    frames, or recordings from different sensors. A recording that cannot even be opened (a corrupt pcap, a bag
+    with no point cloud or several) is appended to ``unreadable`` as (Recording, error) when that list is given,
+    else raises."""
     recordings, seen, sensors = [], Counter(), {}
     for path in map(os.fspath, inputs):
         if not os.path.exists(path):
@@ -122,7 +152,7 @@ def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_o
             raise ValueError(f"{path}: no frame files in this recording")
         try:
             sensor = sensor_of(path, source_options)
-        except (RuntimeError, OSError) as err:
+        except (RuntimeError, OSError, ValueError) as err:  # ValueError: a bag's topics (the options are checked)
             if unreadable is None:
                 raise
             unreadable.append((Recording(rid, [path]), err))
@@ -134,6 +164,69 @@ def plan(inputs: Sequence[str], chunk_frames: int, overlap_frames: int, source_o
                              f"{'/'.join(map(str, b))}; run one batch per sensor (the config applies to all)")
         recordings.append(Recording(rid, [path], split(frames, chunk_frames, overlap_frames)))
     return recordings
+
+
+FILE_OPTIONS = ("motion", "poses", "meta", "calibration", "beam_calibration", "gnss")
+
+
+def batch_options(run_options: dict, chunk_frames: int, overlap_frames: int, segment_lengths_m: Sequence[float],
+                  geo_options: dict) -> dict:
+    """What a batch's results depend on, one flat mapping as OUT_DIR/options.json keeps it ("config.sensor_height",
+    "motion", "segment_lengths_m", ...): the config in full (defaults filled in), the motion, poses and source
+    options, the frame ranges (they decide what each part holds), the segment lengths and the map's options. Not
+    the workers, the scheduler or the progress bar: they change no result."""
+    from .config import Config
+
+    options = {f"config.{name}": value for name, value in _flat(Config.from_dict(run_options.get("config") or {})
+                                                                .to_dict()).items()}
+    others = dict(run_options, chunk_frames=chunk_frames, overlap_frames=overlap_frames,
+                  segment_lengths_m=[float(x) for x in segment_lengths_m], **geo_options)
+    options.update((name, _comparable(name, value)) for name, value in others.items() if name != "config")
+    return json.loads(json.dumps(options))  # tuples as lists, as the file gives them back
+
+
+def _flat(tree: dict) -> dict:
+    flat = {}
+    for name, value in tree.items():
+        if isinstance(value, dict):
+            flat.update((f"{name}.{inner}", v) for inner, v in _flat(value).items())
+        else:
+            flat[name] = value
+    return flat
+
+
+def _comparable(name: str, value):
+    """An option as options.json keeps it: a file by its content's sha256 (where it lies changes no result), poses
+    and a motion table in memory by their numbers'."""
+    if name in FILE_OPTIONS and isinstance(value, (str, os.PathLike)):
+        try:
+            content = Path(value).read_bytes()
+        except OSError as err:
+            option = f"--{name.replace('_', '-')} {os.fspath(value)}"
+            raise ValueError(f"{option}: cannot be read ({err.strerror})") from None
+        return f"file with sha256 {hashlib.sha256(content).hexdigest()}"
+    if isinstance(value, drive.MotionTable):
+        numbers = [np.asarray(column).tolist() for column in (value.t, value.speed, value.yaw_rate)]
+        return f"motion table with sha256 {hashlib.sha256(json.dumps(numbers).encode()).hexdigest()}"
+    if name == "poses" and value is not None:
+        numbers = [[float(v) for v in pose] for pose in value]
+        return f"{len(numbers)} poses with sha256 {hashlib.sha256(json.dumps(numbers).encode()).hexdigest()}"
+    return value
+
+
+def check_options(out_dir: Path, options: dict) -> None:
+    """Refuses to resume a batch made with other options, naming those that differ: its finished recordings would
+    be mixed with ones made otherwise. A batch from before options.json was kept is not checked."""
+    path = out_dir / "options.json"
+    if not path.exists():
+        return
+    made_with = json.loads(path.read_text())
+    differ = [name for name in sorted(set(made_with) | set(options)) if made_with.get(name) != options.get(name)]
+    if differ:
+        said = "; ".join(f"{name} {json.dumps(made_with.get(name))} there, {json.dumps(options.get(name))} now"
+                         for name in differ)
+        raise ValueError(f"{out_dir}: the earlier batch there ran with other options ({said}): give the options it "
+                         f"ran with to --resume it, or choose another -o")
 
 
 def part_path(out_dir: Path, rid: str, chunk: Chunk) -> Path:
@@ -219,13 +312,64 @@ def _motion_from(kind: str, rid: str, inputs: list[str], cfg, opts: dict, out_di
     return odo.motion_table(f"{inputs[0]}: lidar odometry"), odo.planar()
 
 
-def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, out_dir: str) -> dict:
-    """Runs frames [first, last) of one recording and writes the kept frames to their Parquet part."""
+# The runner's note when a frame's ground lies at the cloud's origin, level: the points are base-frame points already.
+BASE_FRAME_NOTE = "lies at the cloud's origin ("
+
+
+def find_mounting(inputs: list[str], run_options: dict, until: int) -> Optional[dict]:
+    """The mounting a run of the whole recording settles on among frames [0, until), for the chunks that start
+    after it: each chunk's runner would otherwise estimate its own from its first frame, and the lines would
+    depend on --chunk-frames. {"frame": where it settled, "extrinsics": [x, y, z, roll, pitch, yaw], "source":
+    "estimated"}, or "none" with zero extrinsics when the frame showed base-frame points; None when no frame before
+    ``until`` settled it (every chunk then asks the same frames the whole run asks)."""
+    import warnings
+
+    from .config import Config
+
+    opts = {k: v for k, v in run_options.items() if k not in ("config", "motion", "poses", "motion_from")}
+    found = drive.run(inputs, Config.from_dict(run_options.get("config") or {}), motion=(0.0, 0.0),
+                      frames=(0, until), **opts)  # the mounting needs no motion; a stopped vehicle costs least
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the chunks' runs warn of the same frames
+        for index, result in enumerate(found):
+            if result.mounting["source"] == "estimated":
+                return {"frame": index, "extrinsics": list(result.mounting["extrinsics"]), "source": "estimated"}
+            if any(BASE_FRAME_NOTE in note for note in found.notes):
+                return {"frame": index, "extrinsics": [0.0] * 6, "source": "none"}
+    return None
+
+
+def _mounted(cfg, mounting: dict):
+    """The config with the mounting a run of the whole recording found."""
+    from .config import Config, Extrinsics
+
+    cfg = Config.from_dict(cfg.to_dict()) if cfg is not None else Config()
+    cfg.sensor_height, cfg.extrinsics = None, Extrinsics(*mounting["extrinsics"])
+    return cfg
+
+
+def with_mounting_source(line: str, source: str, where: str) -> str:
+    """The output line as the whole recording's run writes it: a chunk run with the mounting that run found says
+    "given" where it says "estimated" (or "none": base-frame points). Edited as text: the line is the C++ one, byte
+    for byte, and parsing and re-encoding ~60 kB per frame would cost a third of a task."""
+    given = '"source":"given","ground_offset"'
+    if line.count(given) != 1:
+        raise RuntimeError(f"{where}: the output line has no mounting.source \"given\" to restore as {source!r}")
+    return line.replace(given, f'"source":"{source}","ground_offset"')
+
+
+def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, out_dir: str,
+                  mounting: Optional[dict] = None) -> dict:
+    """Runs frames [first, last) of one recording and writes the kept frames to their Parquet part. ``mounting``:
+    what :func:`find_mounting` found, used when the chunk starts after the frame that gave it."""
     from .config import Config
 
     opts = dict(run_options)
     config = opts.pop("config", None)
     cfg = Config.from_dict(config) if config is not None else None
+    mounting_source = None
+    if mounting is not None and chunk.first > mounting["frame"]:
+        cfg, mounting_source = _mounted(cfg, mounting), mounting["source"]
     motion_from = opts.pop("motion_from", None)
     if motion_from:
         opts["motion"], opts["poses"] = _motion_from(motion_from, rid, inputs, cfg, opts, out_dir)
@@ -233,7 +377,8 @@ def process_chunk(rid: str, inputs: list[str], chunk: Chunk, run_options: dict, 
         opts["poses"] = drive.read_kitti_poses(opts["poses"])
     poses = opts.get("poses")
     path = part_path(Path(out_dir), rid, chunk)
-    written = _write_atomically(path, lambda tmp: _write_frames(tmp, inputs, cfg, chunk, opts, poses))
+    written = _write_atomically(path, lambda tmp: _write_frames(tmp, inputs, cfg, chunk, opts, poses,
+                                                                mounting_source))
     if not written and chunk.index == 0:
         path.unlink()
         raise RuntimeError(f"{inputs[0]}: no frames in this recording")
@@ -244,7 +389,7 @@ ROW_GROUP_FRAMES = 128  # a Parquet row group holds at most this many frames,
 ROW_GROUP_BYTES = 2 << 20  # or this many bytes of output lines (a KITTI HDL-64E frame's line is ~59 kB: 36 frames)
 
 
-def _write_frames(tmp: Path, inputs, cfg, chunk: Chunk, opts: dict, poses) -> int:
+def _write_frames(tmp: Path, inputs, cfg, chunk: Chunk, opts: dict, poses, mounting_source=None) -> int:
     """Streams the chunk's kept frames into a Parquet file, a row group at a time. A row group's rows, their
     Arrow table and its encoding are what a worker holds beyond one frame: bounding it by bytes keeps the
     worker's memory flat whatever the sensor (128 KITTI frames per group swung the RSS by 15 %, README "Drives")."""
@@ -257,6 +402,9 @@ def _write_frames(tmp: Path, inputs, cfg, chunk: Chunk, opts: dict, poses) -> in
             index = chunk.first + k
             if index >= chunk.keep_from:
                 rows.append(frame_row(index, result, poses[index] if poses else None))
+                if mounting_source:
+                    rows[-1]["line"] = with_mounting_source(rows[-1]["line"], mounting_source,
+                                                            f"{inputs[0]}: frame {index}")
                 row_bytes += len(rows[-1]["line"])
             if len(rows) == ROW_GROUP_FRAMES or row_bytes >= ROW_GROUP_BYTES:
                 writer.write_table(pa.Table.from_pylist(rows, schema=schema))
@@ -434,12 +582,31 @@ LOCAL_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "500ms", "distributed
 
 
 def local_cluster(workers: int):
-    """A LocalCluster of ``workers`` single-threaded worker processes with LOCAL_CLUSTER_CONFIG."""
+    """A LocalCluster of ``workers`` single-threaded worker processes with LOCAL_CLUSTER_CONFIG. The worker
+    processes ignore SIGINT: a terminal's Ctrl-C reaches the whole process group, and each worker printed a
+    KeyboardInterrupt traceback; the client (main) stops them."""
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):  # the nannies hand it to their worker processes
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _sigint_ignored():  # the nannies hand both to their workers
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored meanwhile (in the main thread only: elsewhere signals cannot be set, nor arrive). A process
+    started meanwhile keeps ignoring it (Python installs its KeyboardInterrupt handler only over the default)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def connect(workers: Optional[int], scheduler: Optional[str], timeout_s: float = 10.0):
@@ -483,21 +650,18 @@ def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, 
     and only what is missing runs; without it, OUT_DIR must not hold an earlier batch.
     """
     out = Path(out_dir)
-    for length in segment_lengths_m:  # refused before any recording runs, as `roadpreview run --segments` does
-        route_builder(run_options.get("config")).check_segment_length(length)
-    if not resume and (out / "frames").exists():
-        raise ValueError(f"{out}: holds an earlier batch; give --resume to complete it or choose another -o")
+    geo_options = geo_options or {}
     source_options = {k: v for k, v in run_options.items()
                       if k not in ("config", "motion", "poses", "frame_rate", "motion_from")}
+    _check_arguments(inputs, out, resume, run_options, source_options, geo_options, segment_lengths_m)
     if run_options.get("motion_from"):
         chunk_frames = 0  # odometry and a bag's motion topics read the whole recording: one task each
+    options = batch_options(run_options, chunk_frames, overlap_frames, segment_lengths_m, geo_options)
+    if resume:
+        check_options(out, options)
     unreadable = []
     recordings = plan(inputs, chunk_frames, overlap_frames, source_options, unreadable)
-    out.mkdir(parents=True, exist_ok=True)
-    bind_inputs(out, recordings, resume)
-    errors_file = out / "errors.jsonl"
-    if errors_file.exists():
-        errors_file.unlink()  # a batch's errors are those of its last run
+    _prepare_out_dir(out, options, recordings, resume)
     report = {"done": [], "skipped": [], "failed": [], "tasks_run": 0}
     for rec, err in unreadable:
         _record_failure(out, rec, err, report)
@@ -505,15 +669,70 @@ def run_batch(inputs: Sequence[str], out_dir, *, workers: Optional[int] = None, 
     if own_client:
         client = connect(workers, scheduler)
     try:
-        _run_graph(client, recordings, out, resume, segment_lengths_m, geo_options or {}, run_options, report, quiet)
+        _run_graph(client, recordings, out, resume, segment_lengths_m, geo_options, run_options, report, quiet)
     finally:
         if own_client:
             cluster = getattr(client, "cluster", None)
             client.close()
             if cluster is not None:
                 cluster.close()
+    for rid in report["failed"]:
+        remove_failed_frames(out, rid)
     _write_tables(out)
     return report
+
+
+def _check_arguments(inputs, out: Path, resume: bool, run_options: dict, source_options: dict, geo_options: dict,
+                     segment_lengths_m) -> None:
+    """The usage errors that the arguments alone show, refused before anything is read or written."""
+    for length in segment_lengths_m:  # as `roadpreview run --segments` refuses them
+        route_builder(run_options.get("config")).check_segment_length(length)
+    check_origin_has_poses(geo_options, run_options)
+    if not resume and (out / "frames").exists():
+        raise ValueError(f"{out}: holds an earlier batch; give --resume to complete it or choose another -o")
+    check_source_options(inputs, source_options)
+
+
+def _prepare_out_dir(out: Path, options: dict, recordings: Sequence[Recording], resume: bool) -> None:
+    """OUT_DIR with the batch's options and each recording's inputs bound, without what an earlier run of it
+    left behind: its error lines (a batch's errors are those of its last run), its killed writers' files."""
+    out.mkdir(parents=True, exist_ok=True)
+    _write_atomically(out / "options.json", lambda tmp: tmp.write_text(json.dumps(options, indent=1) + "\n"))
+    bind_inputs(out, recordings, resume)
+    if resume:
+        remove_stale_temporaries(out)
+    (out / "errors.jsonl").unlink(missing_ok=True)
+
+
+def check_origin_has_poses(geo_options: dict, run_options: dict) -> None:
+    """--origin places the frames' poses on the map: refused before any work when no option gives poses (--poses,
+    or --motion-from lidar, whose odometry does; a bag's motion topics give none)."""
+    if geo_options.get("origin") and not run_options.get("poses") and run_options.get("motion_from") != "lidar":
+        raise ValueError(f"--origin {','.join(f'{v:g}' for v in geo_options['origin'])} places poses on the map, and "
+                         "no option gives the frames poses: give --poses or --motion-from lidar, or a --gnss file")
+
+
+def remove_failed_frames(out: Path, rid: str) -> None:
+    """Removes the per-frame parts of a recording that failed (after all its tasks ended), so that the frames/
+    dataset holds only recordings with a summary; --resume runs it again from its start. A recording finished by
+    an earlier batch keeps its frames."""
+    if not summary_path(out, rid).exists():
+        shutil.rmtree(out / "frames" / f"recording={rid}", ignore_errors=True)
+
+
+def remove_stale_temporaries(out: Path) -> None:
+    """Removes what _write_atomically's writers left when killed (``.NAME.PID.tmp``): on --resume no task of
+    this batch has started yet, so none of them is being written."""
+    for tmp in out.rglob(".*.tmp"):
+        if re.fullmatch(r"\..+\.\d+\.tmp", tmp.name):
+            tmp.unlink(missing_ok=True)
+
+
+def needs_mounting(run_options: dict, chunks: Sequence[Chunk]) -> bool:
+    """Whether chunks to run start past frame 0 of a recording whose mounting the runner is to estimate."""
+    config = run_options.get("config") or {}
+    given = config.get("sensor_height") is not None or config.get("extrinsics") is not None
+    return not given and any(c.first > 0 for c in chunks)
 
 
 def _run_graph(client, recordings, out, resume, lengths, geo_options, run_options, report, quiet) -> None:
@@ -526,11 +745,14 @@ def _run_graph(client, recordings, out, resume, lengths, geo_options, run_option
             report["skipped"].append(rec.id)
             continue
         deps = []
-        for chunk in rec.chunks:
-            if resume and part_path(out, rec.id, chunk).exists():
-                continue
-            f = client.submit(process_chunk, rec.id, rec.inputs, chunk, run_options, str(out), pure=False,
-                              key=f"chunk-{rec.id}-{chunk.index}")
+        missing = [c for c in rec.chunks if not (resume and part_path(out, rec.id, c).exists())]
+        mounting = None
+        if needs_mounting(run_options, missing):
+            mounting = client.submit(find_mounting, rec.inputs, run_options, max(c.first for c in rec.chunks),
+                                     pure=False, key=f"mounting-{rec.id}")
+        for chunk in missing:
+            f = client.submit(process_chunk, rec.id, rec.inputs, chunk, run_options, str(out),
+                              mounting if chunk.first > 0 else None, pure=False, key=f"chunk-{rec.id}-{chunk.index}")
             deps.append(f)
             chunk_futures.append(f)
         finish = client.submit(finish_recording, rec.id, str(out), run_options.get("config"), tuple(lengths),
@@ -637,10 +859,31 @@ def parser() -> argparse.ArgumentParser:
                    help=f"frames per task of a long frame-file recording (default {DEFAULT_CHUNK_FRAMES})")
     p.add_argument("--overlap-frames", type=int, default=DEFAULT_OVERLAP_FRAMES,
                    help=f"frames read before each range for fusion to settle (default {DEFAULT_OVERLAP_FRAMES})")
+    add_decoder_options(p)
     p.add_argument("--origin", help="lat,lon[,alt] (deg, m) of the poses' origin: segments carry lat/lon")
     p.add_argument("--gnss", help="GNSS CSV t,lat,lon[,alt]: segments carry lat/lon (one recording per batch)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     return p
+
+
+def add_decoder_options(p: argparse.ArgumentParser) -> None:
+    """The decoder options of ``roadpreview run`` (same names and meanings), applied to every recording."""
+    p.add_argument("--columns", type=int, help="raw float32 .bin files: values per point, x y z first "
+                                               "(default 5 for *.pcd.bin, else 4)")
+    p.add_argument("--sensor-model", help="Velodyne model: VLP-16, VLP-32C, HDL-32E, HDL-64E (default: from the "
+                                          "packets)")
+    p.add_argument("--calibration", help="Velodyne calibration YAML (ROS velodyne_pointcloud format; HDL-64E needs "
+                                         "one)")
+    p.add_argument("--beam-calibration", help="beams file (roadpreview calibrate) applied while decoding; .bin/.pcd "
+                                              "points find their beam by scan order or elevation")
+
+
+def decoder_options_from(args) -> dict:
+    if args.columns is not None and not 3 <= args.columns <= 64:
+        raise ValueError(f"--columns {args.columns}: expected 3 to 64 values per point")
+    given = {"columns": args.columns, "sensor_model": args.sensor_model, "calibration": args.calibration,
+             "beam_calibration": args.beam_calibration}
+    return {name: value for name, value in given.items() if value is not None}
 
 
 def _config(args) -> Optional[dict]:
@@ -694,10 +937,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         report = run_batch(args.inputs, args.output, workers=args.workers, scheduler=args.scheduler,
                            resume=args.resume, chunk_frames=args.chunk_frames, overlap_frames=args.overlap_frames,
                            segment_lengths_m=lengths, quiet=args.quiet, geo_options=geo_options,
-                           **run_options_from(args))
+                           **run_options_from(args), **decoder_options_from(args))
     except (ValueError, RuntimeError, OSError) as err:
         print(f"roadpreview batch: error: {err}", file=sys.stderr)
         return 2 if isinstance(err, ValueError) else 1
+    except KeyboardInterrupt:  # what is finished is on disk under its final name
+        print(f"roadpreview batch: interrupted; the same command with --resume continues it in {args.output}",
+              file=sys.stderr)
+        return 130
     print(f"roadpreview batch: {len(report['done'])} recording(s) done, {len(report['skipped'])} already done, "
           f"{len(report['failed'])} failed" + (f" (see {Path(args.output) / 'errors.jsonl'})" if report["failed"]
                                                else ""), file=sys.stderr)

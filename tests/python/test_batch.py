@@ -1,12 +1,16 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""roadpreview batch on Dask: per-frame Parquet equal to a serial run, split recordings, a corrupt recording and a
-worker killed mid-task, --resume, and the bad inputs the batch refuses."""
+"""roadpreview batch on Dask: per-frame Parquet equal to a serial run, split recordings (and their estimated
+mounting), a corrupt recording and a worker killed mid-task, --resume (and the options it binds), the decoder
+options, Ctrl-C, and the bad inputs the batch refuses."""
 
+import functools
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +21,7 @@ pytest.importorskip("pyarrow")
 
 import roadpreview as rp  # noqa: E402
 from roadpreview import batch, drive  # noqa: E402
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT  # noqa: E402
+from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, SHARED_DATA, VELODYNE  # noqa: E402
 
 CONFIG = {"sensor_height": KITTI_SENSOR_HEIGHT}
 RUN = {"config": CONFIG, "motion": (5.0, None), "frame_rate": 10.0}
@@ -279,3 +283,225 @@ def test_row_groups_are_bounded_by_frames_and_by_bytes(tmp_path, monkeypatch):
     batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "c"))
     sizes = groups(tmp_path / "c")
     assert sum(sizes) == 9 and len(sizes) >= 3 and max(sizes) <= 3
+
+
+def test_resume_with_other_options_is_refused_naming_them(client, recordings, tmp_path, monkeypatch):
+    """A resume given another sensor height, speed, fusion or segment lengths mixed results made with both in one
+    folder (exit 0); the workers, the scheduler and -q change no result and do not count."""
+    good, _ = recordings
+    out = tmp_path / "out"
+    batch.run_batch(good[:1], out, client=client, quiet=True, **RUN)
+    other = dict(RUN, config=dict(CONFIG, sensor_height=1.8, fusion={"method": "ema"}), motion=(4.0, None))
+    with pytest.raises(ValueError) as refused:
+        batch.run_batch(good[:1], out, client=client, resume=True, quiet=True, segment_lengths_m=[10.0], **other)
+    said = str(refused.value)
+    for name in ("config.sensor_height 1.73 there, 1.8 now", 'config.fusion.method "none" there, "ema" now',
+                 "motion [5.0, null] there, [4.0, null] now", "segment_lengths_m [10.0, 100.0] there, [10.0] now"):
+        assert name in said, said
+    assert said.count(" there, ") == 4 and "give the options it ran with to --resume it" in said
+    motion = tmp_path / "motion.csv"
+    motion.write_text("t,speed,yaw_rate\n0,5,0\n10,5,0\n")
+    batch.run_batch(good[1:2], tmp_path / "csv", client=client, quiet=True, **dict(RUN, motion=str(motion)))
+    motion.write_text("t,speed,yaw_rate\n0,6,0\n10,6,0\n")  # the same file, another motion
+    with pytest.raises(ValueError, match=r"\(motion \"file with sha256 [0-9a-f]{64}\" there, \"file with sha256"):
+        batch.run_batch(good[1:2], tmp_path / "csv", client=client, resume=True, quiet=True,
+                        **dict(RUN, motion=str(motion)))
+    monkeypatch.setattr(batch, "run_batch", functools.partial(batch.run_batch, client=client))
+    cli = [good[0], "-o", str(out), "--resume", "--sensor-height", "1.73", "--frame-rate", "10", "-q"]
+    assert batch.main(cli + ["--speed", "4"]) == 2  # a usage error, before anything runs
+    assert batch.main(cli + ["--speed", "5", "--workers", "1"]) == 0  # the same options: nothing left to do
+
+
+def kitti_drive(folder: Path, frames: int) -> str:
+    """A recording of ``frames`` KITTI frames: seq 00 frames 0-2 repeated (symlinks)."""
+    folder.mkdir(parents=True)
+    for k in range(frames):
+        (folder / f"{k:06d}.bin").symlink_to(SEQ00[k % len(SEQ00)])
+    return str(folder)
+
+
+def test_chunks_take_the_mounting_the_whole_recording_estimated(client, tmp_path):
+    """Without a sensor height each chunk estimated the mounting from its own first frame, so the answers depended
+    on --chunk-frames (700 of 1,200 KITTI lines differed). Now the chunks take the one the whole run estimates."""
+    drive_dir = kitti_drive(tmp_path / "drive", 8)
+    run = dict(RUN, config={"obstacles": {"enabled": False}})
+
+    def lines(chunk_frames):
+        out = tmp_path / f"out{chunk_frames}"
+        batch.run_batch([drive_dir], out, client=client, chunk_frames=chunk_frames, overlap_frames=1, quiet=True,
+                        **run)
+        return frames_of(out, "drive")
+
+    whole, chunked = lines(0), lines(3)  # chunks start at frames 0, 2 (seq 00's frame 2) and 5 (frame 2)
+    assert [r["frame"] for r in chunked] == list(range(8))
+    assert chunked == whole
+    frame0 = next(iter(drive.run([str(SEQ00[0])], rp.Config(), motion=(5.0, None)))).mounting["extrinsics"]
+    for row in chunked:
+        mounting = json.loads(row["line"])["mounting"]
+        assert mounting["source"] == "estimated" and mounting["extrinsics"] == pytest.approx(frame0, abs=1e-15)
+
+
+def test_chunks_keep_the_base_frame_the_whole_recording_settled_on(client, tmp_path):
+    """A first frame whose ground lies at the cloud's origin settles it: base-frame points, no later frame asked.
+    A chunk starting at a frame from a mounted sensor estimated a mounting of its own."""
+    drive_dir = Path(kitti_drive(tmp_path / "drive", 6))
+    points = rp.io.read(SEQ00[0])
+    points[:, 2] += 1.85  # the ground about at z = 0: a cloud in a base frame
+    (drive_dir / "000000.bin").unlink()
+    points.astype(np.float32).tofile(drive_dir / "000000.bin")
+    run = dict(RUN, config={"obstacles": {"enabled": False}})
+    outs = {k: tmp_path / f"out{k}" for k in (0, 2)}
+    for chunk_frames, out in outs.items():
+        batch.run_batch([str(drive_dir)], out, client=client, chunk_frames=chunk_frames, overlap_frames=1,
+                        quiet=True, **run)
+    chunked, whole = frames_of(outs[2], "drive"), frames_of(outs[0], "drive")
+    assert chunked == whole and len(whole) == 6
+    assert {json.loads(r["line"])["mounting"]["source"] for r in whole} == {"none"}
+
+
+def test_a_recording_that_fails_part_way_leaves_no_frames(client, recordings, tmp_path):
+    """Its first chunks' parts stayed in frames/, so `pd.read_parquet(OUT/frames)` mixed in a failed drive."""
+    import pandas as pd
+
+    good, _ = recordings
+    bad = Path(kitti_drive(tmp_path / "in" / "bad", 4))
+    (bad / "000004.bin").write_bytes(SEQ00[0].read_bytes()[:1001])  # the last chunk's frame: truncated
+    out = tmp_path / "out"
+    report = batch.run_batch([good[0], str(bad)], out, client=client, chunk_frames=2, overlap_frames=1, quiet=True,
+                             **RUN)
+    assert report["done"] == ["a"] and report["failed"] == ["bad"]
+    assert "000004.bin" in json.loads((out / "errors.jsonl").read_text())["error"]
+    assert not (out / "frames" / "recording=bad").exists()
+    frames = pd.read_parquet(out / "frames", columns=["recording", "frame"])
+    assert sorted(zip(frames["recording"].astype(str), frames["frame"])) == [("a", 0), ("a", 1), ("a", 2)]
+
+
+@pytest.mark.skipif(not (SHARED_DATA / "laserscan2d").is_dir(), reason="needs the shared data")
+def test_a_bag_without_point_clouds_is_an_error_line_not_the_end_of_the_batch(client, recordings, tmp_path):
+    good, _ = recordings
+    scans = SHARED_DATA / "laserscan2d" / "leg_tracker" / "demo_stationary_simple_environment.bag"
+    report = batch.run_batch([good[0], str(scans)], tmp_path / "out", client=client, quiet=True, **RUN)
+    assert report["done"] == ["a"] and report["failed"] == ["demo_stationary_simple_environment"]
+    (error,) = [json.loads(x) for x in (tmp_path / "out" / "errors.jsonl").read_text().splitlines()]
+    assert error["error"].startswith(f"ValueError: {scans}: no point clouds in this bag"), error
+
+
+@pytest.mark.parametrize("option, value, said", [
+    ("topic", "/points", "--topic applies to ROS bags and MCAP files only"),
+    ("sensor_model", "VLP-16", "--sensor-model applies to pcap recordings only"),
+    ("calibration", "vlp.yaml", "--calibration applies to pcap recordings only")])
+def test_an_option_for_other_inputs_is_a_usage_error(recordings, tmp_path, option, value, said):
+    """Refused before anything runs, naming the input (frame files had one error line each, exit 1)."""
+    good, _ = recordings
+    with pytest.raises(ValueError, match=f"^{good[0]}: {said}$"):
+        batch.run_batch(good[:1], tmp_path / "out", workers=1, quiet=True, **{option: value}, **RUN)
+    assert not (tmp_path / "out").exists()
+
+
+def test_origin_without_poses_is_a_usage_error(recordings, tmp_path):
+    """It failed every recording, each after it had been processed."""
+    good, _ = recordings
+    for motion_from in (None, "bag"):  # a bag's motion topics give no poses
+        with pytest.raises(ValueError, match=r"--origin 50.1,14.4 places poses on the map, and no option gives the "
+                                             r"frames poses: give --poses or --motion-from lidar"):
+            batch.run_batch(good[:1], tmp_path / "out", workers=1, quiet=True, geo_options={"origin": [50.1, 14.4]},
+                            **dict(RUN, motion_from=motion_from))
+    assert batch.main([good[0], "-o", str(tmp_path / "out"), "--speed", "5", "--origin", "50.1,14.4", "-q"]) == 2
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.fixture()
+def batch_cli(client, monkeypatch):
+    """`roadpreview batch ARGS` in this process, on the module's cluster; returns (status, summary.csv rows)."""
+    monkeypatch.setattr(batch, "run_batch", functools.partial(batch.run_batch, client=client))
+
+    def run(*args):
+        out = Path(args[args.index("-o") + 1])
+        status = batch.main([str(a) for a in args] + ["-q"])
+        table = out / "summary.csv"
+        return status, (table.read_text().splitlines()[1:] if table.exists() else [])
+    return run
+
+
+def test_the_beam_calibration_reaches_the_decoder(batch_cli, recordings, tmp_path):
+    """A surface calibration of the bundled KITTI frames: C C D without (median IRI 10.8 m/km), C C B with (6.2)."""
+    good, _ = recordings
+    beams = tmp_path / "beams.yaml"
+    rp.calibrate_beams([rp.io.read(f) for f in KITTI_FRAMES], method="surface",
+                       config=rp.Config(sensor_height=KITTI_SENSOR_HEIGHT)).save(str(beams))
+    common = (good[0], "--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--frame-rate", 10)
+    assert batch_cli(*common, "-o", tmp_path / "plain") == (0, ["a,3,Cx2 Dx1,10.766,5"])
+    assert batch_cli(*common, "--beam-calibration", beams, "-o", tmp_path / "beams") == (0, ["a,3,Bx1 Cx2,6.238,5"])
+
+
+def test_the_columns_reach_the_decoder(batch_cli, recordings, tmp_path):
+    """KITTI frames written with a fifth value per point (a ring number) read as the originals with --columns 5."""
+    good, _ = recordings
+    five = tmp_path / "five" / "a"
+    five.mkdir(parents=True)
+    for f in SEQ00:
+        points = rp.io.read(f)
+        np.column_stack([points, np.arange(len(points)) % 64]).astype(np.float32).tofile(five / f.name)
+    common = ("--speed", 5, "--sensor-height", KITTI_SENSOR_HEIGHT, "--frame-rate", 10)
+    four = batch_cli(good[0], *common, "-o", tmp_path / "four")
+    assert batch_cli(five, *common, "--columns", 5, "-o", tmp_path / "out5") == four
+    columns = [c for c in batch.FRAME_SCHEMA().names if c not in ("source", "line") and not c.startswith("timing")]
+    assert batch.read_frames(tmp_path / "out5", "a", columns) == batch.read_frames(tmp_path / "four", "a", columns)
+    assert batch_cli(five, *common, "-o", tmp_path / "out4")[1] != four[1]  # 20-byte points read as 16-byte ones
+
+
+def test_the_sensor_model_reaches_the_decoder(batch_cli, tmp_path):
+    """An HDL-32E capture decoded as a VLP-16 gives other points: the lines `roadpreview run` writes with it."""
+    pcap = VELODYNE / "hdl32_example.pcap"
+    assert batch_cli(pcap, "--speed", 5, "--sensor-model", "VLP-16", "-o", tmp_path / "out")[0] == 0
+    from paths import run_cli
+
+    expected = [json.loads(x) for x in run_cli("run", pcap, "--speed", 5, "--sensor-model", "VLP-16", "-q")
+                .stdout.splitlines()]
+    got = [json.loads(x) for x in batch.read_frames(tmp_path / "out", "hdl32_example").column("line").to_pylist()]
+    assert [x["points"] for x in got] == [x["points"] for x in expected] and len(got) == 7
+    assert [x["mounting"] for x in got] == [x["mounting"] for x in expected]
+    assert expected[0]["mounting"]["extrinsics"][2] == pytest.approx(0.96, abs=0.01)  # 2.17 m as an HDL-32E
+
+
+def test_the_velodyne_calibration_reaches_the_decoder(batch_cli, tmp_path):
+    cal = tmp_path / "vlp.yaml"
+    cal.write_text("lasers:\n" + "".join(f"  - {{laser_id: {min(k, 14)}, vert_correction: 0.0}}\n" for k in range(16)))
+    out = tmp_path / "out"
+    status, _ = batch_cli(VELODYNE / "velodyne_vlp16.pcap", "--speed", 5, "--sensor-model", "VLP-16",
+                          "--calibration", cal, "-o", out)
+    (error,) = [json.loads(x) for x in (out / "errors.jsonl").read_text().splitlines()]
+    assert status == 1 and "vlp.yaml" in error["error"] and "laser_id 14 listed twice" in error["error"], error
+
+
+def test_resume_removes_what_killed_writers_left(client, recordings, tmp_path):
+    good, _ = recordings
+    out = tmp_path / "out"
+    batch.run_batch(good[:1], out, client=client, quiet=True, **RUN)
+    stale = [out / "frames" / "recording=a" / ".part-00001.parquet.4242.tmp", out / "recordings" / "a" /
+             ".summary.json.4242.tmp", out / ".summary.csv.4242.tmp"]
+    for path in stale:
+        path.write_bytes(b"half")
+    kept = out / "recordings" / "a" / ".notes.tmp"  # not one of ours
+    kept.write_bytes(b"x")
+    batch.run_batch(good[:1], out, client=client, resume=True, quiet=True, **RUN)
+    assert [p.exists() for p in stale] == [False] * 3 and kept.exists()
+
+
+def test_ctrl_c_says_how_to_continue(recordings, tmp_path):
+    """Ctrl-C printed a KeyboardInterrupt traceback; now one line and status 130."""
+    good, _ = recordings
+    many = kitti_drive(tmp_path / "long", 300)
+    exe = Path(sys.executable).parent / "roadpreview"
+    proc = subprocess.Popen([str(exe), "batch", many, *good, "-o", str(tmp_path / "out"), "--workers", "1",
+                             "--speed", "5", "--sensor-height", "1.73", "--chunk-frames", "50"],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while not list((tmp_path / "out").glob("frames/*/part-*.parquet")) and time.monotonic() < deadline:
+        time.sleep(0.2)  # interrupted while tasks run
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: to the whole process group
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, stderr
+    assert f"roadpreview batch: interrupted; the same command with --resume continues it in {tmp_path / 'out'}" \
+        in stderr
