@@ -67,6 +67,45 @@ py::dict path_dict(const rp::WheelPaths& p) {
 
 rp::Config config_from(const std::string& json) { return rp::config_from_json(json, "config"); }
 
+namespace {
+
+py::array one_dimensional(const py::handle& obj, const char* what, const char* kinds, const char* expected) {
+    const py::array a = py::array::ensure(obj);
+    const std::string kind(1, a ? a.dtype().kind() : '?');
+    if (!a || kind.find_first_of(kinds) == std::string::npos)
+        throw py::type_error(std::string(what) + " must be " + expected + ", got " +
+                             (a ? "dtype " + py::str(a.dtype()).cast<std::string>() : std::string("no array")));
+    if (a.ndim() != 1)
+        throw py::value_error(std::string(what) + " must be 1-D, got shape " + py::str(a.attr("shape")).cast<std::string>());
+    return a;
+}
+
+}  // namespace
+
+std::vector<std::int32_t> int32_vector(const py::handle& obj, const char* what) {
+    const py::array a = one_dimensional(obj, what, "iu", "an array of integers");
+    const auto wide = a.dtype().kind() == 'u' ? py::array_t<std::uint64_t, py::array::forcecast>::ensure(a).cast<py::array>()
+                                              : py::array_t<std::int64_t, py::array::forcecast>::ensure(a).cast<py::array>();
+    std::vector<std::int32_t> out(static_cast<std::size_t>(a.size()));
+    for (py::ssize_t i = 0; i < a.size(); ++i) {
+        const bool is_unsigned = a.dtype().kind() == 'u';
+        const auto u = is_unsigned ? *static_cast<const std::uint64_t*>(wide.data(i)) : 0;
+        const auto v = is_unsigned ? static_cast<std::int64_t>(std::min<std::uint64_t>(u, INT64_MAX))
+                                   : *static_cast<const std::int64_t*>(wide.data(i));
+        if (v < INT32_MIN || v > INT32_MAX)
+            throw py::value_error(std::string(what) + " must fit in int32, got " + std::to_string(v) + " at " +
+                                  std::to_string(i));
+        out[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(v);
+    }
+    return out;
+}
+
+std::vector<std::uint8_t> bool_vector(const py::handle& obj, const char* what) {
+    const py::array a = one_dimensional(obj, what, "b", "a bool array");
+    const auto b = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(a);
+    return std::vector<std::uint8_t>(b.data(), b.data() + b.size());
+}
+
 std::vector<double> as_vector(const DoubleArray& a) {
     if (a.ndim() != 1) throw py::value_error("expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
     return std::vector<double>(a.data(), a.data() + a.size());

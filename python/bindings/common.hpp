@@ -80,3 +80,8 @@ py::object plane_array(const std::optional<rp::Plane>& p);
 py::dict path_dict(const rp::WheelPaths& p);
 rp::Config config_from(const std::string& json);
 std::vector<double> as_vector(const DoubleArray& a);
+/// A 1-D array of integers (any integer dtype, each value within int32), named `what` in errors: floats and bools
+/// are refused, not cast (−0.5 became label 0), and values beyond int32 are refused, not wrapped.
+std::vector<std::int32_t> int32_vector(const py::handle& a, const char* what);
+/// A 1-D bool array, named `what` in errors (0.5 is no mask value, and an (N, 1) array no mask of N).
+std::vector<std::uint8_t> bool_vector(const py::handle& a, const char* what);

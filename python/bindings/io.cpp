@@ -97,6 +97,12 @@ void bind_stereo(py::module_& m) {
     // (points dict, disparity) of one pair: files or arrays; a precomputed disparity (file or array) skips matching.
     m.def("stereo_points", [](py::object left, py::object right, const std::string& calib_path, py::object disparity,
                               const std::string& config_json) {
+        if (left.is_none() != right.is_none())
+            throw py::value_error("stereo_points: give both the left and the right image, or neither (with a disparity)");
+        if (left.is_none() && disparity.is_none())
+            throw py::value_error("stereo_points: give the left and right images, or a disparity");
+        if (py::isinstance<py::str>(left) != py::isinstance<py::str>(right))
+            throw py::type_error("stereo_points: left and right must both be file names or both be arrays");
         const rp::Config cfg = rp::config_from_json(config_json, "config");
         const rp::StereoCalibration calib = rp::read_stereo_calibration(calib_path);
         const rp::Extrinsics camera = rp::stereo_camera_pose(cfg, calib);
@@ -116,12 +122,13 @@ void bind_stereo(py::module_& m) {
         const auto rows = static_cast<int>(pair ? pair->left.rows() : d.rows());
         const int first_row = rp::first_road_row(calib, camera, rows, cfg.stereo);
         std::optional<rp::GreyImage> grey;
+        rp::StereoPoints p;
         {
             py::gil_scoped_release release;
             if (disparity.is_none()) d = rp::match_stereo(*pair, first_row, cfg.stereo);
             if (pair) grey = rp::GreyImage(pair->left.cast<float>() / 255.0f);
+            p = rp::disparity_to_points(d, first_row, calib, cfg.stereo, grey ? &*grey : nullptr);
         }
-        rp::StereoPoints p = rp::disparity_to_points(d, first_row, calib, cfg.stereo, grey ? &*grey : nullptr);
         return py::make_tuple(points_dict(std::move(p), first_row), disparity_array(d));
     });
     m.def("open_stereo", [](const std::vector<std::string>& left, const std::vector<std::string>& right,

@@ -13,9 +13,7 @@ rp::Profile profile_of(const DoubleArray& z, double ds,
     rp::Profile p;
     p.ds = ds;
     p.z = as_vector(z);
-    const auto c = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>::ensure(count);
-    if (!c || c.ndim() != 1) throw py::value_error("count must be a 1-D array of integers");
-    p.count.assign(c.data(), c.data() + c.size());
+    p.count = int32_vector(count, "count");
     p.spread = as_vector(DoubleArray::ensure(spread));
     if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
         throw py::value_error("z, count and spread must have one entry per bin");
@@ -26,21 +24,30 @@ void bind_obstacle_stages(py::module_& m) {
     m.def("cluster_labels", [](py::handle points, const std::string& config_json) {
         py::object holder;
         const rp::PointsView view = points_from(points, holder);
-        const std::vector<std::int32_t> labels = rp::cluster_labels(view, config_from(config_json).obstacles);
+        const rp::ObstaclesConfig cfg = config_from(config_json).obstacles;
+        std::vector<std::int32_t> labels;
+        {
+            py::gil_scoped_release release;
+            labels = rp::cluster_labels(view, cfg);
+        }
         return py::array_t<std::int32_t>(static_cast<py::ssize_t>(labels.size()), labels.data());
     }, "Euclidean cluster id of every point (-1: none)");
-    m.def("find_obstacles", [](py::handle base_points, py::array_t<bool, py::array::c_style | py::array::forcecast> ground_mask,
-                               std::array<double, 4> plane, const std::string& config_json) {
+    m.def("find_obstacles", [](py::handle base_points, py::handle ground_mask, std::array<double, 4> plane,
+                               const std::string& config_json) {
         py::object holder;
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
-        const std::vector<std::uint8_t> mask(ground_mask.data(), ground_mask.data() + ground_mask.size());
-        auto clustering = std::make_unique<rp::Clustering>(rp::find_obstacles(view, mask, plane, cfg.ground, cfg.obstacles));
+        const std::vector<std::uint8_t> mask = bool_vector(ground_mask, "ground_mask");
+        std::unique_ptr<rp::Clustering> clustering;
+        {
+            py::gil_scoped_release release;
+            clustering = std::make_unique<rp::Clustering>(rp::find_obstacles(view, mask, plane, cfg.ground, cfg.obstacles));
+        }
         const rp::Clustering& c = *clustering;
         py::object owner = owner_of(std::move(clustering));
         return py::make_tuple(ClustersRef{&c.clusters, owner}, view_of(c.label, owner));
     }, "(Obstacles, cluster id per point) of the non-ground ROI points among base-frame points");
-    m.def("wheel_obstacles", [](py::handle base_points, py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> label_array,
+    m.def("wheel_obstacles", [](py::handle base_points, py::handle label_array,
                                 const ClustersRef& obstacles,
                                 std::array<double, 4> plane, double speed, double yaw_rate, const std::string& wheel,
                                 const std::string& config_json) {
@@ -48,7 +55,7 @@ void bind_obstacle_stages(py::module_& m) {
         py::object holder;
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
-        const std::vector<std::int32_t> labels(label_array.data(), label_array.data() + label_array.size());
+        const std::vector<std::int32_t> labels = int32_vector(label_array, "labels");
         const rp::Clustering clustering{*obstacles.items, labels};
         const rp::Levelling L = rp::levelling_for(cfg.profile.level ? &plane : nullptr);
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
@@ -122,18 +129,23 @@ void bind_stages(py::module_& m) {
         if (!plane.is_none()) pl = plane.cast<std::array<double, 4>>();
         const rp::Levelling L = rp::levelling_for(cfg.profile.level && pl ? &*pl : nullptr);
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
-        const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
-        const std::vector<double> local_z = cfg.profile.level && cfg.profile.level_local && pl
-                                                ? rp::local_ground_heights(view, all, *pl, cfg.profile.level_band_m, paths)
-                                                : std::vector<double>{};
-        rp::WheelProfiles w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile, nullptr,
-                                                 local_z.empty() ? nullptr : &local_z);
-        for (rp::Profile* p : {&w.left, &w.right}) {
-            if (paths.status == rp::PathStatus::Stopped) {
-                p->roughness.reason = rp::RoughnessReason::VehicleStopped;
-                p->roughness.iri.reason = rp::IriReason::VehicleStopped;
-            } else {
-                rp::rate_profile(*p, cfg);
+        rp::WheelProfiles w;
+        {
+            py::gil_scoped_release release;
+            const std::vector<std::uint8_t> all(static_cast<std::size_t>(view.rows()), 1);
+            const std::vector<double> local_z =
+                cfg.profile.level && cfg.profile.level_local && pl
+                    ? rp::local_ground_heights(view, all, *pl, cfg.profile.level_band_m, paths)
+                    : std::vector<double>{};
+            w = rp::build_profiles(view, all, L, paths, cfg.tire_width, cfg.profile, nullptr,
+                                   local_z.empty() ? nullptr : &local_z);
+            for (rp::Profile* p : {&w.left, &w.right}) {
+                if (paths.status == rp::PathStatus::Stopped) {
+                    p->roughness.reason = rp::RoughnessReason::VehicleStopped;
+                    p->roughness.iri.reason = rp::IriReason::VehicleStopped;
+                } else {
+                    rp::rate_profile(*p, cfg);
+                }
             }
         }
         return py::make_tuple(std::move(w.left), std::move(w.right));
@@ -141,6 +153,9 @@ void bind_stages(py::module_& m) {
     m.def("level_points", [](py::handle points, std::array<double, 4> plane) {
         py::object holder;
         const rp::PointsView v = points_from(points, holder);
+        if (!(std::isfinite(plane[0]) && std::isfinite(plane[1]) && std::isfinite(plane[2])) ||
+            plane[0] * plane[0] + plane[1] * plane[1] + plane[2] * plane[2] == 0.0)
+            throw py::value_error("level_points: the plane's normal (a, b, c) must be finite and not zero");
         const rp::Levelling L = rp::levelling_for(&plane);
         py::array_t<double> out({v.rows(), Eigen::Index(3)});
         auto o = out.mutable_unchecked<2>();
@@ -178,26 +193,29 @@ void bind_stages(py::module_& m) {
                                   const std::string& config_json, py::object count_left, py::object spread_left,
                                   py::object count_right, py::object spread_right) {
         const rp::RoughnessConfig cfg = config_from(config_json).roughness;
-        const bool supported = !count_left.is_none() && !spread_left.is_none() && !count_right.is_none() && !spread_right.is_none();
+        const int given = !count_left.is_none() + !spread_left.is_none() + !count_right.is_none() + !spread_right.is_none();
+        if (given != 0 && given != 4)  // a count without its spread was ignored, silently
+            throw py::value_error("count_left and spread_left and count_right and spread_right: give all four or none");
+        const bool supported = given == 4;
         if (!supported) return rp::vehicle_roughness(as_vector(zl), as_vector(zr), ds, cfg);
         return rp::vehicle_roughness(profile_of(zl, ds, count_left, spread_left), profile_of(zr, ds, count_right, spread_right), cfg);
     }, py::arg("z_left"), py::arg("z_right"), py::arg("ds"), py::arg("config_json"), py::arg("count_left") = py::none(),
        py::arg("spread_left") = py::none(), py::arg("count_right") = py::none(), py::arg("spread_right") = py::none());
-    m.def("noise_psd", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count,
-                          DoubleArray spread, double ds) -> py::object {
-        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
-        const auto psd = rp::noise_psd(count.data(), spread.data(), static_cast<std::size_t>(count.size()), ds);
+    m.def("noise_psd", [](py::handle count_array, DoubleArray spread, double ds) -> py::object {
+        const std::vector<std::int32_t> count = int32_vector(count_array, "count");
+        if (count.size() != static_cast<std::size_t>(spread.size())) throw py::value_error("count and spread differ in length");
+        const auto psd = rp::noise_psd(count.data(), spread.data(), count.size(), ds);
         if (!psd) return py::none();
         return py::array_t<double>(static_cast<py::ssize_t>(psd->size()), psd->data());
     });
-    m.def("iri_noise", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count,
-                          DoubleArray spread, double ds) -> std::optional<double> {
-        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
-        return rp::iri_noise(count.data(), spread.data(), static_cast<std::size_t>(count.size()), ds);
+    m.def("iri_noise", [](py::handle count_array, DoubleArray spread, double ds) -> std::optional<double> {
+        const std::vector<std::int32_t> count = int32_vector(count_array, "count");
+        if (count.size() != static_cast<std::size_t>(spread.size())) throw py::value_error("count and spread differ in length");
+        return rp::iri_noise(count.data(), spread.data(), count.size(), ds);
     });
-    m.def("resolved_fraction", [](py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> count, double ds,
-                                  DoubleArray n) {
-        const std::vector<double> phi = rp::resolved_fraction(count.data(), static_cast<std::size_t>(count.size()), ds, as_vector(n));
+    m.def("resolved_fraction", [](py::handle count_array, double ds, DoubleArray n) {
+        const std::vector<std::int32_t> count = int32_vector(count_array, "count");
+        const std::vector<double> phi = rp::resolved_fraction(count.data(), count.size(), ds, as_vector(n));
         return py::array_t<double>(static_cast<py::ssize_t>(phi.size()), phi.data());
     });
     m.def("iri_rectified_slope", [](DoubleArray z, double ds) {

@@ -17,6 +17,7 @@ from typing import Iterable, Optional, Sequence, Union
 import numpy as np
 
 from ._native import core
+from .estimator import _int32_ids
 from .config import Config
 
 DEFAULT_UNNUMBERED_BEAMS = 64  #: a sensor whose frames do not number their points: the KITTI HDL-64E
@@ -28,15 +29,26 @@ def read_beam_calibration(path: Union[str, os.PathLike]):
     return core().read_beam_calibration(os.fspath(path))
 
 
-def _frame_arrays(frame):
-    """(points, beams or None, timestamp or None) of an rp.io frame, an (N, C) array or a (points, beams) pair."""
+def _frame_arrays(frame, k: int):
+    """(points, beams or None, timestamp or None) of frame k: an rp.io frame, an (N, C) array or a (points, beams)
+    pair; points of float32/64 and beams of integers within int32, one per point (a cast would turn int points
+    into a drive without ground, and wrap or truncate beam numbers into other beams)."""
     if isinstance(frame, tuple):
-        points, beams = frame
-        return np.asarray(points), (None if beams is None else np.asarray(beams, np.int32)), None
-    if hasattr(frame, "points"):
-        beams = np.asarray(frame.beams) if len(frame.beams) else None
-        return frame.points, beams, frame.timestamp
-    return np.asarray(frame), None, None
+        points, beams, timestamp = *frame, None
+    elif hasattr(frame, "points"):
+        points, beams, timestamp = frame.points, (frame.beams if len(frame.beams) else None), frame.timestamp
+    else:
+        points, beams, timestamp = frame, None, None
+    points = np.asarray(points)
+    if points.dtype.kind != "f" or points.dtype.itemsize not in (4, 8):
+        raise TypeError(f"calibrate_beams: frame {k}'s points must be float32 or float64, got {points.dtype}")
+    if beams is not None:
+        beams = np.asarray(beams)
+        if beams.dtype.kind not in "iu" or beams.shape != (len(points),):
+            raise TypeError(f"calibrate_beams: frame {k}'s beams must be one integer per point ({len(points)}), got "
+                            f"{beams.dtype} of shape {beams.shape}")
+        beams = _int32_ids(beams, f"calibrate_beams: frame {k}'s beams").astype(np.int32)
+    return points, beams, timestamp
 
 
 def _integrated_poses(times: list, speed: float, yaw_rate: float, frame_rate_hz: float) -> list:
@@ -70,10 +82,17 @@ def _frame_poses(arrays: list, poses: Optional[Sequence], speed: Optional[float]
         if speed is None:
             raise ValueError("calibrate_beams needs the motion: speed (and yaw_rate) or poses "
                              "(or method='surface', which needs none)")
+        for name, value in (("speed", speed), ("yaw_rate", yaw_rate), ("frame_rate_hz", frame_rate_hz)):
+            if not math.isfinite(float(value)):
+                raise ValueError(f"calibrate_beams: {name} must be finite, got {value}")
         poses = _integrated_poses([a[2] for a in arrays], float(speed), float(yaw_rate), frame_rate_hz)
     if len(poses) < len(arrays):
         raise ValueError(f"calibrate_beams: {len(poses)} poses for {len(arrays)} frames")
-    return [tuple(map(float, p[:3])) for p in poses[:len(arrays)]]
+    out = [tuple(map(float, p)) for p in poses[:len(arrays)]]
+    bad = next((k for k, p in enumerate(out) if len(p) < 3 or not all(map(math.isfinite, p[:3]))), None)
+    if bad is not None:
+        raise ValueError(f"calibrate_beams: pose {bad} must be three finite numbers (x, y, yaw), got {out[bad]}")
+    return [p[:3] for p in out]
 
 
 def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate: float = 0.0,
@@ -98,7 +117,7 @@ def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate
     if method not in ("motion", "surface"):
         raise ValueError(f"calibrate_beams: method must be 'motion' or 'surface', got {method!r}")
     info = getattr(frames, "info", None)
-    arrays = [_frame_arrays(f) for f in frames]
+    arrays = [_frame_arrays(f, k) for k, f in enumerate(frames)]
     if not arrays:
         raise core().CalibrationError("calibrate_beams: no frames given")
     beam_count = beam_count if beam_count is not None else _beam_count(arrays, info)

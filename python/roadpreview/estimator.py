@@ -84,6 +84,7 @@ class Estimator:
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
         error_groups, beams = _int32_ids(error_groups, "error_groups"), _int32_ids(beams, "beams")
+        range_variances = _float32_values(range_variances, "range_variances")
         result = self._impl.process(points, speed, yaw_rate, source, timestamp, yaw_rate_source, pose,
                                     range_variances, error_groups, beams)
         if not self._mounting_warned and result.plane is not None and result.mounting["disagrees"]:
@@ -94,6 +95,20 @@ class Estimator:
     def reset(self):
         """Forgets the fused map, the pose and the clock (temporal fusion); the frame counter keeps counting."""
         self._impl.reset()
+
+
+def _float32_values(values, name: str):
+    """``values`` (None passes) as an array the C++ core reads as float32: real numbers only (a complex part, a
+    bool or an object would be cast silently), none beyond float32's range (it would read as inf)."""
+    if values is None:
+        return None
+    values = np.asarray(values)
+    if values.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must hold real numbers, got dtype {values.dtype}")
+    finite = values[np.isfinite(values)] if values.dtype.kind == "f" else values
+    if finite.size and np.abs(finite).max() > np.finfo(np.float32).max:
+        raise ValueError(f"{name} must fit in float32, got {np.abs(finite).max():g}")
+    return values
 
 
 def _int32_ids(ids, name: str):

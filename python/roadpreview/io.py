@@ -158,7 +158,7 @@ def stereo_points(left, right, calib: PathLike, *, disparity=None, config=None) 
     left, right: image files (PNG, grey or colour, 8 or 16 bit) or 2-D uint8 grey arrays; None with ``disparity``.
     calib: KITTI ``calib.txt`` (P2/P3) or a YAML with fx, fy, cx, cy, baseline and optional extrinsics.
     disparity: a precomputed disparity, a 16-bit PNG (KITTI: disparity × 256) or a float (rows, columns) array in
-    px (≤ 0 or NaN invalid), used instead of matching. config: a :class:`roadpreview.Config`; its
+    px (≤ 0, infinite or NaN invalid), used instead of matching. config: a :class:`roadpreview.Config`; its
     sensor_height / extrinsics (else the calibration's extrinsics) pose the camera for the road rows.
     Bad input (unreadable images, a pair of different sizes, a calibration without P2/P3, a zero or negative
     baseline, an 8-bit image as disparity) raises RuntimeError or ValueError naming the file.

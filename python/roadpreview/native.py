@@ -108,13 +108,13 @@ def cluster_labels(xyz, cfg: Config | None = None):
 
 
 def find_obstacles(base_xyz, ground_mask, plane, cfg: Config | None = None):
-    return core().find_obstacles(np.asarray(base_xyz), np.asarray(ground_mask, dtype=bool), [float(v) for v in plane],
+    return core().find_obstacles(np.asarray(base_xyz), np.asarray(ground_mask), [float(v) for v in plane],
                                  _cfg(cfg))
 
 
 def wheel_obstacles(base_xyz, labels, obstacles, plane, path, wheel, speed, yaw_rate, cfg: Config | None = None):
     """``path`` is accepted for call-shape parity; the C++ side plans it again from speed and yaw rate."""
-    return core().wheel_obstacles(np.asarray(base_xyz), np.asarray(labels, dtype=np.int32), obstacles,
+    return core().wheel_obstacles(np.asarray(base_xyz), np.asarray(labels), obstacles,
                                   [float(v) for v in plane], float(speed), float(yaw_rate), wheel, _cfg(cfg))
 
 

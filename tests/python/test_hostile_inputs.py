@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import roadpreview as rp
-from paths import KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_META, OS1_128_PCAP, VELODYNE
+from paths import DATA, KITTI_FRAMES, KITTI_SENSOR_HEIGHT, OS1_128_META, OS1_128_PCAP, VELODYNE
 from paths import run_cli as run
 
 BILLION_LAUGHS = "a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
@@ -277,7 +277,6 @@ def test_python_api_misuse_is_an_error_naming_the_argument(tmp_path):
 
 
 def test_stereo_roadside_and_simulator_misuse_is_an_error_naming_the_input(tmp_path):
-    from paths import DATA
     from roadpreview import sim
 
     calib = DATA / "stereo" / "kitti_object_calib.txt"
@@ -326,3 +325,81 @@ def test_a_profile_of_forty_thousand_bins_costs_no_quadratic_memory():
     res = rp.Estimator(cfg).process(rp.io.read(KITTI_FRAMES[0]), 5.0, 0.0)
     assert len(res.left.z) == 40_000
     assert res.left.roughness.iso_class is not None or res.left.roughness.reason
+
+
+# --- the numpy boundary: what a cast would have turned into other numbers ---------------------------------------
+
+def test_stereo_points_without_images_or_disparity_is_an_error(tmp_path):
+    """Neither images nor a disparity once matched an empty pair (undefined behaviour: an empty optional read)."""
+    calib = DATA / "stereo" / "kitti_object_calib.txt"
+    with pytest.raises(ValueError, match="give the left and right images, or a disparity"):
+        rp.io.stereo_points(None, None, calib)
+    with pytest.raises(ValueError, match="give both the left and the right image, or neither"):
+        rp.io.stereo_points(None, np.zeros((375, 1242), np.uint8), calib, disparity=np.ones((375, 1242), np.float32))
+
+
+def test_an_infinite_disparity_is_no_point():
+    """+inf passed the 'd ≥ the far limit' test: a point at the camera's centre, stated exact (variance 0)."""
+    d = np.full((375, 1242), 20.0, np.float32)
+    d[300, 100] = np.inf
+    found = rp.io.stereo_points(None, None, DATA / "stereo" / "kitti_object_calib.txt", disparity=d, config=rp.Config(sensor_height=1.65))
+    assert 300 * 1242 + 100 not in set(found.pixels.tolist()) and 300 * 1242 + 101 in set(found.pixels.tolist())
+
+
+@pytest.mark.parametrize("variances, error, message", [
+    (np.full(5, 1 + 1j), TypeError, "range_variances must hold real numbers, got dtype complex128"),
+    (np.ones(5, bool), TypeError, "range_variances must hold real numbers, got dtype bool"),
+    (np.full(5, 1e308), ValueError, "range_variances must fit in float32, got 1e\\+308"),
+], ids=["complex", "bool", "beyond float32"])
+def test_range_variances_the_core_cannot_read_are_refused(variances, error, message):
+    points = np.array([[5.0, 0.0, -1.7], [6, 0, -1.7], [7, 1, -1.7], [8, -1, -1.7], [9, 0, -1.7]], np.float32)
+    with pytest.raises(error, match=message):
+        rp.Estimator(rp.Config(sensor_height=1.7)).process(points, 5.0, 0.0, range_variances=variances)
+
+
+def test_calibrate_beams_refuses_numbers_it_would_have_cast():
+    """Int points read as a drive without ground; beam numbers beyond int32 wrapped into other beams; NaN motion
+    read as 'too few beams on the ground'; (x, y) poses gave pybind's generic error."""
+    points = rp.io.read(KITTI_FRAMES[0])
+    beams = np.arange(len(points)) % 64
+    with pytest.raises(TypeError, match="frame 0's points must be float32 or float64, got int64"):
+        rp.calibrate_beams([(points.astype(np.int64), beams)], speed=5.0)
+    with pytest.raises(ValueError, match="frame 0's beams must fit in int32"):
+        rp.calibrate_beams([(points, beams + 2**33)], speed=5.0)
+    with pytest.raises(TypeError, match="frame 0's beams must be one integer per point"):
+        rp.calibrate_beams([(points, beams + 0.5)], speed=5.0)
+    with pytest.raises(ValueError, match="speed must be finite, got nan"):
+        rp.calibrate_beams([(points, beams)] * 2, speed=math.nan)
+    with pytest.raises(ValueError, match=r"pose 1 must be three finite numbers \(x, y, yaw\)"):
+        rp.calibrate_beams([(points, beams)] * 2, poses=[(0.0, 0.0, 0.0), (1.0, 0.0)])
+
+
+def test_stage_functions_refuse_what_a_cast_would_change():
+    """rp.native's stage functions cast: label −0.5 joined cluster 0, a count of 2⁴⁰ wrapped, a mask of 0.5 was
+    True and an (N, 1) mask a mask of N; a zero plane 'levelled' every point to z = 0; ds = 0 gave NaN spectra."""
+    base = np.array([[5.0, 0.0, 0.5], [5.1, 0.0, 0.5], [9.0, 1.0, 0.0]])
+    plane = [0.0, 0.0, 1.0, 0.0]
+    with pytest.raises(TypeError, match="ground_mask must be a bool array, got dtype float64"):
+        rp.native.find_obstacles(base, np.array([0.5, 0.0, 1.0]), plane)
+    with pytest.raises(ValueError, match=r"ground_mask must be 1-D, got shape \(3, 1\)"):
+        rp.native.find_obstacles(base, np.zeros((3, 1), bool), plane)
+    z = np.cumsum(np.random.default_rng(0).normal(0, 0.003, 200))
+    count, spread = np.full(200, 3, np.int64), np.full(200, 0.01)
+    with pytest.raises(ValueError, match="count must fit in int32, got 1099511627779 at 0"):
+        rp.native.analyze_roughness(z, 0.1, rp.Config(), count=count + 2**40, spread=spread)
+    with pytest.raises(ValueError, match=r"count must be 1-D, got shape \(2, 100\)"):
+        rp.native.noise_psd(count.reshape(2, 100), spread, 0.1)
+    with pytest.raises(TypeError, match="count must be an array of integers, got dtype float64"):
+        rp.native.resolved_fraction(count + 0.5, 0.1, np.array([0.1]))
+    with pytest.raises(ValueError, match="the plane's normal"):
+        rp.native.level_points(base, [0.0, 0.0, 0.0, 0.0])
+    for name, call in {"displacement_psd": lambda ds: rp.native.displacement_psd(z, ds),
+                       "roughness": lambda ds: rp.native.analyze_roughness(z, ds, rp.Config()),
+                       "noise_psd": lambda ds: rp.native.noise_psd(count, spread, ds),
+                       "resolved_fraction": lambda ds: rp.native.resolved_fraction(count, ds, np.array([0.1])),
+                       "profile_iri": lambda ds: rp.native.profile_iri(z, ds)}.items():
+        for ds in (0.0, -0.1, math.nan, math.inf):  # −0.1 gave negative spectra, 0 and NaN NaN ones
+            with pytest.raises(ValueError, match=f"{name}: the bin spacing ds must be a finite length > 0 m"):
+                call(ds)
+    with pytest.raises(ValueError, match=r"count_left and spread_left and count_right and spread_right: give all"):
+        rp.native.vehicle_roughness(z, z, 0.1, rp.Config(), count_left=count)

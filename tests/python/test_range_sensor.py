@@ -175,6 +175,27 @@ def test_the_python_api_refuses_what_the_cli_refuses(bench):
         rp.range_sensor.calibrate_distance([1000.0, np.nan, 3000.0], [0.1, 0.2, 0.3])
 
 
+@pytest.mark.parametrize("search_m, reference, message", [
+    (math.nan, None, r"the shift search must be in \(0, 100\] m, got nan m"),
+    (-1.0, None, r"the shift search must be in \(0, 100\] m, got -1 m"),
+    (1e308, None, r"the shift search must be in \(0, 100\] m, got 1e\+308 m"),
+    (0.5, "far", r"the reference profile spans 1e\+308 m; at most 1000 m"),
+    (0.5, "nan first", r"x and z be finite \(row 0\)"),
+], ids=["nan search", "negative search", "huge search", "reference 1e308 m long", "first reference height nan"])
+def test_offset_calibration_refuses_a_search_or_reference_it_cannot_use(bench, search_m, reference, message):
+    """A NaN or 1e308 m search aborted the process inside PCL, a negative one asked for an impossible vector, a
+    reference row 1e308 m away densified it without end (memory grew until killed), a NaN first height passed."""
+    (r0, m0), (r1, m1) = bench["runs"]
+    xz = bench["reference"].copy()
+    if reference == "far":
+        xz = np.vstack([xz, [1e308, 0.0]])
+    elif reference == "nan first":
+        xz[0, 1] = math.nan
+    with pytest.raises(RuntimeError if reference else ValueError, match=message):  # a reference: per sensor and run
+        rp.range_sensor.calibrate_offset([r0, r1], [m0, m1], bench["dir"] / "sensors.yaml", reference=xz,
+                                         search_m=search_m)
+
+
 def test_a_byte_order_mark_before_a_csv_header_is_no_part_of_it(bench, tmp_path):
     """A spreadsheet writes one before the first cell: the header "t,sensor,distance" was refused as not one."""
     readings, motion = bench["runs"][0]

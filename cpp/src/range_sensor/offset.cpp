@@ -14,6 +14,7 @@
 #include <pcl/registration/transformation_estimation_lm.h>
 #include <pcl/registration/warp_point_rigid.h>
 
+#include "core/text.hpp"
 #include "roadpreview/range_sensor/range_sensor.hpp"
 
 namespace roadpreview {
@@ -194,17 +195,36 @@ IcpFit icp_from(const Cloud::Ptr& source, const Cloud::Ptr& target, const pcl::s
     return fit;
 }
 
+// ICP starts over the guess ± the search: a search that is no distance, or beyond any sensor's reach, is a mistake.
+void check_search(double search_m) {
+    if (!(search_m > 0.0 && search_m <= 100.0))
+        throw std::invalid_argument("the shift search must be in (0, 100] m, got " + number_text(search_m) + " m");
+}
+
 }  // namespace
 
 RunShift register_run(const std::vector<double>& x_m, const std::vector<double>& z_m,
                       const std::vector<double>& ref_x_m, const std::vector<double>& ref_z_m, double guess_m,
                       double search_m, bool fit_tilt) {
+    // The reference sizes the work: it is densified to 0.5 mm.
+    constexpr double kMaxReferenceSpanM = 1000.0;
+    check_search(search_m);
+    if (!std::isfinite(guess_m)) throw std::invalid_argument("the shift's first guess must be finite");
     if (ref_x_m.size() < 2 || ref_x_m.size() != ref_z_m.size())
         throw std::invalid_argument("the reference profile needs 2 or more (x, z) points of equal count");
-    for (std::size_t i = 1; i < ref_x_m.size(); ++i)
-        if (!(ref_x_m[i] > ref_x_m[i - 1]) || !std::isfinite(ref_z_m[i]))
-            throw std::invalid_argument("the reference profile's x must increase and its z be finite (row "
+    for (std::size_t i = 0; i < ref_x_m.size(); ++i)
+        if (!std::isfinite(ref_x_m[i]) || !std::isfinite(ref_z_m[i]) || (i > 0 && !(ref_x_m[i] > ref_x_m[i - 1])))
+            throw std::invalid_argument("the reference profile's x must increase and its x and z be finite (row "
                 + std::to_string(i) + ")");
+    if (!(ref_x_m.back() - ref_x_m.front() <= kMaxReferenceSpanM))
+        throw std::invalid_argument("the reference profile spans " + number_text(ref_x_m.back() - ref_x_m.front()) +
+                                    " m; at most 1000 m (a bench track, or the map along a run)");
+    if (x_m.size() != z_m.size())
+        throw std::invalid_argument("a run's x and z differ in length (" + std::to_string(x_m.size()) + " and " +
+                                    std::to_string(z_m.size()) + ")");
+    for (std::size_t i = 0; i < x_m.size(); ++i)
+        if (!std::isfinite(x_m[i]) || !std::isfinite(z_m[i]))
+            throw std::invalid_argument("a run's sample " + std::to_string(i) + " is not finite");
     if (x_m.size() < 10) throw std::invalid_argument("a run needs at least 10 samples, got "
         + std::to_string(x_m.size()));
     const Reference ref{ref_x_m, ref_z_m};
@@ -340,6 +360,7 @@ double geometric_foot_m(const RangeSensor& s) { return s.x_m + s.height_m * std:
 RangeCalibration calibrate_offsets(const std::vector<RangeSensor>& layout, RangeCalibration cal,
                                    const std::vector<std::string>& run_paths, const std::vector<RangeMotion>& motions,
                                    const std::vector<std::vector<ReferenceProfile>>& references, double search_m) {
+    check_search(search_m);
     if (references.size() != 1 && references.size() != layout.size())
         throw std::runtime_error("give one set of reference profiles, or one per sensor");
     if (run_paths.size() != motions.size())

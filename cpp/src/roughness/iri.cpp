@@ -77,7 +77,7 @@ namespace {
 // when the profile is no longer than the average.
 template <class Visit>
 bool rectified_slopes(const double* z, std::size_t count, double ds, Visit&& visit) {
-    if (!(ds > 0.0)) throw std::invalid_argument("iri: ds must be > 0");
+    check_spacing(ds, "iri");
     const std::size_t k = moving_average_samples(ds);
     if (count <= k) return false;
     const auto a = std::min(static_cast<std::size_t>(std::lround(kInitLengthM / ds)), count - 1);
@@ -98,10 +98,11 @@ bool rectified_slopes(const double* z, std::size_t count, double ds, Visit&& vis
 void profile_iri(const std::vector<double>& z, double ds, const IriConfig& cfg, Iri& out) {
     clear(out);
     const auto [first, last] = longest_valid_stretch(z);
-    if (last == first) {
+    if (last == first) {  // an empty profile may have no spacing
         out.reason = IriReason::NoValidProfile;
         return;
     }
+    check_spacing(ds, "profile_iri");
     out.length_m = static_cast<double>(last - first - 1) * ds;
     if (out.length_m < cfg.min_length_m - 1e-9 || last - first <= moving_average_samples(ds)) {
         out.reason = IriReason::StretchTooShort;
@@ -145,7 +146,7 @@ double iri(const double* z, std::size_t count, double ds) {
 }
 
 std::optional<double> iri_noise(const std::int32_t* count, const double* spread, std::size_t bins, double ds) {
-    if (!(ds > 0.0)) throw std::invalid_argument("iri_noise: ds must be > 0");
+    check_spacing(ds, "iri_noise");
     RoughnessScratch s;
     return iri_noise(count, spread, bins, ds, s);
 }

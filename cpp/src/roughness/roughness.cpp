@@ -94,6 +94,7 @@ LogFit fit_log_line(const std::vector<double>& x, const std::vector<double>& y) 
 
 void displacement_psd(const double* z, std::size_t count, double ds, RoughnessScratch& s, Spectrum& sp) {
     if (count < 2) throw std::invalid_argument("displacement_psd needs at least 2 samples");
+    check_spacing(ds, "displacement_psd");
     std::vector<double>& x = s.detrended;
     detrend(z, count, x);
     const double N = static_cast<double>(count);
@@ -419,7 +420,8 @@ std::pair<std::size_t, std::size_t> longest_valid_stretch(const std::vector<doub
 
 namespace {
 RoughnessReason stretch_problem(std::size_t samples, double ds, const RoughnessConfig& cfg) {
-    if (samples == 0) return RoughnessReason::NoValidProfile;
+    if (samples == 0) return RoughnessReason::NoValidProfile;  // an empty profile may have no spacing
+    check_spacing(ds, "roughness");
     // One bin has no spectrum, however long it is (a ds_m as long as min_length_m)
     if (samples < 2 || static_cast<double>(samples) * ds < cfg.min_length_m - 1e-9)
         return RoughnessReason::StretchTooShort;

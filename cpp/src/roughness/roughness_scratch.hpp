@@ -6,17 +6,29 @@
 
 #include <complex>
 #include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include <unsupported/Eigen/FFT>
 
+#include "core/text.hpp"
 #include "roadpreview/profile/profile.hpp"
 #include "roadpreview/roughness/iri.hpp"
 #include "roadpreview/roughness/roughness.hpp"
 #include "roadpreview/roughness/support.hpp"
 
 namespace roadpreview {
+
+/// Throws, naming `where`, unless the bins' spacing ds is a finite length > 0 (0 divides by zero, a negative one
+/// gave negative spectra, and the stage functions take ds from their caller, not from a checked config).
+inline void check_spacing(double ds, const char* where) {
+    if (!(ds > 0.0 && ds < std::numeric_limits<double>::infinity()))
+        throw std::invalid_argument(std::string(where) + ": the bin spacing ds must be a finite length > 0 m, got " +
+                                    number_text(ds));
+}
 
 /// Bin j's height error as weights on (at most) two backed bins: itself, or its gap's two ends.
 struct Anchors {

@@ -240,6 +240,7 @@ std::optional<std::vector<double>> backed_variances(const std::int32_t* count, c
 
 std::optional<std::vector<double>> noise_psd(const std::int32_t* count, const double* spread, std::size_t bins,
                                              double ds) {
+    check_spacing(ds, "noise_psd");
     RoughnessScratch scratch;
     std::vector<double> psd;
     if (!noise_psd(count, spread, bins, ds, true, scratch, psd)) return std::nullopt;
@@ -248,6 +249,7 @@ std::optional<std::vector<double>> noise_psd(const std::int32_t* count, const do
 
 std::vector<double> resolved_fraction(const std::int32_t* count, std::size_t bins, double ds,
                                       const std::vector<double>& n) {
+    check_spacing(ds, "resolved_fraction");
     RoughnessScratch scratch;
     std::vector<double> phi;
     resolved_fraction(count, bins, ds, n, scratch, phi);

@@ -38,9 +38,12 @@ StereoPoints disparity_to_points(const DisparityImage& disparity, int first_row,
     const Eigen::Index tiles_per_row = (cols + tile_cols - 1) / tile_cols;
     StereoPoints out;
     const Eigen::Index first = std::clamp<Eigen::Index>(first_row, 0, rows);
+    // A usable disparity: finite (NaN compares false; +inf, a point at the camera's centre, is no measurement) and
+    // at least that of max_depth_m.
+    const auto usable = [&](double d) { return d >= min_disparity && d < INFINITY; };
     Eigen::Index valid = 0;
     for (Eigen::Index v = first; v < rows; ++v)
-        for (Eigen::Index u = 0; u < cols; ++u) valid += disparity(v, u) >= min_disparity;  // NaN compares false
+        for (Eigen::Index u = 0; u < cols; ++u) valid += usable(disparity(v, u));
     out.points.resize(valid, 4);
     out.range_variances.resize(static_cast<std::size_t>(valid));
     out.pixels.resize(static_cast<std::size_t>(valid));
@@ -49,7 +52,7 @@ StereoPoints disparity_to_points(const DisparityImage& disparity, int first_row,
     for (Eigen::Index v = first; v < rows; ++v) {
         for (Eigen::Index u = 0; u < cols; ++u) {
             const double d = disparity(v, u);
-            if (!(d >= min_disparity)) continue;
+            if (!usable(d)) continue;
             const double z = fb / d;
             const double right = (static_cast<double>(u) - calib.cx_px) * z / calib.fx_px;
             const double down = (static_cast<double>(v) - calib.cy_px) * z / calib.fy_px;
