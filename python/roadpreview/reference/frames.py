@@ -10,15 +10,16 @@ from ..config import Config
 
 
 def check_points(points) -> np.ndarray:
-    """Return ``points`` as an N×C float array (C ≥ 3); a wrong shape is a ValueError, a wrong dtype a TypeError."""
+    """Return ``points`` as an N×C float array (C ≥ 3) in native byte order; a wrong shape is a ValueError, a
+    wrong dtype a TypeError. float32 and float64 of either byte order are accepted (big-endian is converted)."""
     points = np.asarray(points)
     if points.ndim != 2:
         raise ValueError(f"points must be a 2-D N×C array (C >= 3), got shape {points.shape}")
     if points.shape[1] < 3:
         raise ValueError(f"points must have at least 3 columns (x, y, z), got shape {points.shape}")
-    if points.dtype not in (np.float32, np.float64):
+    if points.dtype.kind != "f" or points.dtype.itemsize not in (4, 8):
         raise TypeError(f"points must be float32 or float64, got dtype {points.dtype}")
-    return points
+    return points.astype(points.dtype.newbyteorder("="), copy=False)
 
 
 def check_per_point(values, points: np.ndarray, name: str) -> np.ndarray | None:
@@ -28,6 +29,20 @@ def check_per_point(values, points: np.ndarray, name: str) -> np.ndarray | None:
     if np.shape(values) != (len(points),):
         raise ValueError(f"{name} must have one entry per point ({len(points)}), got shape {np.shape(values)}")
     return np.asarray(values)
+
+
+def check_ids(values, points: np.ndarray, name: str) -> np.ndarray | None:
+    """``values`` (None passes) as one integer id per row of ``points``: other dtypes are a TypeError (a float
+    would be truncated), ids beyond int32 a ValueError (the C++ core's ids are int32)."""
+    values = check_per_point(values, points, name)
+    if values is None:
+        return None
+    if values.dtype.kind not in "iu":
+        raise TypeError(f"{name} must be an integer array, got dtype {values.dtype}")
+    int32 = np.iinfo(np.int32)
+    if values.size and (values.min() < int32.min or values.max() > int32.max):
+        raise ValueError(f"{name} must fit in int32, got values {values.min()}…{values.max()}")
+    return values
 
 
 def rotation_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:

@@ -17,7 +17,7 @@ from ..config import Config
 from .frames import check_points, to_base_frame
 from .ground import NO_GROUND, ground_model, roi_facing
 from .iri import vehicle_iri, wheel_iri
-from .path import check_motion, plan_path, wheel_y
+from .path import check_motion, finite_number, plan_path, wheel_y
 from .point_errors import point_errors
 from .profile import Profile, bin_count, fill_gaps, level_points, levelling_rotation, local_ground_model
 from .roughness import analyze_roughness, vehicle_from_wheels, vehicle_roughness
@@ -46,6 +46,22 @@ def integrate_motion(pose, speed: float, yaw_rate: float, dt: float) -> tuple[fl
     radius = speed / yaw_rate
     return x + radius * (math.sin(yaw + turn) - math.sin(yaw)), y + radius * (math.cos(yaw) - math.cos(yaw + turn)), \
         yaw + turn
+
+
+def check_timestamp_pose(timestamp, pose) -> tuple[Optional[float], Optional[tuple]]:
+    """(timestamp, pose) as a float and a tuple of three floats (None passes); a non-number timestamp is a
+    TypeError, a timestamp that is not finite or a pose that is not three finite numbers a ValueError."""
+    if timestamp is not None:
+        timestamp = finite_number(timestamp, "timestamp", TypeError)
+    if pose is not None:
+        try:
+            values = tuple(float(v) for v in pose)
+        except (TypeError, ValueError):
+            raise ValueError(f"pose must be (x, y, yaw), three finite numbers, got {pose!r:.60}") from None
+        if len(values) != 3 or not all(math.isfinite(v) for v in values):
+            raise ValueError(f"pose must be (x, y, yaw), three finite numbers, got {values}")
+        pose = values
+    return timestamp, pose
 
 
 @dataclass
@@ -114,7 +130,9 @@ class FusedMap:
         self.readout_ground = None
 
     def advance(self, speed, yaw_rate, timestamp=None, pose=None) -> Optional[str]:
-        """Moves to this frame's pose; returns why the map was reset, if it was."""
+        """Moves to this frame's pose; returns why the map was reset, if it was. A timestamp or pose that is not
+        finite is a ValueError that leaves the map as it was."""
+        timestamp, pose = check_timestamp_pose(timestamp, pose)  # before any change: a NaN would stay for good
         dt = 1.0 / self.cfg.fusion.frame_rate_hz if self.started else 0.0
         reset = None
         if timestamp is not None and self.last_time is not None:
@@ -128,7 +146,7 @@ class FusedMap:
                 dt = 0.0
         self.last_time = timestamp  # dt is t − t_prev of consecutive frames, both timestamped
         if pose is not None:
-            self.pose = tuple(pose)
+            self.pose = pose
         elif self.started:
             self.pose = integrate_motion(self.pose, speed, yaw_rate, dt)
         self.started = True
@@ -304,11 +322,12 @@ def process_fused(state: FusedMap, points, speed, yaw_rate, *, timestamp=None, p
     points = check_points(points)
     speed, yaw_rate = check_motion(speed, yaw_rate)
     path = plan_path(speed, yaw_rate, cfg)
+    # Every input is checked before the map moves: a bad frame leaves the state as it was.
+    base_xyz, finite = to_base_frame(points, cfg)
+    variances, groups = point_errors(points, base_xyz, finite, cfg, range_variances, error_groups, beams)
     reset = state.advance(speed, yaw_rate, timestamp, pose)
     status = {"method": cfg.fusion.method, "frames": state.fused, "coverage": 0.0, "frame_coverage": 0.0,
               "reset": reset, "pose": state.pose}
-    base_xyz, finite = to_base_frame(points, cfg)
-    variances, groups = point_errors(points, base_xyz, finite, cfg, range_variances, error_groups, beams)
     facing = roi_facing(cfg, speed) if path["status"] != "stopped" else cfg  # reversing looks behind
     model = ground_model(base_xyz, facing) if len(base_xyz) else None
     ground, plane = (model.mask, model.plane) if model else (None, None)

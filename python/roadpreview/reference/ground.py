@@ -40,8 +40,13 @@ def roi_facing(cfg: Config, direction: float) -> Config:
 
 
 def fit_plane(points_xyz) -> np.ndarray:
-    """PCA plane (a, b, c, d) with unit normal and c > 0 (c = 0 keeps the solver's sign)."""
+    """PCA plane (a, b, c, d) with unit normal and c > 0 (c = 0 keeps the solver's sign). Non-finite points are
+    a ValueError (not a DegenerateFit, which callers take as "no plane here")."""
     xyz = np.asarray(points_xyz, dtype=np.float64)[:, :3]
+    bad = ~np.isfinite(xyz).all(axis=1)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise ValueError(f"points_xyz must be finite, got {xyz[row].tolist()} in row {row}")
     if len(xyz) < 3:
         raise DegenerateFit(f"a plane needs at least 3 points, got {len(xyz)}")
     centre = xyz.mean(axis=0)

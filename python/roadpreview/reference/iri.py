@@ -10,7 +10,7 @@ import numpy as np
 
 from ..config import Config
 from .runs import NO_VALID_BIN, longest_valid_stretch
-from .support import noise_psd
+from .support import check_ds, noise_psd
 
 # Golden car per unit sprung mass (ASTM E1926): tyre and suspension stiffness (1/s²), damping (1/s), mass ratio.
 K1, K2, C, MU = 653.0, 63.3, 6.0, 0.15
@@ -62,6 +62,7 @@ def suspension_slope(z, ds: float) -> np.ndarray:
     the k-sample moving average; the car starts level with the profile's mean slope over its first 11 m,
     (z[a] − z[0])/(a·ds), a = the sample nearest to 11 m (or the last one)."""
     z = np.asarray(z, dtype=np.float64)
+    ds = check_ds(ds)
     k = moving_average_samples(ds)
     if len(z) <= k:
         return np.zeros(0)
@@ -89,6 +90,7 @@ def iri(z, ds: float) -> float:
 def profile_iri(z, ds: float, cfg: Config | None = None) -> Iri:
     """IRI over the longest valid stretch of a profile (NaN = missing), if it is at least iri.min_length_m."""
     cfg = cfg or Config()
+    ds = check_ds(ds)
     start, stop = longest_valid_stretch(z)
     if stop == start:
         return Iri(reason=NO_VALID_BIN)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config
+from .frames import check_per_point
 from .ground import height_above, roi_mask
 from .profile import arc_length, bin_count, level_points
 
@@ -190,9 +191,8 @@ def find_obstacles(base_xyz, ground_mask, plane, cfg: Config | None = None) -> t
     """Clusters of the non-ground ROI points among ``base_xyz`` and the cluster id per point (−1: none)."""
     cfg = cfg or Config()
     xyz = np.asarray(base_xyz, dtype=np.float64)[:, :3]
-    ground_mask = np.asarray(ground_mask, dtype=bool)
-    if len(ground_mask) != len(xyz):
-        raise ValueError(f"ground_mask has {len(ground_mask)} entries for {len(xyz)} points")
+    # The shape, not len(): an (N, 1) mask would broadcast against N-long masks into N × N.
+    ground_mask = check_per_point(ground_mask, xyz, "ground_mask").astype(bool)
     plane = np.asarray(plane, dtype=np.float64)
     candidates = np.flatnonzero(roi_mask(xyz, cfg) & ~ground_mask)
     labels = np.full(len(xyz), -1, dtype=np.int32)
@@ -229,9 +229,7 @@ def wheel_obstacles(base_xyz, labels, obstacles: Obstacles, plane, path: dict, w
     cfg = cfg or Config()
     if path["status"] == "stopped" or len(obstacles) == 0:
         return PathObstacles()
-    labels = np.asarray(labels)
-    if len(labels) != len(base_xyz):
-        raise ValueError(f"wheel_obstacles: {len(labels)} labels for {len(base_xyz)} points")
+    labels = check_per_point(labels, base_xyz, "labels")
     clustered = labels >= 0
     xyz = np.asarray(base_xyz, dtype=np.float64)[clustered, :3]
     ids = labels[clustered]
@@ -260,10 +258,15 @@ def blocked_bins(s_start, s_end, cfg: Config | None = None) -> np.ndarray:
     cfg = cfg or Config()
     count, ds, margin = bin_count(cfg), cfg.profile.ds_m, cfg.obstacles.safety_margin_m
     blocked = np.zeros(count, dtype=bool)
-    for start, end in zip(np.atleast_1d(s_start), np.atleast_1d(s_end)):
+    s_start, s_end = np.atleast_1d(s_start), np.atleast_1d(s_end)
+    if s_start.shape != s_end.shape:
+        raise ValueError(f"blocked_bins: s_start and s_end differ in shape: {s_start.shape} vs {s_end.shape}")
+    for start, end in zip(s_start, s_end):
         if not (np.isfinite(start) and np.isfinite(end) and start <= end):
             raise ValueError("blocked_bins: an obstacle needs finite s_start <= s_end")
-        first = int(np.clip(math.floor((start - margin) / ds), 0, count - 1))
-        last = int(np.clip(math.floor((end + margin) / ds), 0, count - 1))
+        # Clipped before the cast to int: (s ± margin)/ds overflows to ±inf for s near ±1e308.
+        with np.errstate(over="ignore"):
+            first = int(np.clip(np.floor((start - margin) / ds), 0, count - 1))
+            last = int(np.clip(np.floor((end + margin) / ds), 0, count - 1))
         blocked[first:last + 1] = True
     return blocked

@@ -7,18 +7,20 @@ import math
 from ..config import Config
 
 
+def finite_number(value, name: str, not_a_number: type = ValueError) -> float:
+    """``value`` as a float; `not_a_number` when it is none, ValueError when it is not finite."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise not_a_number(f"{name} must be a number, got {value!r:.60}") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {number}")
+    return number
+
+
 def check_motion(speed, yaw_rate) -> tuple[float, float]:
     """(V, ω) as floats; ValueError when either is not a finite number."""
-    values = []
-    for name, value in (("speed", speed), ("yaw_rate", yaw_rate)):
-        try:
-            value = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be a number, got {value!r}") from None
-        if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value}")
-        values.append(value)
-    return values[0], values[1]
+    return finite_number(speed, "speed"), finite_number(yaw_rate, "yaw_rate")
 
 
 def wheel_y(wheel: str, cfg: Config) -> float:

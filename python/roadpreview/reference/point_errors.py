@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..config import Config
-from .frames import check_per_point, sensor_origin
+from .frames import check_ids, check_per_point, sensor_origin
 from .stereo import height_variances
 
 
@@ -20,8 +20,8 @@ def point_errors(points, base_xyz, finite, cfg: Config, range_variances=None, er
     given (a point of a beam with σ = 0, or of an unknown beam < 0, is a group of its own: −1 − its row). With
     every σ = 0 the beams are not used."""
     range_variances = check_per_point(range_variances, points, "range_variances")
-    error_groups = check_per_point(error_groups, points, "error_groups")
-    beams = check_per_point(beams, points, "beams")
+    error_groups = check_ids(error_groups, points, "error_groups")
+    beams = check_ids(beams, points, "beams")
     listed = np.radians(np.asarray(cfg.profile.beam_sigmas_deg, dtype=float))
     others = math.radians(cfg.profile.beam_sigma_deg)
     counted = beams is not None and (others > 0 or bool(np.any(listed > 0)))

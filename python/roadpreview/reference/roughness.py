@@ -13,7 +13,7 @@ import numpy as np
 from ..config import Config
 from .iri import Iri
 from .runs import NO_VALID_BIN, longest_run, longest_valid_stretch
-from .support import Support
+from .support import Support, check_ds
 
 ISO_CLASSES = "ABCDEFGH"
 ISO_GEOMETRIC_MEANS = 1e-6 * 4.0 ** np.arange(2, 10)  # 16, 64, ..., 262144 (×10⁻⁶ m³)
@@ -82,6 +82,7 @@ def displacement_psd(x, ds: float) -> tuple[np.ndarray, np.ndarray]:
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1 or len(x) < 2 or not np.all(np.isfinite(x)):
         raise ValueError("displacement_psd needs a 1-D, all-finite stretch of at least 2 samples")
+    ds = check_ds(ds)
     count = len(x)
     window = periodic_hann(count)
     power_loss = np.mean(window**2)  # U
@@ -265,11 +266,24 @@ def _stretch_problem(count: int, ds: float, cfg: Config) -> Optional[str]:
     return None
 
 
+def _check_support(z: np.ndarray, count, spread, names: tuple[str, str]) -> None:
+    """ValueError unless ``count`` and ``spread`` are both None, or both hold one entry per bin of ``z``: one
+    alone would be ignored, a shorter one misread."""
+    if (count is None) != (spread is None):
+        raise ValueError(f"give both {names[0]} and {names[1]}, or neither")
+    for name, values in zip(names, (count, spread)):
+        if values is not None and np.shape(values) != z.shape:
+            raise ValueError(f"{name} must have one entry per bin of the profile {z.shape}, "
+                             f"got shape {np.shape(values)}")
+
+
 def analyze_roughness(z, ds: float, cfg: Config | None = None, *, count=None, spread=None) -> Roughness:
     """The whole of §4 for one profile (NaN = missing bin); noise-aware when the bins' point counts and height
-    spreads (the profile's ``count`` and ``spread``) are given."""
+    spreads (the profile's ``count`` and ``spread``, both or neither) are given."""
     cfg = cfg or Config()
     z = np.asarray(z, dtype=np.float64)
+    ds = check_ds(ds)
+    _check_support(z, count, spread, ("count", "spread"))
     start, stop = longest_valid_stretch(z)
     problem = _stretch_problem(stop - start, ds, cfg)
     if problem:
@@ -289,6 +303,9 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, 
         return Roughness(reason=NO_VALID_BIN)
     if z_left.shape != z_right.shape:
         raise ValueError(f"left and right profiles differ in shape: {z_left.shape} vs {z_right.shape}")
+    ds = check_ds(ds)
+    _check_support(z_left, count_left, spread_left, ("count_left", "spread_left"))
+    _check_support(z_right, count_right, spread_right, ("count_right", "spread_right"))
     start, stop = longest_run(~np.isnan(z_left) & ~np.isnan(z_right))
     problem = _stretch_problem(stop - start, ds, cfg)
     if problem:

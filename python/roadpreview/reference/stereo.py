@@ -51,14 +51,15 @@ def first_road_row(calib: dict, rows: int, cfg: Config) -> int:
 
 def disparity_to_points(disparity, first_row: int, calib: dict, stereo: StereoConfig | None = None):
     """(points (N, 3) camera frame, range variances (N,) m², pixel indices (N,)) of the valid pixels of rows
-    first_row … nearer than stereo.max_depth_m, row by row. Range variance: σ_z = z²·σ_d/(fx·B) along the axis,
+    first_row … nearer than stereo.max_depth_m, row by row: a finite disparity d ≥ fx·B/max_depth_m (zero,
+    negative, infinite and NaN disparities are invalid). Range variance: σ_z = z²·σ_d/(fx·B) along the axis,
     times r/z along the ray."""
     stereo = stereo or StereoConfig()
     d = np.asarray(disparity, dtype=np.float64)
     fb = calib["fx"] * calib["baseline"]
     v, u = np.mgrid[0:d.shape[0], 0:d.shape[1]]
-    with np.errstate(invalid="ignore"):
-        valid = (v >= first_row) & (d >= fb / stereo.max_depth_m)
+    with np.errstate(invalid="ignore"):  # d = ∞ would be a point at the camera with a NaN variance
+        valid = (v >= first_row) & np.isfinite(d) & (d >= fb / stereo.max_depth_m)
     z = fb / d[valid]
     right = (u[valid] - calib["cx"]) * z / calib["fx"]
     down = (v[valid] - calib["cy"]) * z / calib["fy"]

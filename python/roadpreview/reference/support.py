@@ -16,6 +16,13 @@ MEDIAN_VARIANCE_FACTOR = math.pi / 2
 NYQUIST_TOLERANCE = 1e-9  # relative: a frequency on an interval's Nyquist frequency is resolved
 
 
+def check_ds(ds) -> float:
+    """The bin length ``ds`` (m) as a float; ValueError unless finite and > 0 (0 divides by zero, a negative ds
+    gives negative PSDs)."""
+    ds = float(ds)
+    if not (math.isfinite(ds) and ds > 0):
+        raise ValueError(f"ds must be finite and > 0 m, got {ds}")
+    return ds
 
 
 def pooled_variances(count, spread, band, max_spread_factor: float = np.inf, min_bins: int = 1) -> Optional[np.ndarray]:
@@ -98,6 +105,7 @@ def noise_psd(count, spread, ds: float, windowed: bool = True) -> Optional[np.nd
     errors of the backed bins, carried into the gaps by the linear interpolation, windowed like the profile
     (periodic Hann; the detrend is neglected), or not at all (``windowed`` false: the errors' power averaged over
     the stretch, which the IRI's noise reads). None when the bin variances are unknown."""
+    ds = check_ds(ds)
     variance = backed_variances(count, spread)
     if variance is None:
         return None
@@ -136,7 +144,7 @@ def resolved_fraction(count, ds: float, n: np.ndarray) -> np.ndarray:
     the stretch. Where points lie g apart and the profile is linear between them, a wave of frequency n keeps
     the amplitude sinc²(n·g) of linear interpolation (sinc x = sin πx / πx) up to the Nyquist frequency 1/(2g),
     and nothing is resolved above it."""
-    spacing = interval_spacing(count, ds)
+    spacing = interval_spacing(count, check_ds(ds))
     window_sq = (0.5 * (1 - np.cos(2 * np.pi * np.arange(len(spacing)) / len(spacing)))) ** 2
     x = np.asarray(n, dtype=float)[:, None] * spacing[None, :]
     kept = np.where(x <= 0.5 * (1 + NYQUIST_TOLERANCE), np.sinc(x) ** 4, 0.0)
