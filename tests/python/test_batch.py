@@ -271,15 +271,15 @@ def test_row_groups_are_bounded_by_frames_and_by_bytes(tmp_path, monkeypatch):
 
     batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "a"))
     assert groups(tmp_path / "a") == [9]  # 9 KITTI lines are far below both bounds
-    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 4)
+    monkeypatch.setattr(batch.chunks, "ROW_GROUP_FRAMES", 4)
     batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "b"))
     assert groups(tmp_path / "b") == [4, 4, 1]
-    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 3)  # no empty group after the last full one
+    monkeypatch.setattr(batch.chunks, "ROW_GROUP_FRAMES", 3)  # no empty group after the last full one
     batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "e"))
     assert groups(tmp_path / "e") == [3, 3, 3]
-    monkeypatch.setattr(batch, "ROW_GROUP_FRAMES", 128)
+    monkeypatch.setattr(batch.chunks, "ROW_GROUP_FRAMES", 128)
     line_bytes = len(batch.read_frames(tmp_path / "a", "d", ["line"]).column("line")[0].as_py())
-    monkeypatch.setattr(batch, "ROW_GROUP_BYTES", 2 * line_bytes)  # lines differ a little: 2 or 3 frames a group
+    monkeypatch.setattr(batch.chunks, "ROW_GROUP_BYTES", 2 * line_bytes)  # lines differ a little: 2 or 3 frames a group
     batch.process_chunk("d", [str(folder)], batch.Chunk(0, 0, 9, 0), dict(RUN, config=config), str(tmp_path / "c"))
     sizes = groups(tmp_path / "c")
     assert sum(sizes) == 9 and len(sizes) >= 3 and max(sizes) <= 3
@@ -306,7 +306,7 @@ def test_resume_with_other_options_is_refused_naming_them(client, recordings, tm
     with pytest.raises(ValueError, match=r"\(motion \"file with sha256 [0-9a-f]{64}\" there, \"file with sha256"):
         batch.run_batch(good[1:2], tmp_path / "csv", client=client, resume=True, quiet=True,
                         **dict(RUN, motion=str(motion)))
-    monkeypatch.setattr(batch, "run_batch", functools.partial(batch.run_batch, client=client))
+    monkeypatch.setattr(batch.cli, "run_batch", functools.partial(batch.run_batch, client=client))
     cli = [good[0], "-o", str(out), "--resume", "--sensor-height", "1.73", "--frame-rate", "10", "-q"]
     assert batch.main(cli + ["--speed", "4"]) == 2  # a usage error, before anything runs
     assert batch.main(cli + ["--speed", "5", "--workers", "1"]) == 0  # the same options: nothing left to do
@@ -413,7 +413,7 @@ def test_origin_without_poses_is_a_usage_error(recordings, tmp_path):
 @pytest.fixture()
 def batch_cli(client, monkeypatch):
     """`roadpreview batch ARGS` in this process, on the module's cluster; returns (status, summary.csv rows)."""
-    monkeypatch.setattr(batch, "run_batch", functools.partial(batch.run_batch, client=client))
+    monkeypatch.setattr(batch.cli, "run_batch", functools.partial(batch.run_batch, client=client))
 
     def run(*args):
         out = Path(args[args.index("-o") + 1])
