@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -103,7 +104,10 @@ std::vector<rs::LaserScan> read_input(const Input& in, const RoadsideOptions& o,
     } else if (ends_with(p, ".json")) {
         scans = rs::scans_from_telegrams(rs::read_sick_json(p), o.skip_bad, counts);
     } else if (ends_with(p, ".pcap") || ends_with(p, ".pcapng")) {
-        scans = rs::scans_from_telegrams(rs::read_sick_pcap(p, o.sensor_port), o.skip_bad, counts);
+        std::string truncated;  // with --skip-bad, the telegrams before a break are read and the break noted
+        scans = rs::scans_from_telegrams(rs::read_sick_pcap(p, o.sensor_port, o.skip_bad ? &truncated : nullptr),
+                                         o.skip_bad, counts);
+        if (!truncated.empty() && note) *note = truncated;
     } else if (ends_with(p, ".log") || ends_with(p, ".log.gz") || ends_with(p, ".clf") || ends_with(p, ".clf.gz")) {
         bool missing = false;
         scans = rs::read_carmen_log(p, o.carmen_rate_hz, 0.0, &missing);
@@ -132,6 +136,22 @@ std::string why_no_scans(const Input& in, const rs::SickDecodeCounts& counts, in
     return p + ": no scans";
 }
 
+// A file's scans of one scanner should come in time order; the run merges every file's scans by time, which would
+// take a restamped scan (0.5 s back) elsewhere in the sequence unsaid.
+void warn_time_steps_back(const std::string& path, const std::vector<rs::LaserScan>& scans) {
+    std::map<int, double> last;  // per scanner
+    long long back = 0;
+    double most = 0.0;
+    for (const auto& s : scans) {
+        const auto it = last.find(s.scanner);
+        if (it != last.end() && s.time_s < it->second) ++back, most = std::max(most, it->second - s.time_s);
+        last[s.scanner] = it != last.end() ? std::max(it->second, s.time_s) : s.time_s;
+    }
+    if (back > 0)
+        std::fprintf(stderr, "roadpreview: warning: %s: %lld scans are timed before a scan they follow (by up to "
+                     "%.3g s); the run takes every scan in time order\n", path.c_str(), back, most);
+}
+
 std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const RoadsideOptions& o, bool quiet,
                                     std::vector<std::string>* empty = nullptr) {
     std::vector<rs::LaserScan> all;
@@ -146,6 +166,7 @@ std::vector<rs::LaserScan> read_all(const std::vector<Input>& inputs, const Road
                          static_cast<long long>(counts.scans), static_cast<long long>(counts.other),
                          static_cast<long long>(counts.bad), static_cast<long long>(counts.repeated));
         if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
+        warn_time_steps_back(in.path, scans);
         all.insert(all.end(), std::make_move_iterator(scans.begin()), std::make_move_iterator(scans.end()));
     }
     return all;
@@ -271,33 +292,52 @@ int run(const RoadsideOptions& o) {
     return 0;
 }
 
+// One scanner's scans of a file: layout, time span and rate, counters, ranges.
+void describe_scans(const std::vector<const rs::LaserScan*>& scans) {
+    const rs::LaserScan& f = *scans.front();
+    const double deg = 180.0 / 3.14159265358979323846;
+    std::printf("  beams %zu, angles %.4f° to %.4f° in %.4f° steps (scanner frame, 0° ahead), intensities %s\n",
+                f.ranges_m.size(), f.start_angle_rad * deg, f.angle_rad(f.ranges_m.size() - 1) * deg, f.step_rad * deg,
+                f.intensities.empty() ? "no" : "yes");
+    const auto [first, last] = std::minmax_element(scans.begin(), scans.end(),
+                                                   [](const auto* a, const auto* b) { return a->time_s < b->time_s; });
+    const double t0 = (*first)->time_s, t1 = (*last)->time_s;
+    std::printf("  time %.3f to %.3f s (%.3f s)", t0, t1, t1 - t0);
+    if (scans.size() > 1 && t1 > t0) std::printf(", %.2f Hz", static_cast<double>(scans.size() - 1) / (t1 - t0));
+    std::printf("\n");
+    if (f.counter >= 0)
+        std::printf("  scan counter %lld to %lld\n", static_cast<long long>(f.counter),
+                    static_cast<long long>(scans.back()->counter));
+    float lo = INFINITY, hi = 0.0f;
+    long long valid = 0, total = 0;
+    for (const auto* s : scans)
+        for (float r : s->ranges_m) {
+            ++total;
+            if (std::isfinite(r)) ++valid, lo = std::min(lo, r), hi = std::max(hi, r);
+        }
+    std::printf("  ranges %.3f to %.3f m, %lld of %lld beams with a return\n", valid ? lo : 0.0f, hi, valid, total);
+}
+
+// What each file holds, per scanner (a CSV may hold several): 1 when a file holds no scan, and why.
 int info(const RoadsideOptions& o) {
+    int status = 0;
     for (const auto& in : resolve_inputs(o.inputs, nullptr)) {
-        RoadsideOptions quiet = o;
-        const auto scans = read_all({in}, quiet, false);
+        std::vector<std::string> empty;
+        const auto scans = read_all({in}, o, false, &empty);
         std::printf("%s: %zu scans\n", in.path.c_str(), scans.size());
-        if (scans.empty()) continue;
-        const auto& f = scans.front();
-        const double deg = 180.0 / 3.14159265358979323846;
-        std::printf("  beams %zu, angles %.4f° to %.4f° in %.4f° steps (scanner frame, 0° ahead), intensities %s\n",
-                    f.ranges_m.size(), f.start_angle_rad * deg, f.angle_rad(f.ranges_m.size() - 1) * deg,
-                    f.step_rad * deg, f.intensities.empty() ? "no" : "yes");
-        std::printf("  time %.3f to %.3f s (%.3f s)", f.time_s, scans.back().time_s, scans.back().time_s - f.time_s);
-        if (scans.size() > 1)
-            std::printf(", %.2f Hz", static_cast<double>(scans.size() - 1) / (scans.back().time_s - f.time_s));
-        std::printf("\n");
-        if (f.counter >= 0) std::printf("  scan counter %lld to %lld\n", static_cast<long long>(f.counter),
-                                        static_cast<long long>(scans.back().counter));
-        float lo = INFINITY, hi = 0.0f;
-        long long valid = 0, total = 0;
-        for (const auto& s : scans)
-            for (float r : s.ranges_m) {
-                ++total;
-                if (std::isfinite(r)) ++valid, lo = std::min(lo, r), hi = std::max(hi, r);
-            }
-        std::printf("  ranges %.3f to %.3f m, %lld of %lld beams with a return\n", valid ? lo : 0.0f, hi, valid, total);
+        if (scans.empty()) {
+            std::fprintf(stderr, "roadpreview: %s\n", empty.empty() ? (in.path + ": no scans").c_str() : empty[0].c_str());
+            status = 1;
+            continue;
+        }
+        std::map<int, std::vector<const rs::LaserScan*>> by_scanner;
+        for (const auto& s : scans) by_scanner[s.scanner].push_back(&s);
+        for (const auto& [scanner, of_one] : by_scanner) {
+            if (by_scanner.size() > 1) std::printf(" scanner %d: %zu scans\n", scanner, of_one.size());
+            describe_scans(of_one);
+        }
     }
-    return 0;
+    return status;
 }
 
 // Scanner 2 (or the second input's scanner) registered onto the first from a static scene: prints the pose.
@@ -319,13 +359,19 @@ int extrinsics(const RoadsideOptions& o) {
     const auto& moving = site.scanners[static_cast<std::size_t>(b)];
     const rs::ExtrinsicsResult r = rs::register_scanners(scans[0], fixed.pose, scans[1], moving.pose, o.max_distance_m);
     const double deg = 180.0 / 3.14159265358979323846;
-    std::fprintf(stderr, "%s onto %s: %s, fitness %.4f m² (RMS %.3f m), moved by (%.3f, %.3f) m and %.3f°\n",
-                 moving.name.c_str(), fixed.name.c_str(), r.converged ? "converged" : "NOT converged", r.fitness_m2,
-                 std::sqrt(r.fitness_m2), r.pose.x_m - moving.pose.x_m, r.pose.y_m - moving.pose.y_m,
-                 (r.pose.yaw_rad - moving.pose.yaw_rad) * deg);
+    if (!r.converged) {  // no site entry to paste: the one printed would be the guess, or ICP's last wrong step
+        char fitness[64] = "no point pairs within --max-distance";  // PCL's fitness is then DBL_MAX
+        if (r.fitness_m2 < 1e300) std::snprintf(fitness, sizeof fitness, "fitness %.4g m²", r.fitness_m2);
+        throw std::runtime_error(moving.name + " onto " + fixed.name + ": ICP did not converge (" + fitness +
+                                 "): the scans share too little of the scene within --max-distance, or the site "
+                                 "poses are too far off to start from");
+    }
+    std::fprintf(stderr, "%s onto %s: converged, fitness %.4f m² (RMS %.3f m), moved by (%.3f, %.3f) m and %.3f°\n",
+                 moving.name.c_str(), fixed.name.c_str(), r.fitness_m2, std::sqrt(r.fitness_m2),
+                 r.pose.x_m - moving.pose.x_m, r.pose.y_m - moving.pose.y_m, (r.pose.yaw_rad - moving.pose.yaw_rad) * deg);
     std::printf("- {name: %s, x_m: %.4f, y_m: %.4f, yaw_deg: %.4f, time_offset_s: %g}\n", moving.name.c_str(),
                 r.pose.x_m, r.pose.y_m, r.pose.yaw_rad * deg, moving.time_offset_s);
-    return r.converged ? 0 : 1;
+    return 0;
 }
 
 }  // namespace

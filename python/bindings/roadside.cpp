@@ -163,7 +163,12 @@ void bind_roadside(py::module_& parent) {
         return scan_list(rs::scans_from_telegrams(rs::read_sick_json(path), skip_bad));
     }, py::arg("path"), py::arg("skip_bad") = false);
     m.def("read_sick_pcap", [](const std::string& path, int port, bool skip_bad) {
-        return scan_list(rs::scans_from_telegrams(rs::read_sick_pcap(path, port), skip_bad));
+        std::string truncated;  // with skip_bad, the telegrams before a break are read and the break warned of
+        auto scans = scan_list(rs::scans_from_telegrams(rs::read_sick_pcap(path, port, skip_bad ? &truncated : nullptr),
+                                                        skip_bad));
+        if (!truncated.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, truncated.c_str(), 1) != 0)
+            throw py::error_already_set();
+        return scans;
     }, py::arg("path"), py::arg("sensor_port") = 2112, py::arg("skip_bad") = false);
     m.def("read_carmen_log", [](const std::string& path, double rate_hz) {
         bool timestamps_missing = false;

@@ -46,7 +46,7 @@ class BagFrame:
 
 
 @contextmanager
-def _reader(paths: Sequence[str]):
+def bag_reader(paths: Sequence[str]):
     """An open rosbags AnyReader (ROS 1 bag, ROS 2 bag with SQLite or MCAP storage); unreadable files raise
     RuntimeError naming the file."""
     from rosbags.highlevel import AnyReader
@@ -69,7 +69,7 @@ def _reader(paths: Sequence[str]):
 def topics(path) -> list[dict]:
     """Every topic of a bag: name, message type, message count."""
     paths = _paths(path)
-    with _reader(paths) as reader:
+    with bag_reader(paths) as reader:
         counts: dict = {}
         for c in reader.connections:
             entry = counts.setdefault(c.topic, {"topic": c.topic, "type": c.msgtype, "messages": 0})
@@ -160,7 +160,7 @@ class BagSource:
         return self._clouds() if self.kind == "cloud" else self._ouster_frames()
 
     def _clouds(self):
-        with _reader(self.paths) as reader:
+        with bag_reader(self.paths) as reader:
             conns = [c for c in reader.connections if c.topic == self.topic]
             for k, (c, t_ns, raw) in enumerate(reader.messages(connections=conns)):
                 msg = reader.deserialize(raw, c.msgtype)
@@ -171,7 +171,7 @@ class BagSource:
     def _ouster_frames(self):
         imu_topics = {t["topic"] for t in self.info["topics"]
                       if t["type"] in OUSTER_PACKET_TYPES and "imu" in t["topic"]}
-        with _reader(self.paths) as reader:
+        with bag_reader(self.paths) as reader:
             conns = [c for c in reader.connections if c.topic == self.topic or c.topic in imu_topics]
             for c, t_ns, raw in reader.messages(connections=conns):
                 buf = bytes(reader.deserialize(raw, c.msgtype).buf)
@@ -192,7 +192,7 @@ def _ouster_decoder(paths: list[str], available: list[dict]):
     meta_topics = [t["topic"] for t in available if t["type"] == STRING and "metadata" in t["topic"]]
     if not meta_topics:
         raise ValueError(f"{paths[0]}: Ouster packets but no metadata topic (std_msgs/String named *metadata*)")
-    with _reader(paths) as reader:
+    with bag_reader(paths) as reader:
         conns = [c for c in reader.connections if c.topic == meta_topics[0]]
         for c, _, raw in reader.messages(connections=conns):
             text = reader.deserialize(raw, c.msgtype).data
@@ -231,7 +231,7 @@ def motion_table(inputs, topic: Optional[str] = None, speed_mps: Optional[float]
     if kind == IMU and speed_mps is None:
         raise ValueError(f"{paths[0]}: {chosen} gives the yaw rate only: give the speed too")
     t, v, w = [], [], []
-    with _reader(paths) as reader:
+    with bag_reader(paths) as reader:
         for c, _, raw in reader.messages(connections=[c for c in reader.connections if c.topic == chosen]):
             msg = reader.deserialize(raw, c.msgtype)
             t.append(stamp_s(msg.header))

@@ -21,6 +21,7 @@ import csv
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sysconfig
@@ -73,14 +74,14 @@ def read_scans(path: PathLike, scanner: Optional[int] = None, rate_hz: Optional[
 def read_rosbag_scans(path: PathLike, topic: Optional[str] = None, scanner: int = 0) -> list[dict]:
     """sensor_msgs/LaserScan messages of a ROS 1 bag, a ROS 2 bag (folder) or MCAP, with the `rosbags` package.
     Time: the message header's stamp. Ranges outside [range_min, range_max] or not finite are no return."""
-    from rosbags.highlevel import AnyReader  # optional dependency: pip install roadpreview[roadside]
+    from .io_bags import bag_reader  # the rosbags package, optional: pip install roadpreview[roadside]
 
     out = []
-    with AnyReader([Path(path)]) as reader:
+    with bag_reader([os.fspath(path)]) as reader:  # an unreadable file: RuntimeError naming it
         conns = [c for c in reader.connections if c.msgtype.endswith("LaserScan") and (topic is None or c.topic == topic)]
         if not conns:
             raise ValueError(f"{path}: no sensor_msgs/LaserScan topic" + (f" named {topic}" if topic else ""))
-        for conn, _, raw in reader.messages(connections=conns):
+        for conn, _, raw in _messages(reader, conns, path):
             msg = reader.deserialize(raw, conn.msgtype)
             r = np.asarray(msg.ranges, dtype=np.float32).copy()
             bad = ~np.isfinite(r) | (r < msg.range_min) | (r > msg.range_max)
@@ -91,6 +92,15 @@ def read_rosbag_scans(path: PathLike, topic: Optional[str] = None, scanner: int 
                             intensities=np.asarray(msg.intensities, np.float32) if len(msg.intensities) else None,
                             pose=None, source=f"{path}:{conn.topic}#{len(out)}"))
     return out
+
+
+def _messages(reader, connections, path):
+    """The reader's messages; a bag that breaks off midway raises RuntimeError naming it (rosbags' own errors name
+    no file)."""
+    try:
+        yield from reader.messages(connections=connections)
+    except Exception as err:  # rosbags raises its own error classes per format
+        raise RuntimeError(f"{path}: the bag breaks off ({err})") from None
 
 
 def write_scan_csv(scans: Iterable[dict], path: PathLike) -> None:
@@ -156,10 +166,10 @@ def _native_scan(scan: dict) -> dict:
 
 
 def _site_text(site: PathLike) -> str:
-    """The YAML text of a site given as a file path or as the text itself (a text has a line break or a colon; a
-    single line without one is a path, which must exist)."""
+    """The YAML text of a site given as a file path or as the text itself (a text has a line break, or a colon
+    followed by a space or a brace: a path like `dir/my:site.yaml` has neither, and must exist)."""
     s = str(site)
-    if "\n" in s or (":" in s and not Path(s).exists()):
+    if "\n" in s or (not isinstance(site, os.PathLike) and re.search(r":[ {]", s) and not Path(s).exists()):
         return s
     if not Path(s).is_file():
         raise FileNotFoundError(f"{s or repr(s)}: no such site file")

@@ -159,6 +159,27 @@ TEST(SickDecoder, PcapngTcpStreamsMatchTheReadme) {
     EXPECT_EQ(cut[3].ranges_m, scans[3].ranges_m);  // a byte prefix of the same stream
 }
 
+// A poll's answer ("sRA LMDscandata", to "sRN LMDscandata") holds the same fields as the streamed event ("sSN"): a
+// scan (it was counted as "other", 277 telegrams and none a scan).
+TEST(SickDecoder, APolledScanIsAScan) {
+    REQUIRE_FILE(sick_file("20210302_lms111.pcapng.json"));
+    auto streamed = first_lms111_scan();
+    const auto b = rs::decode_sick_telegram(streamed.data(), streamed.size(), "cola-b");
+    ASSERT_TRUE(b);
+    std::vector<std::uint8_t> polled_b = streamed, polled_a = as_cola_a(*b);
+    polled_b[8 + 1] = 'R', polled_b[8 + 2] = 'A';  // after the 8-byte CoLa-B header: "sSN" → "sRA"
+    std::uint8_t checksum = 0;
+    for (std::size_t i = 8; i + 1 < polled_b.size(); ++i) checksum ^= polled_b[i];
+    polled_b.back() = checksum;
+    polled_a[1 + 1] = 'R', polled_a[1 + 2] = 'A';  // after STX
+    for (const auto* polled : {&polled_b, &polled_a}) {
+        const auto t = rs::decode_sick_telegram(polled->data(), polled->size(), "polled");
+        ASSERT_TRUE(t);
+        EXPECT_EQ(t->scan_counter, b->scan_counter);
+        EXPECT_EQ(rs::to_laser_scan(*t, "polled").ranges_m, rs::to_laser_scan(*b, "streamed").ranges_m);
+    }
+}
+
 TEST(SickDecoder, ColaAGivesTheSameScanAsColaB) {
     REQUIRE_FILE(sick_file("20210302_lms111.pcapng.json"));
     const auto bytes = first_lms111_scan();

@@ -338,6 +338,63 @@ def test_scans_with_poses_need_a_world_background():
         rp.roadside.Processor(run.site_yaml.replace("confirm_hits: 3", "confirm_hits: 3, world: {cell: 0.2}"))
 
 
+@pytest.mark.parametrize("field, value", [("step_rad", math.nan), ("step_rad", 0.0), ("step_rad", 1e300),
+                                          ("start_angle_rad", math.inf), ("start_angle_rad", 100.0)])
+def test_a_scan_with_angles_no_scanner_has_is_refused(field, value):
+    """A NaN step once ended in "foreground spans nan × nan m", a step of 0 or 1e300 made objects."""
+    run = sr.simulate("pedestrian_crossing", seed=4)
+    with pytest.raises(RuntimeError, match="the scan's angles are no scanner's: 361 beams from"):
+        rp.roadside.Processor(run.site_yaml).push(dict(run.scans[0], **{field: value}))
+
+
+def test_a_track_the_scanners_no_longer_see_says_since_when():
+    """A track coasts on its predicted motion for max_coast_s once the scanners lose it; it was reported like a
+    measured one (the leg_tracker bag: 428 reports 5.6–15 m from a 5.6 m scanner)."""
+    run = sr.simulate("pedestrian_crossing", seed=4)
+    empty = {}  # per scanner: its first scan, before the pedestrian comes
+    for scan in run.scans:
+        empty.setdefault(scan["scanner"], scan["ranges_m"])
+    lost_at = 8.0
+    scans = [dict(s, ranges_m=empty[s["scanner"]]) if s["time_s"] >= lost_at else s for s in run.scans]
+    cycles = rp.roadside.Processor(run.site_yaml).run(scans)
+    seen = [(c["t_s"], o["since_measured_s"]) for c in cycles for o in c["objects"] if o["id"] > 0]
+    measured = [since for t, since in seen if t < lost_at - 0.5]
+    coasting = [(t, since) for t, since in seen if t > lost_at + 0.1]
+    assert measured and np.median(measured) < 0.03 and max(measured) < 0.3  # measured in most cycles of 1/37.5 s
+    assert coasting and all(since == pytest.approx(t - lost_at, abs=0.1) for t, since in coasting)
+    assert max(since for _, since in coasting) > 0.5
+
+
+def test_unreadable_bags_and_missing_site_files_are_named(tmp_path):
+    """A PNG renamed .bag raised a bare UnicodeDecodeError, a truncated bag "Bag index looks damaged" without its
+    path, and a site path with a colon in its name "expected a mapping" (it was taken for YAML text)."""
+    pytest.importorskip("rosbags")
+    png = tmp_path / "picture.bag"
+    png.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
+    with pytest.raises(RuntimeError, match=r"picture\.bag: not a readable ROS bag or MCAP file"):
+        rp.roadside.read_scans(png)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(b"#ROSBAG V2.0\n" + bytes(100))
+    with pytest.raises(RuntimeError, match=r"cut\.bag: not a readable ROS bag"):
+        rp.roadside.read_scans(cut)
+    with pytest.raises(FileNotFoundError, match=r"my:site\.yaml: no such site file"):
+        rp.roadside.Processor(str(tmp_path / "my:site.yaml"))
+
+
+def test_a_scanner_that_changes_its_layout_is_refused():
+    """The per-beam background is learned beam by beam: a later scan with another step or first beam looked
+    elsewhere and was classified against it, silently (unless the site file pinned the layout)."""
+    run = sr.simulate("pedestrian_crossing", seed=4)
+    site = "\n".join(line.split(", max_range_m")[0] + "}" if "name: s" in line else line
+                     for line in run.site_yaml.splitlines())  # no layout pinned in the site file
+    proc = rp.roadside.Processor(site)
+    first = next(s for s in run.scans if s["scanner"] == 0)
+    proc.push(first)
+    with pytest.raises(RuntimeError, match=r"the scanner 's1' changed its layout to 361 beams from -90° every 0\.25° "
+                                           r"from 361 beams from -90° every 0\.5° of its first scan"):
+        proc.push(dict(first, time_s=first["time_s"] + 0.1, step_rad=math.radians(0.25)))
+
+
 @pytest.mark.skipif(not CARMEN_LOG.exists(), reason="shared data absent")
 def test_carmen_log_gives_moving_objects_against_its_world_background():
     """The robot drives 1.75 km over the campus: what moved is what its log saw only briefly where it mostly saw

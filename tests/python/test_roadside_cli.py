@@ -4,6 +4,7 @@ SICK files, and clear errors for bad input."""
 
 import json
 
+import numpy as np
 import pytest
 
 import roadpreview as rp
@@ -133,10 +134,52 @@ def test_bad_inputs_are_clear_errors(sim_files, tmp_path):
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", short, "-o", out, "--geojson", geo, check=False)
     assert proc.returncode == 1 and "no cycle written" in proc.stderr
     assert not out.exists() and not geo.exists()
+    # A scan restamped 0.5 s back is said to be (the run merges every file's scans by time, and took it elsewhere).
+    restamped = rp.roadside.read_scans(d / "scans.csv")
+    restamped[200]["time_s"] -= 0.5
+    rp.roadside.write_scan_csv(restamped, tmp_path / "restamped.csv")
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", tmp_path / "restamped.csv", "-q")
+    assert "restamped.csv: 1 scans are timed before a scan they follow (by up to 0.47" in proc.stderr, proc.stderr
+    assert "are timed before" not in run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "-q").stderr
+    # ICP that finds no pairs prints no site entry to paste (it printed the guess, and a fitness of 1.8e308).
+    scans = rp.roadside.read_scans(d / "scans.csv")
+    fixed, moving = tmp_path / "fixed.csv", tmp_path / "moving.csv"
+    rp.roadside.write_scan_csv([s for s in scans if s["scanner"] == 0], fixed)
+    rp.roadside.write_scan_csv([dict(s, ranges_m=np.full(len(s["ranges_m"]), 79.0)) for s in scans
+                                if s["scanner"] == 1], moving)
+    proc = run_cli("roadside", "extrinsics", "--site", d / "site.yaml", fixed, moving, check=False)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert "s2 onto s1: ICP did not converge (no point pairs within --max-distance)" in proc.stderr, proc.stderr
     huge = tmp_path / "det.jsonl"  # a number beyond a double: nlohmann's out_of_range once escaped without the file
     huge.write_text('{"t": 1e400, "x": 1, "y": 2, "w": 3, "h": 4, "class": "car"}\n')
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", huge, check=False)
     assert proc.returncode == 1 and "det.jsonl:1: not JSON" in proc.stderr, proc.stderr
+
+
+def test_info_describes_each_scanner_of_a_file_and_fails_on_a_file_without_scans(sim_files, tmp_path):
+    """A CSV of two scanners once read as one at the sum of their rates (75 Hz), with the first one's layout; a file
+    without scans was "0 scans", exit 0."""
+    d, _ = sim_files
+    out = run_cli("roadside", "info", d / "scans.csv").stdout
+    assert out.count(": 525 scans\n") == 2 and " scanner 1: 525 scans" in out and out.count("37.50 Hz") == 2
+    empty = tmp_path / "empty.csv"
+    empty.write_text("t,scanner,angle_deg,range_m\n")
+    proc = run_cli("roadside", "info", empty, check=False)
+    assert proc.returncode == 1 and "empty.csv: 0 scans" in proc.stdout and "empty.csv: no scans" in proc.stderr
+
+
+@pytest.mark.skipif(not (SICK / "test.pcapng").exists(), reason="shared data absent")
+def test_a_sick_capture_that_breaks_off_is_said_to(tmp_path):
+    """A capture cut inside a record read as the telegrams before the cut, unsaid (exit 0)."""
+    cut = tmp_path / "cut.pcapng"
+    cut.write_bytes((SICK / "test.pcapng").read_bytes()[:-300])
+    proc = run_cli("roadside", "info", cut, check=False)
+    assert proc.returncode == 1 and "cut.pcapng: the capture breaks off after" in proc.stderr
+    assert "--skip-bad reads the telegrams before it" in proc.stderr
+    proc = run_cli("roadside", "info", "--skip-bad", cut)
+    assert "note: " in proc.stderr and "truncated or corrupt" in proc.stderr and ": 15 scans" in proc.stdout
+    with pytest.warns(RuntimeWarning, match="cut.pcapng: the capture breaks off after"):
+        assert len(rp.roadside.read_scans(cut, skip_bad=True)) == 15
 
 
 @pytest.mark.skipif(not (SICK / "20210302_lms111.pcapng.json").exists(), reason="shared data absent")

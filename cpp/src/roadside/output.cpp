@@ -42,7 +42,8 @@ nlohmann::json object_json(const OutputObject& o) {
             {"speed_mps", rounded(o.speed_mps, 1e-3)},
             {"heading_deg", rounded(o.heading_rad * kRadToDeg, 1e-2)},
             {"points", o.points},
-            {"age_s", rounded(o.age_s, 1e-3)}};
+            {"age_s", rounded(o.age_s, 1e-3)},
+            {"since_measured_s", rounded(o.since_measured_s, 1e-3)}};
 }
 
 }  // namespace

@@ -33,7 +33,21 @@ Pose2 compose(const Pose2& a, const Pose2& b) {  // b expressed in a
     return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, a.yaw_rad + b.yaw_rad};
 }
 
+std::string layout_text(const ScanLayout& l) {
+    return std::to_string(l.beams) + " beams from " + number_text(l.start_angle_rad / kDeg, 8) + "° every " +
+           number_text(l.step_rad / kDeg, 8) + "°";
+}
+
+ScanLayout layout_of(const LaserScan& scan) { return {scan.ranges_m.size(), scan.start_angle_rad, scan.step_rad}; }
+
 void check_layout(const LaserScan& scan, const ScannerSite& site) {
+    // A scan's beams lie within one turn: angles beyond it are a unit or a field mixed up (the Python API takes
+    // any dict; a step of 1e300 or NaN once made objects, or a grid of NaN metres).
+    const double turn = 2.0 * kPi * (1.0 + 1e-9);
+    if (!(std::abs(scan.start_angle_rad) <= turn) || !(scan.step_rad != 0.0) ||
+        !(std::abs(scan.step_rad) * static_cast<double>(scan.ranges_m.size()) <= turn + std::abs(scan.step_rad)))
+        throw std::runtime_error(scan.source + ": the scan's angles are no scanner's: " + layout_text(layout_of(scan)) +
+                                 " (its first beam within ±360°, a nonzero step, all beams within one turn)");
     auto bad = [&](const std::string& what) {
         throw std::runtime_error(scan.source + ": scan layout disagrees with the site's scanner '" + site.name + "': " + what);
     };
@@ -51,7 +65,7 @@ void check_layout(const LaserScan& scan, const ScannerSite& site) {
 
 Processor::Processor(Site site)
     : site_(std::move(site)), geo_(site_.origin), background_(site_.scanners.size()), status_(site_.scanners.size()),
-      learn_start_s_(site_.scanners.size(), 0.0),
+      learn_start_s_(site_.scanners.size(), 0.0), first_layout_(site_.scanners.size()),
       tracker_(tracker_settings(site_.settings)) {
     for (std::size_t i = 0; i < status_.size(); ++i) status_[i].name = site_.scanners[i].name;
     // OpenCV sets up its parallel back end on its first dilation and labelling (about 4 ms here): done now, so that
@@ -93,6 +107,19 @@ void Processor::learn_world(const std::vector<LaserScan>& scans) {
     world_.emplace(posed, poses, site_.settings.world);
 }
 
+// A scanner's layout stays what its first scan had: its background is per beam, and a beam of another step or first
+// angle looks elsewhere (a site file that pins the layout catches it there; most do not).
+void Processor::check_same_layout(const LaserScan& scan) {
+    std::optional<ScanLayout>& first = first_layout_[static_cast<std::size_t>(scan.scanner)];
+    const ScanLayout now = layout_of(scan);
+    if (!first) first = now;
+    if (first->beams != now.beams || std::abs(first->step_rad - now.step_rad) > 1e-6 * kDeg ||
+        std::abs(first->start_angle_rad - now.start_angle_rad) > 1e-4 * kDeg)
+        throw std::runtime_error(scan.source + ": the scanner '" + site_.scanners[static_cast<std::size_t>(scan.scanner)].name +
+                                 "' changed its layout to " + layout_text(now) + " from " + layout_text(*first) +
+                                 " of its first scan: its background is per beam");
+}
+
 Pose2 Processor::site_pose(const LaserScan& scan) const {
     const Pose2& mount = site_.scanners[static_cast<std::size_t>(scan.scanner)].pose;
     return scan.pose ? compose(*scan.pose, mount) : mount;
@@ -109,6 +136,7 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     std::int64_t invalid = 0;
     LaserScan scan = checked(input, &invalid);
     const ScannerSite& where = site_.scanners[static_cast<std::size_t>(scan.scanner)];
+    check_same_layout(scan);
     if (scan.pose && !world_)
         throw std::runtime_error(scan.source + ": the scan carries a pose (a moving scanner): learn the world "
                                  "background from the log first (Processor::learn_world; `roadside run` does)");
@@ -284,6 +312,7 @@ OutputObject Processor::output(const Track& t, double t_s) const {
     for (int k = 0; k < 4; ++k) o.mbr_wgs84[k] = geo_.to_wgs84(o.mbr_site[k][0], o.mbr_site[k][1]);
     o.points = t.last_object.points;
     o.age_s = t_s - t.first_seen_s;
+    o.since_measured_s = std::max(0.0, t_s - t.last_update_s);  // a track coasting behind an occlusion is a guess
     return o;
 }
 

@@ -206,8 +206,13 @@ SickScanTelegram read_scandata(Fields& f, ColaFraming framing, const std::string
     return t;
 }
 
-constexpr const char* kScanCommand = "sSN LMDscandata ";
+// A scan telegram: the streamed event "sSN LMDscandata " or the answer to a poll ("sRN LMDscandata"), "sRA
+// LMDscandata ", whose fields are the same (SICK's telegram listing); both 16 characters.
 constexpr std::size_t kScanCommandLength = 16;
+bool is_scan_command(const void* text, std::size_t length) {
+    return length >= kScanCommandLength && (std::memcmp(text, "sSN LMDscandata ", kScanCommandLength) == 0 ||
+                                            std::memcmp(text, "sRA LMDscandata ", kScanCommandLength) == 0);
+}
 
 std::optional<SickScanTelegram> decode_cola_b(const std::uint8_t* data, std::size_t size, const std::string& where) {
     if (size < 9) fail(where, "truncated CoLa-B frame (" + std::to_string(size) + " bytes)");
@@ -220,7 +225,7 @@ std::optional<SickScanTelegram> decode_cola_b(const std::uint8_t* data, std::siz
     for (std::size_t i = 8; i < size - 1; ++i) checksum ^= data[i];
     if (checksum != data[size - 1]) fail(where, "CoLa-B checksum error");
     const std::uint8_t* payload = data + 8;
-    if (length < kScanCommandLength || std::memcmp(payload, kScanCommand, kScanCommandLength) != 0) return std::nullopt;
+    if (!is_scan_command(payload, length)) return std::nullopt;
     BinaryFields f(payload + kScanCommandLength, length - kScanCommandLength, where);
     SickScanTelegram t = read_scandata(f, ColaFraming::B, where);
     if (!f.at_end()) fail(where, "CoLa-B telegram has bytes left over after its last field");
@@ -230,7 +235,7 @@ std::optional<SickScanTelegram> decode_cola_b(const std::uint8_t* data, std::siz
 std::optional<SickScanTelegram> decode_cola_a(const std::uint8_t* data, std::size_t size, const std::string& where) {
     if (size < 2 || data[size - 1] != 0x03) fail(where, "CoLa-A frame does not end with ETX");
     const std::string body(reinterpret_cast<const char*>(data + 1), size - 2);
-    if (body.compare(0, kScanCommandLength, kScanCommand) != 0) return std::nullopt;
+    if (!is_scan_command(body.data(), body.size())) return std::nullopt;
     AsciiFields f(body.substr(kScanCommandLength), where);
     SickScanTelegram t = read_scandata(f, ColaFraming::A, where);
     if (!f.at_end()) fail(where, "CoLa-A telegram has fields left over after its last field");

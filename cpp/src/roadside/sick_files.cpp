@@ -2,6 +2,7 @@
 // SICK telegrams from files: sick_scan_xd's JSON dumps (nlohmann::json) and pcap/pcapng captures (libtins reads
 // the records and reassembles the TCP streams; the telegrams are framed from the sensor's stream).
 #include <tins/exceptions.h>
+#include <pcap/pcap.h>
 #include <tins/sniffer.h>
 #include <tins/tcp_ip/stream_follower.h>
 
@@ -72,7 +73,7 @@ std::vector<TimedTelegram> read_sick_json(const std::string& path) {
     return out;
 }
 
-std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_port) {
+std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_port, std::string* truncated) {
     std::unique_ptr<Tins::FileSniffer> sniffer;
     try {
         sniffer = std::make_unique<Tins::FileSniffer>(path);
@@ -113,6 +114,13 @@ std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_po
         }
         return true;
     });
+    // libtins ends its loop on a record libpcap cannot read as on the file's end; libpcap keeps the error.
+    if (const std::string error = pcap_geterr(sniffer->get_pcap_handle()); !error.empty()) {
+        const std::string why = path + ": the capture breaks off after " + std::to_string(out.size()) +
+                                " telegrams, truncated or corrupt (libpcap: " + error + ")";
+        if (!truncated) throw std::runtime_error(why + "; --skip-bad reads the telegrams before it");
+        *truncated = why;
+    }
     return out;
 }
 

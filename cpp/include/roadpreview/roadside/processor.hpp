@@ -17,6 +17,12 @@
 
 namespace roadpreview::roadside {
 
+/// How a scanner lays its beams: their count, the first beam's angle and the step between them.
+struct ScanLayout {
+    std::size_t beams = 0;
+    double start_angle_rad = 0.0, step_rad = 0.0;
+};
+
 /// A camera detection: image box (px, top-left x, y, width, height), class and score, at time t.
 struct CameraDetection {
     double t_s = 0.0;
@@ -45,6 +51,7 @@ struct OutputObject {
     std::array<LatLon, 4> mbr_wgs84{};
     int points = 0;
     double age_s = 0.0;
+    double since_measured_s = 0.0;  ///< from its last measurement to the cycle's time (more than a cycle: predicted)
 };
 
 struct ScannerStatus {
@@ -91,6 +98,7 @@ private:
     /// The scan on the site clock, its layout checked, invalid ranges made no return (and counted, if asked).
     LaserScan checked(const LaserScan& input, std::int64_t* invalid_ranges = nullptr) const;
     Pose2 site_pose(const LaserScan& scan) const;  ///< the scanner's pose: its logged pose (if any) ∘ its mount
+    void check_same_layout(const LaserScan& scan);
     void associate_camera(double t0_s, double t1_s, Cycle& cycle);
     OutputObject output(const Track& t, double t_s) const;
     Site site_;
@@ -99,6 +107,7 @@ private:
     std::optional<WorldBackground> world_;
     std::vector<ScannerStatus> status_;
     std::vector<double> learn_start_s_;
+    std::vector<std::optional<ScanLayout>> first_layout_;  ///< per scanner: its first scan's
     Tracker tracker_;
     std::vector<LaserScan> pending_;
     std::vector<CameraDetection> detections_;

@@ -106,8 +106,11 @@ struct TimedTelegram {
 std::vector<TimedTelegram> read_sick_json(const std::string& path);
 
 /// The sensor→client TCP streams of a pcap/pcapng capture (libpcap + libtins), reassembled and framed into
-/// telegrams; the time is that of the segment that completed each telegram.
-std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_port = 2112);
+/// telegrams; the time is that of the segment that completed each telegram. A capture that breaks off inside a
+/// record throws std::runtime_error naming the file, unless `truncated` is given: then it receives why, and the
+/// telegrams before the break are returned.
+std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_port = 2112,
+                                          std::string* truncated = nullptr);
 
 /// Counts of a decode, for `roadside info` and the tests.
 struct SickDecodeCounts {
