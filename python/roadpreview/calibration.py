@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from typing import Iterable, Optional, Sequence, Union
 
 import numpy as np
@@ -131,4 +132,8 @@ def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate
                                      int(min_observations))
     if info:
         out.sensor_model, out.serial = info.get("sensor_model", ""), info.get("serial", "")
+    if method != "surface" and out.travel_m < core().SHORT_DRIVE_M:
+        warnings.warn(f"calibrate_beams: a drive of {out.travel_m:.2f} m is short for the motion method "
+                      f"({core().SHORT_DRIVE_M:.0f} m or more): its offsets are unreliable and their σ understated; "
+                      "method='surface' needs no motion", RuntimeWarning, stacklevel=2)
     return out
