@@ -379,6 +379,47 @@ TEST(Ouster, APacketOrderWithinAFrameGivesTheSameFrame) {
     }
 }
 
+// A frame's last packet swapped with the next frame's first once read as a restart: two spurious frames of one
+// packet each (5 frames of 3). Late, it is counted so; a copy of a frame's closing packet is a duplicate, not a new
+// frame; and the same frame again from its first column (a sensor restart, a capture of one frame looped) is a frame.
+TEST(Ouster, APacketLateAcrossTheFrameBoundaryIsLateAndTheSameIdFromTheStartIsAFrame) {
+    const std::string pcap = kOuster + "OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+    const rp::OusterMetadata meta = rp::read_ouster_metadata(kOuster + "OS-1-128_v2.3.0_1024x10.json");
+    std::vector<rp::UdpDatagram> packets;
+    rp::PcapReader reader(pcap);
+    for (rp::UdpDatagram d; reader.next(d);)
+        if (d.payload.size() == meta.lidar_packet_bytes()) packets.push_back(d);
+    ASSERT_EQ(packets.size(), 3u * 64u);
+    const auto decode = [&](const std::vector<rp::UdpDatagram>& in) {
+        rp::OusterDecoder d(meta);
+        std::vector<rp::Frame> frames;
+        for (const auto& p : in)
+            if (auto f = d.add_packet(p.payload.data(), p.payload.size(), p.timestamp)) frames.push_back(std::move(*f));
+        if (auto f = d.finish()) frames.push_back(std::move(*f));
+        return frames;
+    };
+    auto swapped = packets;
+    std::swap(swapped[63], swapped[64]);  // frame 1795's last packet after frame 1796's first
+    const auto frames = decode(swapped);
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_EQ(frames[0].diagnostics.lost_packets, 1);  // its last 16 columns never came in time
+    EXPECT_EQ(frames[1].diagnostics.late_packets, 1);  // counted when the next frame is returned
+    EXPECT_TRUE(frames[1].diagnostics.complete);
+    auto copied = packets;
+    copied.insert(copied.begin() + 64, packets[63]);  // the closing packet of frame 1795 twice
+    const auto with_copy = decode(copied);
+    ASSERT_EQ(with_copy.size(), 3u);
+    EXPECT_EQ(with_copy[1].diagnostics.duplicate_packets, 1);
+    EXPECT_EQ(with_copy[1].diagnostics.late_packets, 0);
+    const std::vector<rp::UdpDatagram> one(packets.begin(), packets.begin() + 64);
+    std::vector<rp::UdpDatagram> looped = one;
+    looped.insert(looped.end(), one.begin(), one.end());
+    const auto twice = decode(looped);
+    ASSERT_EQ(twice.size(), 2u);
+    EXPECT_EQ(twice[1].points.rows(), twice[0].points.rows());
+    EXPECT_TRUE(twice[1].diagnostics.complete);
+}
+
 namespace {
 
 // The region the pipeline crops to with the defaults (x 1–40 m, |y| ≤ 10 m), the sensor `height_m` up.

@@ -349,6 +349,7 @@ OusterDecoder::OusterDecoder(OusterMetadata meta) : meta_(std::move(meta)) {
     xyzr_.resize(4 * pixels);
     returned_.resize(pixels);
     column_state_.assign(static_cast<std::size_t>(W), 0);
+    closed_state_.assign(static_cast<std::size_t>(W), 0);
     column_ns_.assign(static_cast<std::size_t>(W), 0);
 }
 
@@ -431,9 +432,11 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
         ++outside_window_;
         return std::nullopt;
     }
-    // A packet of the frame just closed came late (reordered on the way): its columns are counted missing there.
-    if (!open_ && id == closed_id_) {
-        ++late_packets_;
+    // A packet of the frame last returned (while no frame or the next is open): late, reordered on the way (its
+    // columns are missing there, and counted so), or a copy (they are not) — unless it opens the column window:
+    // then the same id came again, a sensor restarted or a capture of one frame looped.
+    if (id == closed_id_ && !(open_ && id == frame_id_) && !opens_window(first_col, col_bytes)) {
+        ++(closed_missing_any(first_col, col_bytes) ? late_packets_ : duplicate_packets_);
         return std::nullopt;
     }
     std::optional<Frame> done;
@@ -464,6 +467,21 @@ std::optional<Frame> OusterDecoder::add_packet(const std::uint8_t* data, std::si
     // The window's last column closes the frame at once (no wait for the next frame's first packet: live latency).
     if (last_of_window && !done) done = build_frame();
     return done;
+}
+
+bool OusterDecoder::opens_window(const std::uint8_t* first_col, std::size_t col_bytes) const {
+    for (int c = 0; c < meta_.columns_per_packet; ++c)
+        if (read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8) == meta_.column_window[0])
+            return true;
+    return false;
+}
+
+bool OusterDecoder::closed_missing_any(const std::uint8_t* first_col, std::size_t col_bytes) const {
+    for (int c = 0; c < meta_.columns_per_packet; ++c) {
+        const int mid = read_le<std::uint16_t>(first_col + static_cast<std::size_t>(c) * col_bytes + 8);
+        if (in_window(mid) && closed_state_[static_cast<std::size_t>(mid)] == 0) return true;
+    }
+    return false;
 }
 
 void OusterDecoder::decode_column(const std::uint8_t* px, int column) {
@@ -608,6 +626,7 @@ Frame OusterDecoder::build_frame(bool at_end) {
     }
     open_ = false;
     closed_id_ = frame_id_;
+    closed_state_ = column_state_;  // the same size every frame: a copy, no allocation
     return f;
 }
 

@@ -112,6 +112,10 @@ private:
     /// column received.
     std::int64_t missing_run(bool from_start) const;
     bool in_window(int column) const;
+    /// Whether the packet (its first column at `first_col`) holds the column window's first column.
+    bool opens_window(const std::uint8_t* first_col, std::size_t col_bytes) const;
+    /// Whether a column of the packet in the window was missing from the frame last returned.
+    bool closed_missing_any(const std::uint8_t* first_col, std::size_t col_bytes) const;
 
     OusterMetadata meta_;
     Lut lut_;
@@ -130,6 +134,7 @@ private:
     std::vector<float> xyzr_;
     std::vector<std::uint8_t> returned_;
     std::vector<std::uint8_t> column_state_;  // 0 missing, 1 valid, 2 invalid
+    std::vector<std::uint8_t> closed_state_;  // column_state_ of the frame last returned
     std::vector<std::uint64_t> column_ns_;
     std::vector<float> column_s_;  // each column's time since the frame's first, made when a frame is built
     std::vector<ImuSample> imu_;
