@@ -3,7 +3,9 @@
 // `roadpreview calibrate INPUT... -o beams.yaml` estimates the beams' offsets from a drive;
 // `roadpreview info INPUT...` describes a recording.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -331,10 +333,18 @@ rp::SourceOptions source_options(const RunOptions& o, const CLI::App& app, const
 }
 
 // A live sensor on a udp:// address.
+// Set by SIGINT or SIGTERM during a live run: the stream ends there, and the run writes its summary and route files
+// as at --duration (the default action ended it at once, without them). Lock-free: safe in a signal handler.
+std::atomic<bool> g_stop_live{false};
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+extern "C" void stop_live(int) { g_stop_live = true; }
+
 std::unique_ptr<rp::FrameSource> open_live_source(const RunOptions& o, const CLI::App& app, const rp::Config& cfg) {
-    for (const char* name : {"--columns", "--poses", "--frame-rate"})
-        if (app.count(name)) throw std::invalid_argument(std::string(name) + " does not apply to a udp:// input");
     rp::LiveOptions live;
+    live.stop = &g_stop_live;
+    std::signal(SIGINT, stop_live);
+    std::signal(SIGTERM, stop_live);
     live.source = source_options(o, app, cfg);
     live.timeout_s = o.live.timeout_s;
     live.duration_s = o.live.duration_s;
@@ -377,6 +387,9 @@ void check_inputs(const RunOptions& o, const CLI::App& app) {
     if (!is_live(o))
         for (const char* name : {"--duration", "--timeout"})
             if (app.count(name)) throw UsageError(std::string(name) + " applies to a udp:// input only");
+    if (is_live(o))  // ignored by a live source, silently: the address's port is the lidar's
+        for (const char* name : {"--columns", "--poses", "--frame-rate", "--lidar-port"})
+            if (app.count(name)) throw UsageError(std::string(name) + " does not apply to a udp:// input");
     if (!is_stereo(o) && !o.calib.empty())
         throw UsageError("--calib is a stereo calibration: it goes with --stereo or --disparity");
     if (is_stereo(o))  // a LiDAR decoder's options would be ignored, silently
@@ -470,6 +483,10 @@ int run(const RunOptions& o, const CLI::App& app) {
                      "(mounting.disagrees in the output)\n",
                      static_cast<long long>(runner.mounting_disagreements()));
     if (route) write_route(o, *route);
+    if (g_stop_live) {
+        std::fprintf(stderr, "roadpreview: interrupted: the live run ended there (its output and summary are complete)\n");
+        return 130;  // as a shell reports a run stopped by Ctrl-C
+    }
     return 0;
 }
 

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <functional>
 #include <future>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,14 @@ int free_port_pair() {
 }
 
 std::string url(int port) { return "udp://127.0.0.1:" + std::to_string(port); }
+
+// The live source of the bundled OS1-128's packets on `port` (its IMU's on the next), ending after `timeout_s` of silence.
+std::unique_ptr<rp::FrameSource> listen_os1(int port, double timeout_s) {
+    rp::LiveOptions o;
+    o.source.meta = kOs1Meta;
+    o.timeout_s = timeout_s;
+    return rp::open_live(url(port), o);
+}
 
 std::vector<rp::Frame> offline(const std::string& pcap, const std::string& meta,
                                const std::vector<rp::SensorRoi>& roi_columns = {}) {
@@ -201,8 +210,10 @@ TEST(Live, DroppedAndReorderedPacketsAreFlaggedNotFatal) {
         ASSERT_GT(run.sent.dropped, 0);
         ASSERT_GT(run.sent.reordered, 0);
         const std::vector<rp::Frame> whole = offline(pcap, meta);
-        // Every loop's frames come through (a restart starts a new frame); fewer points only where flagged.
+        // Every loop's frames come through (a restart starts a new frame), no more (a packet late across a frame's
+        // end once made two more frames of one packet each); fewer points only where flagged.
         EXPECT_GE(run.frames.size(), whole.size() * 4 - 1);
+        EXPECT_LE(run.frames.size(), whole.size() * 4);
         std::int64_t flagged = 0, lost = 0;
         for (const rp::Frame& f : run.frames) {
             const auto& d = f.diagnostics;
@@ -239,12 +250,33 @@ TEST(Live, NoDatagramsWithinTheTimeoutIsAnErrorNamingTheAddress) {
     EXPECT_NE(e.find("no datagrams within"), std::string::npos) << e;
 }
 
+// The IMU's datagrams alone once kept the run waiting for as long as they came: silence is the lidar port's.
+TEST(Live, AnImuThatGoesOnAloneDoesNotKeepTheRunWaiting) {
+    const int port = free_port_pair();
+    auto source = listen_os1(port, 0.3);
+    std::atomic<bool> stop{false};
+    auto imu = std::async(std::launch::async, [&] {
+        BoundSocket sender;
+        for (int k = 0; k < 500 && !stop; ++k) {  // up to 5 s of an IMU at 100 Hz
+            sender.send_to(port + 1, std::vector<std::uint8_t>(48, 0));
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+    });
+    const double t0 = rp::steady_now_s();
+    const std::string e = error_of([&] {
+        while (source->next()) {
+        }
+    });
+    const double took_s = rp::steady_now_s() - t0;
+    stop = true;
+    imu.get();
+    EXPECT_NE(e.find(url(port) + ": no datagrams on this port within 0.3 s"), std::string::npos) << e;
+    EXPECT_LT(took_s, 2.0);
+}
+
 TEST(Live, AWrongSizeDatagramIsAnErrorNamingTheAddress) {
     const int port = free_port_pair();
-    rp::LiveOptions o;
-    o.source.meta = kOs1Meta;
-    o.timeout_s = 2.0;
-    auto source = rp::open_live(url(port), o);
+    auto source = listen_os1(port, 2.0);
     BoundSocket sender;
     sender.send_to(port, std::vector<std::uint8_t>(100, 0));
     const std::string e = error_of([&] { source->next(); });

@@ -123,6 +123,35 @@ def test_cli_live_run_reports_the_packets_lost():
     assert re.search(r"; [1-9][0-9]* of [0-9]+ frames affected", err), err
 
 
+def test_cli_live_run_stopped_by_ctrl_c_writes_its_summary_and_route(tmp_path):
+    """SIGINT ended a live run at once: no summary, no segments, an empty profile folder. It ends the stream now."""
+    import signal
+    import time
+
+    port = free_port_pair()
+    run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(OS1_128_META), "--speed", "2.5",
+                            "--sensor-height", str(OS1_128_HEIGHT), "--timeout", "10", "--segments", "1",
+                            "--segments-csv", str(tmp_path / "s.csv"), "-o", str(tmp_path / "out.jsonl")],
+                           stderr=subprocess.PIPE, text=True)
+    try:
+        assert "listening on" in run.stderr.readline()
+        sender = subprocess.Popen([cli(), "replay", str(OS1_128_PCAP), "--to", f"127.0.0.1:{port}", "--loop", "100"],
+                                  stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 30
+        while (not (tmp_path / "out.jsonl").exists() or not (tmp_path / "out.jsonl").read_text()) \
+                and time.monotonic() < deadline:
+            time.sleep(0.05)  # a frame or more written
+        run.send_signal(signal.SIGINT)
+        err = run.stderr.read()
+        run.wait(timeout=30)
+    finally:
+        run.kill()
+        sender.kill()
+    assert run.returncode == 130, err
+    assert "interrupted: the live run ended there" in err and "frame(s), pipeline median" in err and "live:" in err
+    assert (tmp_path / "s.csv").read_text().count("\n") >= 2  # the header and a segment
+
+
 def test_cli_live_run_without_datagrams_is_an_error_naming_the_address():
     port = free_port_pair()
     proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--timeout", "0.3", check=False)
@@ -152,6 +181,13 @@ def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
 def test_cli_live_options_are_refused_with_files():
     proc = run_cli("run", OS1_128_PCAP, "--speed", "1", "--duration", "1", check=False)
     assert proc.returncode == 2 and "--duration applies to a udp:// input only" in proc.stderr  # a usage error
+
+
+@pytest.mark.parametrize("option", [("--lidar-port", "7502"), ("--columns", "4"), ("--frame-rate", "10")])
+def test_cli_file_options_are_refused_with_a_live_input(option):
+    """--lidar-port was ignored, silently: the udp:// address's port is the lidar's. Refused before any port is bound."""
+    proc = run_cli("run", "udp://127.0.0.1:47560", "--speed", "1", *option, check=False)
+    assert proc.returncode == 2 and f"{option[0]} does not apply to a udp:// input" in proc.stderr
 
 
 def test_cli_replay_of_a_capture_without_udp_is_an_error_naming_it(tmp_path):

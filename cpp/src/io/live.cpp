@@ -78,16 +78,20 @@ public:
         std::unique_lock<std::mutex> lock(mutex_);
         for (;;) {
             const double now = steady_now_s();
-            // The duration ends the stream even when a backlog waits (a pipeline slower than the sensor).
+            // The duration (or a stop) ends the stream even when a backlog waits (a pipeline slower than the sensor).
             if (options_.duration_s > 0.0 && now - opened_s_ >= options_.duration_s) return false;
+            if (options_.stop && options_.stop->load()) return false;
             if (!queue_.empty()) break;
             if (failure_.size()) throw std::runtime_error(name_ + ": " + failure_);
-            const double silent_s = now - (received_ ? last_arrival_s_ : opened_s_);
+            // Silence is the first port's (the lidar's): an IMU that goes on alone would keep the run waiting forever.
+            const double silent_s = now - (data_received_ ? last_data_arrival_s_ : opened_s_);
             if (silent_s >= options_.timeout_s) {
-                if (received_) return false;  // the sensor went quiet: the end of the stream
+                if (data_received_) return false;  // the sensor went quiet: the end of the stream
                 std::ostringstream msg;
-                msg << name_ << ": no datagrams within " << options_.timeout_s
-                    << " s (is the sensor sending to this address and port?)";
+                msg << name_ << ": no datagrams" << (received_ ? " on this port" : "") << " within "
+                    << options_.timeout_s << " s (";
+                if (received_) msg << received_ << " on the others: ";
+                msg << "is the sensor sending to this address and port?)";
                 throw std::runtime_error(msg.str());
             }
             arrived_.wait_for(lock, std::chrono::milliseconds(20));
@@ -186,7 +190,8 @@ private:
             for (auto it = pending.begin(); it != end; ++it) {
                 UdpDatagram& d = *it;
                 d.record = ++received_;
-                last_arrival_s_ = std::max(last_arrival_s_, d.arrival_s);
+                if (d.dst_port == ports_.front())
+                    ++data_received_, last_data_arrival_s_ = std::max(last_data_arrival_s_, d.arrival_s);
                 dropped_ += !queue_.push(d);
             }
         }
@@ -216,7 +221,8 @@ private:
     std::condition_variable arrived_;
     DatagramQueue queue_;
     std::int64_t received_ = 0, dropped_ = 0;
-    double last_arrival_s_ = 0.0;
+    std::int64_t data_received_ = 0;  // on the first port, the lidar's
+    double last_data_arrival_s_ = 0.0;
     std::string failure_;
 };
 

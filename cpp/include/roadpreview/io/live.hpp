@@ -3,6 +3,7 @@
 // by the same decoders as the pcap readers. And the replay of a capture's UDP payloads with their recorded timing.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -33,6 +34,9 @@ struct LiveOptions {
     /// ended (the frame being assembled is returned, then the end).
     double timeout_s = 5.0;
     double duration_s = 0.0;  ///< > 0: the stream ends after this long (s, from opening)
+    /// When given, the stream ends as soon as it is true (as at `duration_s`): a signal handler's flag, so that a
+    /// run stopped by Ctrl-C still returns its last frame and its caller writes its summary.
+    const std::atomic<bool>* stop = nullptr;
     /// the receive queue's size, a ring allocated and zeroed once when the input opens (in memory in full from
     /// the start): datagrams that do not fit are dropped and counted
     std::size_t queue_bytes = std::size_t{64} << 20;
