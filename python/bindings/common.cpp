@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "common.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
+#include <type_traits>
 #include <unordered_set>
 
 namespace {
@@ -69,30 +73,26 @@ rp::Config config_from(const std::string& json) { return rp::config_from_json(js
 
 namespace {
 
+// A 1-D array of one of the dtype `kinds` (an empty one of any dtype: an empty list reads as float64).
 py::array one_dimensional(const py::handle& obj, const char* what, const char* kinds, const char* expected) {
     const py::array a = py::array::ensure(obj);
-    const std::string kind(1, a ? a.dtype().kind() : '?');
-    if (!a || kind.find_first_of(kinds) == std::string::npos)
-        throw py::type_error(std::string(what) + " must be " + expected + ", got " +
-                             (a ? "dtype " + py::str(a.dtype()).cast<std::string>() : std::string("no array")));
+    if (!a) throw py::type_error(std::string(what) + " must be " + expected + ", got no array");
+    if (a.size() > 0 && std::string(kinds).find(a.dtype().kind()) == std::string::npos)
+        throw py::type_error(std::string(what) + " must be " + expected + ", got dtype " +
+                             py::str(a.dtype()).cast<std::string>());
     if (a.ndim() != 1)
         throw py::value_error(std::string(what) + " must be 1-D, got shape " + py::str(a.attr("shape")).cast<std::string>());
     return a;
 }
 
-}  // namespace
-
-std::vector<std::int32_t> int32_vector(const py::handle& obj, const char* what) {
-    const py::array a = one_dimensional(obj, what, "iu", "an array of integers");
-    const auto wide = a.dtype().kind() == 'u' ? py::array_t<std::uint64_t, py::array::forcecast>::ensure(a).cast<py::array>()
-                                              : py::array_t<std::int64_t, py::array::forcecast>::ensure(a).cast<py::array>();
-    std::vector<std::int32_t> out(static_cast<std::size_t>(a.size()));
-    for (py::ssize_t i = 0; i < a.size(); ++i) {
-        const bool is_unsigned = a.dtype().kind() == 'u';
-        const auto u = is_unsigned ? *static_cast<const std::uint64_t*>(wide.data(i)) : 0;
-        const auto v = is_unsigned ? static_cast<std::int64_t>(std::min<std::uint64_t>(u, INT64_MAX))
-                                   : *static_cast<const std::int64_t*>(wide.data(i));
-        if (v < INT32_MIN || v > INT32_MAX)
+// `a`'s values as int32, read as the widest integer T of their kind; a value beyond int32 is an error.
+template <typename T>
+std::vector<std::int32_t> narrowed(const py::array& a, const char* what) {
+    const auto values = py::array_t<T, py::array::forcecast>::ensure(a);
+    std::vector<std::int32_t> out(static_cast<std::size_t>(values.size()));
+    for (py::ssize_t i = 0; i < values.size(); ++i) {
+        const T v = values.at(i);
+        if ((std::is_signed_v<T> && v < static_cast<T>(INT32_MIN)) || v > static_cast<T>(INT32_MAX))
             throw py::value_error(std::string(what) + " must fit in int32, got " + std::to_string(v) + " at " +
                                   std::to_string(i));
         out[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(v);
@@ -100,10 +100,32 @@ std::vector<std::int32_t> int32_vector(const py::handle& obj, const char* what) 
     return out;
 }
 
+}  // namespace
+
+std::vector<std::int32_t> int32_vector(const py::handle& obj, const char* what) {
+    const py::array a = one_dimensional(obj, what, "iu", "an array of integers");
+    return a.dtype().kind() == 'u' ? narrowed<std::uint64_t>(a, what) : narrowed<std::int64_t>(a, what);
+}
+
 std::vector<std::uint8_t> bool_vector(const py::handle& obj, const char* what) {
     const py::array a = one_dimensional(obj, what, "b", "a bool array");
     const auto b = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(a);
     return std::vector<std::uint8_t>(b.data(), b.data() + b.size());
+}
+
+std::vector<double> double_vector(const py::handle& obj, const char* what) {
+    const py::array a = one_dimensional(obj, what, "fiu", "an array of real numbers");
+    const auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    return std::vector<double>(d.data(), d.data() + d.size());
+}
+
+rp::Plane checked_plane(const std::array<double, 4>& plane, const char* what) {
+    const double norm = std::sqrt(plane[0] * plane[0] + plane[1] * plane[1] + plane[2] * plane[2]);
+    if (!(std::abs(norm - 1.0) <= 1e-6 && plane[2] > 0.0 && std::isfinite(plane[3])))
+        throw py::value_error(std::string(what) + " must be (a, b, c, d) with a unit normal pointing up (c > 0), got (" +
+                              std::to_string(plane[0]) + ", " + std::to_string(plane[1]) + ", " +
+                              std::to_string(plane[2]) + ", " + std::to_string(plane[3]) + ")");
+    return plane;
 }
 
 std::vector<double> as_vector(const DoubleArray& a) {

@@ -85,3 +85,8 @@ std::vector<double> as_vector(const DoubleArray& a);
 std::vector<std::int32_t> int32_vector(const py::handle& a, const char* what);
 /// A 1-D bool array, named `what` in errors (0.5 is no mask value, and an (N, 1) array no mask of N).
 std::vector<std::uint8_t> bool_vector(const py::handle& a, const char* what);
+/// A 1-D array of real numbers as float64, named `what` in errors (a string or an object is no array of them).
+std::vector<double> double_vector(const py::handle& a, const char* what);
+/// A plane as the pipeline makes them — a unit normal pointing up (c > 0), finite d — else ValueError naming `what`:
+/// the levelling divides by 1 + c, and a normal of another length scales the heights.
+rp::Plane checked_plane(const std::array<double, 4>& plane, const char* what);

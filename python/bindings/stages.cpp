@@ -14,7 +14,7 @@ rp::Profile profile_of(const DoubleArray& z, double ds,
     p.ds = ds;
     p.z = as_vector(z);
     p.count = int32_vector(count, "count");
-    p.spread = as_vector(DoubleArray::ensure(spread));
+    p.spread = double_vector(spread, "spread");
     if (p.count.size() != p.z.size() || p.spread.size() != p.z.size())
         throw py::value_error("z, count and spread must have one entry per bin");
     return p;
@@ -32,8 +32,9 @@ void bind_obstacle_stages(py::module_& m) {
         }
         return py::array_t<std::int32_t>(static_cast<py::ssize_t>(labels.size()), labels.data());
     }, "Euclidean cluster id of every point (-1: none)");
-    m.def("find_obstacles", [](py::handle base_points, py::handle ground_mask, std::array<double, 4> plane,
+    m.def("find_obstacles", [](py::handle base_points, py::handle ground_mask, std::array<double, 4> given_plane,
                                const std::string& config_json) {
+        const rp::Plane plane = checked_plane(given_plane, "plane");
         py::object holder;
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(base_points, holder, "base_points");
@@ -49,8 +50,9 @@ void bind_obstacle_stages(py::module_& m) {
     }, "(Obstacles, cluster id per point) of the non-ground ROI points among base-frame points");
     m.def("wheel_obstacles", [](py::handle base_points, py::handle label_array,
                                 const ClustersRef& obstacles,
-                                std::array<double, 4> plane, double speed, double yaw_rate, const std::string& wheel,
-                                const std::string& config_json) {
+                                std::array<double, 4> given_plane, double speed, double yaw_rate,
+                                const std::string& wheel, const std::string& config_json) {
+        const rp::Plane plane = checked_plane(given_plane, "plane");
         if (wheel != "left" && wheel != "right") throw py::value_error("wheel must be 'left' or 'right', got '" + wheel + "'");
         py::object holder;
         const rp::Config cfg = config_from(config_json);
@@ -126,7 +128,7 @@ void bind_stages(py::module_& m) {
         const rp::Config cfg = config_from(config_json);
         const rp::PointsView view = points_from(ground_points, holder, "ground_points");
         std::optional<rp::Plane> pl;
-        if (!plane.is_none()) pl = plane.cast<std::array<double, 4>>();
+        if (!plane.is_none()) pl = checked_plane(plane.cast<std::array<double, 4>>(), "plane");
         const rp::Levelling L = rp::levelling_for(cfg.profile.level && pl ? &*pl : nullptr);
         const rp::WheelPaths paths = rp::plan_paths(speed, yaw_rate, cfg.track_width, cfg.path);
         rp::WheelProfiles w;
@@ -150,12 +152,10 @@ void bind_stages(py::module_& m) {
         }
         return py::make_tuple(std::move(w.left), std::move(w.right));
     }, "Profiles of both wheels, with their roughness and IRI, from ground points given in the base frame");
-    m.def("level_points", [](py::handle points, std::array<double, 4> plane) {
+    m.def("level_points", [](py::handle points, std::array<double, 4> given_plane) {
+        const rp::Plane plane = checked_plane(given_plane, "plane");
         py::object holder;
         const rp::PointsView v = points_from(points, holder);
-        if (!(std::isfinite(plane[0]) && std::isfinite(plane[1]) && std::isfinite(plane[2])) ||
-            plane[0] * plane[0] + plane[1] * plane[1] + plane[2] * plane[2] == 0.0)
-            throw py::value_error("level_points: the plane's normal (a, b, c) must be finite and not zero");
         const rp::Levelling L = rp::levelling_for(&plane);
         py::array_t<double> out({v.rows(), Eigen::Index(3)});
         auto o = out.mutable_unchecked<2>();
@@ -201,16 +201,18 @@ void bind_stages(py::module_& m) {
         return rp::vehicle_roughness(profile_of(zl, ds, count_left, spread_left), profile_of(zr, ds, count_right, spread_right), cfg);
     }, py::arg("z_left"), py::arg("z_right"), py::arg("ds"), py::arg("config_json"), py::arg("count_left") = py::none(),
        py::arg("spread_left") = py::none(), py::arg("count_right") = py::none(), py::arg("spread_right") = py::none());
-    m.def("noise_psd", [](py::handle count_array, DoubleArray spread, double ds) -> py::object {
+    m.def("noise_psd", [](py::handle count_array, py::handle spread_array, double ds) -> py::object {
         const std::vector<std::int32_t> count = int32_vector(count_array, "count");
-        if (count.size() != static_cast<std::size_t>(spread.size())) throw py::value_error("count and spread differ in length");
+        const std::vector<double> spread = double_vector(spread_array, "spread");
+        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
         const auto psd = rp::noise_psd(count.data(), spread.data(), count.size(), ds);
         if (!psd) return py::none();
         return py::array_t<double>(static_cast<py::ssize_t>(psd->size()), psd->data());
     });
-    m.def("iri_noise", [](py::handle count_array, DoubleArray spread, double ds) -> std::optional<double> {
+    m.def("iri_noise", [](py::handle count_array, py::handle spread_array, double ds) -> std::optional<double> {
         const std::vector<std::int32_t> count = int32_vector(count_array, "count");
-        if (count.size() != static_cast<std::size_t>(spread.size())) throw py::value_error("count and spread differ in length");
+        const std::vector<double> spread = double_vector(spread_array, "spread");
+        if (count.size() != spread.size()) throw py::value_error("count and spread differ in length");
         return rp::iri_noise(count.data(), spread.data(), count.size(), ds);
     });
     m.def("resolved_fraction", [](py::handle count_array, double ds, DoubleArray n) {

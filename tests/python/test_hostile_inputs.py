@@ -391,8 +391,16 @@ def test_stage_functions_refuse_what_a_cast_would_change():
         rp.native.noise_psd(count.reshape(2, 100), spread, 0.1)
     with pytest.raises(TypeError, match="count must be an array of integers, got dtype float64"):
         rp.native.resolved_fraction(count + 0.5, 0.1, np.array([0.1]))
-    with pytest.raises(ValueError, match="the plane's normal"):
-        rp.native.level_points(base, [0.0, 0.0, 0.0, 0.0])
+    for plane in ([0.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 0.0, 2.0, 0.0]):  # NaN x, y; doubled z
+        with pytest.raises(ValueError, match=r"plane must be \(a, b, c, d\) with a unit normal pointing up"):
+            rp.native.level_points(base, plane)
+    with pytest.raises(TypeError, match="spread must be an array of real numbers, got dtype <U3"):
+        rp.native.analyze_roughness(z, 0.1, rp.Config(), count=count, spread="abc")  # once a segmentation fault
+    with pytest.raises(ValueError, match=r"spread must be 1-D, got shape \(2, 100\)"):
+        rp.native.noise_psd(count, spread.reshape(2, 100), 0.1)
+    with pytest.raises(ValueError, match="count must fit in int32, got 18446744073709551615 at 0"):
+        rp.native.noise_psd(np.full(200, 2**64 - 1, np.uint64), spread, 0.1)
+    assert rp.native.resolved_fraction([], 0.1, np.array([0.1])).shape == (1,)  # an empty list is an empty count
     for name, call in {"displacement_psd": lambda ds: rp.native.displacement_psd(z, ds),
                        "roughness": lambda ds: rp.native.analyze_roughness(z, ds, rp.Config()),
                        "noise_psd": lambda ds: rp.native.noise_psd(count, spread, ds),
