@@ -159,3 +159,14 @@ def test_an_infinite_disparity_is_invalid_not_a_point_at_the_camera():
     points, variances, pixels = ref.stereo.disparity_to_points(d, 0, calib, StereoConfig())
     assert sorted(set(range(16)) - set(pixels)) == [0, 9, 15]
     assert np.isfinite(variances).all() and (points[:, 0] == pytest.approx(7.0))  # fx·B/d = 350/50
+
+
+@pytest.mark.parametrize("impl", [rp.native, rp.reference], ids=["cpp", "reference"])
+def test_a_profile_without_a_valid_bin_needs_no_spacing(impl):
+    """An empty or all-NaN profile has no stretch to rate whatever its spacing: both implementations say so (the
+    reference once refused ds = 0 first, where the core reads the profile first)."""
+    for z in (np.full(10, np.nan), np.zeros(0)):
+        assert impl.analyze_roughness(z, 0.0, rp.Config()).reason == "no valid profile"
+        assert impl.profile_iri(z, 0.0).reason == "no valid profile"
+    with pytest.raises(ValueError, match="ds"):
+        impl.analyze_roughness(np.zeros(200), 0.0, rp.Config())

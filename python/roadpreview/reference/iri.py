@@ -90,10 +90,10 @@ def iri(z, ds: float) -> float:
 def profile_iri(z, ds: float, cfg: Config | None = None) -> Iri:
     """IRI over the longest valid stretch of a profile (NaN = missing), if it is at least iri.min_length_m."""
     cfg = cfg or Config()
-    ds = check_ds(ds)
     start, stop = longest_valid_stretch(z)
     if stop == start:
-        return Iri(reason=NO_VALID_BIN)
+        return Iri(reason=NO_VALID_BIN)  # an empty profile may have no spacing
+    ds = check_ds(ds)
     length = (stop - start - 1) * ds
     if length < cfg.iri.min_length_m - 1e-9 or stop - start <= moving_average_samples(ds):
         return Iri(length=length, reason=TOO_SHORT)

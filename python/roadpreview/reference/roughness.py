@@ -260,7 +260,8 @@ def classify_psd(n: np.ndarray, psd: np.ndarray, length: float, ds: float, cfg: 
 
 def _stretch_problem(count: int, ds: float, cfg: Config) -> Optional[str]:
     if count == 0:
-        return NO_VALID_BIN
+        return NO_VALID_BIN  # an empty profile may have no spacing
+    check_ds(ds)
     if count < 2 or count * ds < cfg.roughness.min_length_m - 1e-9:
         return TOO_SHORT
     return None
@@ -282,7 +283,6 @@ def analyze_roughness(z, ds: float, cfg: Config | None = None, *, count=None, sp
     spreads (the profile's ``count`` and ``spread``, both or neither) are given."""
     cfg = cfg or Config()
     z = np.asarray(z, dtype=np.float64)
-    ds = check_ds(ds)
     _check_support(z, count, spread, ("count", "spread"))
     start, stop = longest_valid_stretch(z)
     problem = _stretch_problem(stop - start, ds, cfg)
@@ -303,7 +303,6 @@ def vehicle_roughness(z_left, z_right, ds: float, cfg: Config | None = None, *, 
         return Roughness(reason=NO_VALID_BIN)
     if z_left.shape != z_right.shape:
         raise ValueError(f"left and right profiles differ in shape: {z_left.shape} vs {z_right.shape}")
-    ds = check_ds(ds)
     _check_support(z_left, count_left, spread_left, ("count_left", "spread_left"))
     _check_support(z_right, count_right, spread_right, ("count_right", "spread_right"))
     start, stop = longest_run(~np.isnan(z_left) & ~np.isnan(z_right))

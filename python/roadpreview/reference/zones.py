@@ -26,16 +26,16 @@ def patch_rings_sectors(xyz: np.ndarray, cfg: Config) -> tuple[np.ndarray, np.nd
     return ring, sector
 
 
-def paper_fit(xyz: np.ndarray, start: np.ndarray, cfg: Config, part=True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def paper_fit(xyz: np.ndarray, start: np.ndarray, cfg: Config, eligible=True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The paper's iteration from the points `start` selects: (plane of the last fit, the points that fit was
     made on, the points it keeps — at most pca_threshold_m above it and max_depth_m below), among the points
-    `part` marks (those that take part at all)."""
+    `eligible` marks (those that take part at all)."""
     kept = start
     for _ in range(cfg.ground.pca_iterations):
         fitted = kept
         plane = fit_plane(xyz[fitted])
         h = height_above(xyz, plane)
-        kept = (h <= cfg.ground.pca_threshold_m) & (h >= -cfg.ground.max_depth_m) & part
+        kept = (h <= cfg.ground.pca_threshold_m) & (h >= -cfg.ground.max_depth_m) & eligible
     return plane, fitted, kept
 
 
@@ -91,7 +91,7 @@ def fit_patch(xyz: np.ndarray, reference: np.ndarray, cfg: Config):
     lowest = min(np.sort(above_reference[not_under])[:g.zone_seed_points].mean(), 0.0)
     seeds = not_under & (above_reference <= lowest + g.pca_threshold_m)
     try:
-        plane, fitted, ground = paper_fit(xyz, seeds, cfg, part=not_under)
+        plane, fitted, ground = paper_fit(xyz, seeds, cfg, eligible=not_under)
     except DegenerateFit:  # too few seeds for a plane of its own
         return None, inherited, False
     flatness, breadth, centre = _spreads_and_centre(xyz[fitted])
