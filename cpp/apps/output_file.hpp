@@ -11,11 +11,13 @@
 
 namespace roadpreview::cli {
 
-/// Removes `path` when it is a regular file holding nothing; no-op for "" (stdout) and anything else.
+/// Removes `path` when it is a regular file holding nothing; no-op for "" (stdout) and anything else — a symbolic
+/// link included (-o /dev/stdout, or a link to a file the user keeps: the link itself would go).
 inline void remove_if_empty(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
-    if (!path.empty() && fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0) fs::remove(path, ec);
+    if (!path.empty() && fs::symlink_status(path, ec).type() == fs::file_type::regular && fs::file_size(path, ec) == 0)
+        fs::remove(path, ec);
 }
 
 /// The stream a command writes its lines to: the file `path`, or stdout for "". On leaving its scope — a finished

@@ -593,10 +593,8 @@ int calibrate(const RunOptions& o, const CLI::App& app) {
     std::fprintf(stderr, "roadpreview: %d of %d beams determined (%s) from %lld frames%s (point noise %.1f mm); "
                  "largest offset %.4f deg; wrote %s\n", determined, c.beam_count, o.calibration_method.c_str(),
                  static_cast<long long>(c.frames), travel, 1e3 * c.residual_m, largest, o.output.c_str());
-    if (by_motion && c.travel_m < rp::kShortDriveM)
-        std::fprintf(stderr, "roadpreview: warning: a drive of %.2f m is short for the motion method (%.0f m or more): "
-                     "its offsets are unreliable and their σ understated; --method surface needs no motion\n",
-                     c.travel_m, rp::kShortDriveM);
+    if (const std::string warning = by_motion ? rp::short_drive_warning(c.travel_m) : ""; !warning.empty())
+        std::fprintf(stderr, "roadpreview: warning: %s (--method surface)\n", warning.c_str());
     return 0;
 }
 

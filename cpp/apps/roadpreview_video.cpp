@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
     app.add_option("--cascade", cascades, "CLASS=FILE[:MIN_NEIGHBOURS]: a Viola–Jones cascade (OpenCV XML) whose "
                                           "detections get CLASS (repeatable)");
     app.add_flag("--no-people", no_people, "Do not run the HOG people detector (class pedestrian)");
-    app.add_option("--people-threshold", o.people_threshold, "HOG SVM margin a person needs (default 0)");
+    app.add_option("--people-threshold", o.people_threshold, "HOG SVM margin a person needs, ≥ 0 (default 0; its score is margin/(1 + margin))");
     app.add_option("--process-width", o.process_width_px, "Frames are scaled to this width for detection, px "
                                                           "(default 720, as the paper)");
     app.add_option("--stride", o.frame_stride, "Detect in every n-th frame (default 1)");

@@ -238,24 +238,17 @@ int run(const RoadsideOptions& o) {
             std::fprintf(stderr, "world background from the scans with poses: %d × %d cells of %.2f m, scan period %.3f s\n",
                          w.width_cells(), w.height_cells(), site.settings.world.cell_m, w.scan_period_s());
     }
-    std::size_t detections = 0;
-    const auto add_detections = [&](const std::vector<rs::CameraDetection>& d) {
-        processor.add_detections(d);
-        detections += d.size();
-    };
-    if (!o.detections.empty()) add_detections(rs::read_detections(o.detections));
-    if (!o.camera.video.empty()) add_detections(detect_in_video(o.camera, site, o.quiet));
+    if (!o.detections.empty()) processor.add_detections(rs::read_detections(o.detections));
+    if (!o.camera.video.empty()) processor.add_detections(detect_in_video(o.camera, site, o.quiet));
     roadpreview::cli::OutputFile output(o.output);  // a run that fails before its first cycle leaves no empty file
     std::ostream& out = output.stream();
     std::vector<rs::Cycle> kept;  // for GeoJSON only
     long long cycles = 0, objects = 0, dropouts = 0;
-    double worst_ms = 0.0, total_ms = 0.0, first_cycle_s = 0.0, last_cycle_s = 0.0;
+    double worst_ms = 0.0, total_ms = 0.0;
     std::vector<bool> was_active(site.scanners.size(), true);
     auto emit = [&](const std::vector<rs::Cycle>& done) {
         for (const auto& c : done) {
             out << rs::cycle_to_json(c) << '\n';
-            if (cycles == 0) first_cycle_s = c.t_s;
-            last_cycle_s = c.t_s;
             ++cycles, objects += static_cast<long long>(c.objects.size());
             worst_ms = std::max(worst_ms, c.process_ms), total_ms += c.process_ms;
             for (std::size_t i = 0; i < c.scanners.size(); ++i) {
@@ -272,11 +265,8 @@ int run(const RoadsideOptions& o) {
     };
     for (const auto& s : scans) emit(processor.push(s));
     emit(processor.finish());
-    if (const std::size_t outside = processor.detections_outside_scans(); outside > 0 && cycles > 0)
-        std::fprintf(stderr, "roadpreview: warning: %zu of %zu camera detections lie more than 1 s outside the scans' "
-                     "time (the cycles end at t = %.3f–%.3f s on the site clock) and are in no output: check the "
-                     "camera's time_offset_s in the site file (or --video-start)\n", outside, detections,
-                     first_cycle_s, last_cycle_s);
+    if (const std::string warning = processor.detections_outside_warning(); !warning.empty() && cycles > 0)
+        std::fprintf(stderr, "roadpreview: warning: %s\n", warning.c_str());
     output.check_written();
     if (cycles == 0) throw std::runtime_error("no cycle written: the inputs end within the background learning time");
     if (!o.geojson.empty()) {
@@ -361,7 +351,7 @@ int extrinsics(const RoadsideOptions& o) {
     const double deg = 180.0 / 3.14159265358979323846;
     if (!r.converged) {  // no site entry to paste: the one printed would be the guess, or ICP's last wrong step
         char fitness[64] = "no point pairs within --max-distance";  // PCL's fitness is then DBL_MAX
-        if (r.fitness_m2 < 1e300) std::snprintf(fitness, sizeof fitness, "fitness %.4g m²", r.fitness_m2);
+        if (r.fitness_m2 < std::numeric_limits<double>::max()) std::snprintf(fitness, sizeof fitness, "fitness %.4g m²", r.fitness_m2);
         throw std::runtime_error(moving.name + " onto " + fixed.name + ": ICP did not converge (" + fitness +
                                  "): the scans share too little of the scene within --max-distance, or the site "
                                  "poses are too far off to start from");
@@ -403,7 +393,7 @@ std::function<int()> add_roadside_commands(CLI::App& app) {
         cmd->add_option("--cascade", v.cascades, "CLASS=FILE[:MIN_NEIGHBOURS]: a Viola–Jones cascade (OpenCV XML) "
                                                  "whose detections get CLASS (repeatable)");
         cmd->add_flag("--no-people", v.no_people, "Do not run the HOG people detector (class pedestrian)");
-        cmd->add_option("--people-threshold", v.people_threshold, "HOG SVM margin a person needs (default 0)");
+        cmd->add_option("--people-threshold", v.people_threshold, "HOG SVM margin a person needs, ≥ 0 (default 0; its score is margin/(1 + margin))");
         cmd->add_option("--process-width", v.process_width_px, "Video frames are scaled to this width for detection, "
                                                                "px (default 720, as the paper)");
         cmd->add_option("--video-stride", v.stride, "Detect in every n-th video frame (default 1)")

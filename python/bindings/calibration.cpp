@@ -98,7 +98,7 @@ py::array per_beam(const rp::BeamCalibration& c, Get get) {
 
 void bind_calibration(py::module_& m) {
     py::register_exception<rp::CalibrationError>(m, "CalibrationError", PyExc_ValueError);
-    m.attr("SHORT_DRIVE_M") = rp::kShortDriveM;
+    m.def("short_drive_warning", &rp::short_drive_warning, py::arg("travel_m"));
     py::class_<rp::BeamCalibration>(m, "BeamCalibration", "Per-beam offsets estimated from a drive (a beams file)")
         .def_readwrite("sensor_model", &rp::BeamCalibration::sensor_model)
         .def_readwrite("serial", &rp::BeamCalibration::serial)

@@ -123,9 +123,10 @@ void bind_stereo(py::module_& m) {
         const int first_row = rp::first_road_row(calib, camera, rows, cfg.stereo);
         std::optional<rp::GreyImage> grey;
         rp::StereoPoints p;
+        const bool match = disparity.is_none();  // asked with the GIL held
         {
             py::gil_scoped_release release;
-            if (disparity.is_none()) d = rp::match_stereo(*pair, first_row, cfg.stereo);
+            if (match) d = rp::match_stereo(*pair, first_row, cfg.stereo);
             if (pair) grey = rp::GreyImage(pair->left.cast<float>() / 255.0f);
             p = rp::disparity_to_points(d, first_row, calib, cfg.stereo, grey ? &*grey : nullptr);
         }

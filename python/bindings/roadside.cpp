@@ -138,6 +138,15 @@ public:
         const InUse in_use(this, kWhat);
         return p_.detections_outside_scans();
     }
+    std::string detections_outside_warning() const {
+        const InUse in_use(this, kWhat);
+        return p_.detections_outside_warning();
+    }
+    std::vector<std::string> scanner_names() const {
+        std::vector<std::string> out;
+        for (const auto& scanner : p_.site().scanners) out.push_back(scanner.name);
+        return out;
+    }
     // Each site scanner's clock offset (s), in the site file's order: what puts its scans on the site clock.
     std::vector<double> time_offsets_s() const {
         std::vector<double> out;
@@ -210,5 +219,7 @@ void bind_roadside(py::module_& parent) {
         .def("add_detections", &PyProcessor::add_detections)
         .def("finish", &PyProcessor::finish)
         .def_property_readonly("time_offsets_s", &PyProcessor::time_offsets_s)
-        .def_property_readonly("detections_outside_scans", &PyProcessor::detections_outside_scans);
+        .def_property_readonly("detections_outside_scans", &PyProcessor::detections_outside_scans)
+        .def("detections_outside_warning", &PyProcessor::detections_outside_warning)
+        .def_property_readonly("scanner_names", &PyProcessor::scanner_names);
 }

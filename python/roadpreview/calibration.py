@@ -18,8 +18,8 @@ from typing import Iterable, Optional, Sequence, Union
 import numpy as np
 
 from ._native import core
-from .estimator import _int32_ids
 from .config import Config
+from .estimator import int32_ids
 
 DEFAULT_UNNUMBERED_BEAMS = 64  #: a sensor whose frames do not number their points: the KITTI HDL-64E
 
@@ -48,7 +48,7 @@ def _frame_arrays(frame, k: int):
         if beams.dtype.kind not in "iu" or beams.shape != (len(points),):
             raise TypeError(f"calibrate_beams: frame {k}'s beams must be one integer per point ({len(points)}), got "
                             f"{beams.dtype} of shape {beams.shape}")
-        beams = _int32_ids(beams, f"calibrate_beams: frame {k}'s beams").astype(np.int32)
+        beams = int32_ids(beams, f"calibrate_beams: frame {k}'s beams").astype(np.int32)
     return points, beams, timestamp
 
 
@@ -132,8 +132,7 @@ def calibrate_beams(frames: Iterable, *, speed: Optional[float] = None, yaw_rate
                                      int(min_observations))
     if info:
         out.sensor_model, out.serial = info.get("sensor_model", ""), info.get("serial", "")
-    if method != "surface" and out.travel_m < core().SHORT_DRIVE_M:
-        warnings.warn(f"calibrate_beams: a drive of {out.travel_m:.2f} m is short for the motion method "
-                      f"({core().SHORT_DRIVE_M:.0f} m or more): its offsets are unreliable and their σ understated; "
-                      "method='surface' needs no motion", RuntimeWarning, stacklevel=2)
+    warning = core().short_drive_warning(out.travel_m) if method != "surface" else ""
+    if warning:
+        warnings.warn(f"calibrate_beams: {warning} (method='surface')", RuntimeWarning, stacklevel=2)
     return out

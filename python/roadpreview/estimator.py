@@ -83,7 +83,7 @@ class Estimator:
             pose = tuple(float(v) for v in pose)
             if len(pose) != 3:
                 raise ValueError(f"pose must be (x, y, yaw), got {len(pose)} values")
-        error_groups, beams = _int32_ids(error_groups, "error_groups"), _int32_ids(beams, "beams")
+        error_groups, beams = int32_ids(error_groups, "error_groups"), int32_ids(beams, "beams")
         range_variances = _float32_values(range_variances, "range_variances")
         result = self._impl.process(points, speed, yaw_rate, source, timestamp, yaw_rate_source, pose,
                                     range_variances, error_groups, beams)
@@ -111,7 +111,7 @@ def _float32_values(values, name: str):
     return values
 
 
-def _int32_ids(ids, name: str):
+def int32_ids(ids, name: str):
     """``ids`` (None passes) as an array; integers beyond int32 are a ValueError (the C++ core's ids are int32)."""
     if ids is None:
         return None

@@ -224,12 +224,16 @@ class Processor:
         for s in sorted(scans, key=site_time):
             cycles += self.push(s)
         cycles += self.finish()
-        outside = self.detections_outside_scans
-        if outside and cycles:
-            warnings.warn(f"{outside} camera detections lie more than 1 s outside the scans' time (the cycles end at "
-                          f"t = {cycles[0]['t_s']:.3f}–{cycles[-1]['t_s']:.3f} s on the site clock) and are in no "
-                          "output: check the camera's time_offset_s in the site file", RuntimeWarning, stacklevel=2)
+        for warning in [self._p.detections_outside_warning()] + self._scanners_without_scans(scans):
+            if warning and cycles:
+                warnings.warn(warning, RuntimeWarning, stacklevel=2)
         return cycles
+
+    def _scanners_without_scans(self, scans: list) -> list[str]:
+        """A warning per site scanner no scan came from (as the CLI gives one)."""
+        given = {int(s["scanner"]) for s in scans}
+        return [f"site scanner '{name}' has no scans in the inputs" for k, name in enumerate(self._p.scanner_names)
+                if k not in given]
 
     @property
     def detections_outside_scans(self) -> int:

@@ -61,7 +61,7 @@ def run_one(out, inputs, rid, **run_options):
     geo_options = run_options.pop("geo_options")
     batch.process_chunk(rid, rec.inputs, rec.chunks[0], run_options, str(out))
     batch.finish_recording(rid, str(out), run_options.get("config"), (10.0,), geo_options)
-    batch._write_tables(out)
+    batch.write_tables(out)
 
 
 def test_a_gnss_track_puts_the_batch_segments_on_the_map(tmp_path):

@@ -83,6 +83,13 @@ def test_detections_on_another_clock_are_said_to_be_in_no_output(sim_files, tmp_
     assert processor.detections_outside_scans == len(run.detections)
     proc = run_cli("roadside", "run", "--site", d / "site.yaml", d / "scans.csv", "--detections", d / "det.csv", "-q")
     assert "camera detections lie" not in proc.stderr  # the simulated camera's detections fall in the scans' time
+    # A site scanner without scans is said to be, by the CLI and the Python processor alike.
+    alone = [s for s in rp.roadside.read_scans(d / "scans.csv") if s["scanner"] == 0]
+    rp.roadside.write_scan_csv(alone, tmp_path / "s1.csv")
+    proc = run_cli("roadside", "run", "--site", d / "site.yaml", tmp_path / "s1.csv", "-q")
+    assert "warning: site scanner 's2' has no scans in the inputs" in proc.stderr
+    with pytest.warns(RuntimeWarning, match="site scanner 's2' has no scans in the inputs"):
+        rp.roadside.Processor(d / "site.yaml").run(alone)
 
 
 @pytest.mark.parametrize("score", ["0", "-1", "1.5", "1e308"])

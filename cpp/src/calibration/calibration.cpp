@@ -346,6 +346,12 @@ void BeamCalibrator::add_frame(PointsView points, const std::vector<std::int32_t
     add_frame(points, beams, one_plane_ground(points, cfg_), pose);
 }
 
+std::string short_drive_warning(double travel_m) {
+    if (travel_m >= kShortDriveM) return "";
+    return "a drive of " + fixed(travel_m, 2) + " m is short for the motion method (" + fixed(kShortDriveM, 0) +
+           " m or more): its offsets are unreliable and their σ understated; the surface method needs no motion";
+}
+
 BeamCalibration BeamCalibrator::solve() const {
     const auto frames = static_cast<int>(poses_.size());
     if (frames < options_.min_frames)

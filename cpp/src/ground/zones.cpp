@@ -47,7 +47,7 @@ std::optional<PlaneFit> iterate_fit(const std::vector<Eigen::Vector3d>& pts, std
         bool changed = false;
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const double h = height_above(fit->plane, pts[i].x(), pts[i].y(), pts[i].z());
-            const bool keep = (h <= cfg.pca_threshold_m) & (h >= -cfg.max_depth_m) && eligible(i);
+            const bool keep = h <= cfg.pca_threshold_m && h >= -cfg.max_depth_m && eligible(i);
             if (keep == static_cast<bool>(kept[i])) continue;
             changed = true;
             kept[i] = keep;

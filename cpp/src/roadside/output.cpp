@@ -87,8 +87,10 @@ std::string cycles_to_geojson(const std::vector<Cycle>& cycles) {
 // A score votes for its class: 0 voted nothing (a matched box left its track unclassed), 1e308 summed to an
 // infinite vote and a null score in the output.
 void check_detection(const CameraDetection& d, const std::string& where) {
-    for (double v : {d.t_s, d.x_px, d.y_px, d.w_px, d.h_px, d.score})
-        if (!std::isfinite(v)) throw std::runtime_error(where + ": detection has a non-finite number");
+    const std::pair<const char*, double> fields[] = {{"t", d.t_s}, {"x", d.x_px}, {"y", d.y_px}, {"w", d.w_px},
+                                                     {"h", d.h_px}, {"score", d.score}};
+    for (const auto& [name, v] : fields)
+        if (!std::isfinite(v)) throw std::runtime_error(where + ": detection " + name + " is not a finite number");
     if (d.w_px <= 0 || d.h_px <= 0) throw std::runtime_error(where + ": detection box w and h must be > 0");
     if (d.cls.empty()) throw std::runtime_error(where + ": empty class");
     if (!(d.score > 0.0 && d.score <= 1.0))

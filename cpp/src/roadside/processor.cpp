@@ -109,12 +109,11 @@ void Processor::learn_world(const std::vector<LaserScan>& scans) {
 
 // A scanner's layout stays what its first scan had: its background is per beam, and a beam of another step or first
 // angle looks elsewhere (a site file that pins the layout catches it there; most do not).
-void Processor::check_same_layout(const LaserScan& scan) {
-    std::optional<ScanLayout>& first = first_layout_[static_cast<std::size_t>(scan.scanner)];
+void Processor::check_same_layout(const LaserScan& scan) const {
+    const std::optional<ScanLayout>& first = first_layout_[static_cast<std::size_t>(scan.scanner)];
     const ScanLayout now = layout_of(scan);
-    if (!first) first = now;
-    if (first->beams != now.beams || std::abs(first->step_rad - now.step_rad) > 1e-6 * kDeg ||
-        std::abs(first->start_angle_rad - now.start_angle_rad) > 1e-4 * kDeg)
+    if (first && (first->beams != now.beams || std::abs(first->step_rad - now.step_rad) > 1e-6 * kDeg ||
+        std::abs(first->start_angle_rad - now.start_angle_rad) > 1e-4 * kDeg))
         throw std::runtime_error(scan.source + ": the scanner '" + site_.scanners[static_cast<std::size_t>(scan.scanner)].name +
                                  "' changed its layout to " + layout_text(now) + " from " + layout_text(*first) +
                                  " of its first scan: its background is per beam");
@@ -145,7 +144,9 @@ std::vector<Cycle> Processor::push(const LaserScan& input) {
     if (st.last_scan_s >= 0.0 && scan.time_s + 1e-9 < st.last_scan_s)
         throw std::runtime_error(scan.source + ": scan time goes backwards for scanner '" + where.name + "'");
     // Counted once the cycle this scan closes is out: that cycle's status is of the scans up to its end.
-    const auto count_scan = [&] {
+    const auto count_scan = [&] {  // the scan is taken: its scanner's layout is known from here on
+        auto& layout = first_layout_[static_cast<std::size_t>(scan.scanner)];
+        if (!layout) layout = layout_of(scan);
         st.last_scan_s = scan.time_s;
         ++st.scans;
         st.invalid_ranges += invalid;
@@ -222,6 +223,17 @@ std::size_t Processor::detections_outside_scans() const {
     return static_cast<std::size_t>(std::count_if(detections_.begin(), detections_.end(), [&](const CameraDetection& d) {
         return d.t_s < first_time_s_ - kCameraMemoryS || d.t_s > last_scan_s + kCameraMemoryS;
     }));
+}
+
+std::string Processor::detections_outside_warning() const {
+    const std::size_t outside = detections_outside_scans();
+    if (outside == 0 || !started_) return "";
+    double last_scan_s = first_time_s_;
+    for (const auto& st : status_) last_scan_s = std::max(last_scan_s, st.last_scan_s);
+    return std::to_string(outside) + " of " + std::to_string(detections_.size()) + " camera detections lie more "
+           "than 1 s outside the scans' time (t = " + number_text(first_time_s_, 10) + "–" + number_text(last_scan_s, 10) +
+           " s on the site clock) and are in no output: check the camera's time_offset_s in the site file (or a "
+           "video's start time)";
 }
 
 void Processor::add_detections(const std::vector<CameraDetection>& detections) {

@@ -106,6 +106,7 @@ std::vector<TimedTelegram> read_sick_pcap(const std::string& path, int sensor_po
             stream.ignore_server_data();
         }
     });
+    pcap_geterr(sniffer->get_pcap_handle())[0] = '\0';  // what libpcap says after the loop is of the loop's reads
     sniffer->sniff_loop([&](Tins::Packet& packet) {
         try {
             follower.process_packet(packet);

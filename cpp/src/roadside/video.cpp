@@ -24,7 +24,9 @@ void check(const VideoDetectionOptions& o, const std::string& path) {
     if (o.process_width_px < 64 || o.process_width_px > 8192) fail("process width must be 64–8192 px");
     if (o.frame_stride < 1) fail("frame stride must be ≥ 1");
     if (!std::isfinite(o.start_time_s)) fail("start time must be finite");
-    if (!std::isfinite(o.people_threshold)) fail("the people threshold must be finite");
+    // A detection's score is its margin m as m/(1 + m), in (0, 1): a negative margin has none.
+    if (!(o.people_threshold >= 0.0 && std::isfinite(o.people_threshold)))
+        fail("the people threshold (a HOG SVM margin) must be a finite number ≥ 0");
     if (!o.people && o.cascades.empty()) fail("nothing to detect: people detection off and no cascade given");
     for (const auto& c : o.cascades) {
         if (c.cls.empty() || c.cls.find_first_of(",\"\n") != std::string::npos)

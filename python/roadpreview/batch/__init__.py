@@ -46,4 +46,3 @@ from .planning import (DEFAULT_CHUNK_FRAMES, DEFAULT_OVERLAP_FRAMES, SOURCE_OPTI
 from .summaries import (SEGMENT_LENGTHS_M, SEGMENT_SCHEMA, Summary, finish_recording, route_builder, segment_rows,
                         stitch, write_tables)
 
-_write_tables = write_tables  # its name in batch.py (tests/python/test_geo.py)

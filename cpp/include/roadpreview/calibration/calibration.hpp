@@ -26,6 +26,8 @@ public:
 /// understated (README "Beam self-calibration": on a 9 m simulated drive offsets of up to 0.1° stayed 0.007° off,
 /// and two 1.7 m halves of a real drive disagreed by 0.08° where each stated 0.003°). Runs warn below it.
 inline constexpr double kShortDriveM = 15.0;
+/// The warning a motion calibration of a drive of `travel_m` deserves: empty from kShortDriveM on.
+std::string short_drive_warning(double travel_m);
 
 struct CalibrationOptions {
     /// Road cells in which the beams' heights are compared. Smaller cells bias the steep beams: range noise moves

@@ -91,6 +91,8 @@ public:
     /// How many of the camera detections given so far lie more than a second (the time a track keeps a detection)
     /// before the first scan or after the last, on the site clock: on another clock, most likely; in no output.
     std::size_t detections_outside_scans() const;
+    /// The warning those detections deserve (empty when there are none, or no scan yet).
+    std::string detections_outside_warning() const;
     const Site& site() const { return site_; }
 
 private:
@@ -98,7 +100,7 @@ private:
     /// The scan on the site clock, its layout checked, invalid ranges made no return (and counted, if asked).
     LaserScan checked(const LaserScan& input, std::int64_t* invalid_ranges = nullptr) const;
     Pose2 site_pose(const LaserScan& scan) const;  ///< the scanner's pose: its logged pose (if any) ∘ its mount
-    void check_same_layout(const LaserScan& scan);
+    void check_same_layout(const LaserScan& scan) const;
     void associate_camera(double t0_s, double t1_s, Cycle& cycle);
     OutputObject output(const Track& t, double t_s) const;
     Site site_;
