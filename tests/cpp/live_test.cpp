@@ -340,6 +340,13 @@ TEST(Live, EndpointsAreParsedOrRefusedByName) {
         EXPECT_NE(e.find(bad), std::string::npos) << e;
     }
     EXPECT_NE(error_of([] { rp::parse_udp_endpoint("127.0.0.1", false); }).find("no port"), std::string::npos);
+    // They read "cannot resolve the address (Name or service not known)".
+    EXPECT_NE(error_of([] { rp::open_live("udp://[::1]:47560", {}); }).find("[::1] is an IPv6 address; give an IPv4"),
+              std::string::npos);
+    rp::ReplayOptions r;
+    EXPECT_NE(error_of([&] { rp::replay_pcap(kOs1, rp::parse_udp_endpoint("udp://127.0.0.1:47560", false), r); })
+                  .find("give the address as ADDR:PORT, without a scheme"),
+              std::string::npos);
 }
 
 TEST(Live, ReplayOfACaptureWithoutUdpIsAnErrorNamingTheFile) {

@@ -12,6 +12,10 @@
 namespace roadpreview {
 
 sockaddr_in resolve_ipv4(const std::string& address, int port, const std::string& where) {
+    if (address.find("://") != std::string::npos)
+        throw std::runtime_error(where + ": give the address as ADDR:PORT, without a scheme");
+    if (address.find(':') != std::string::npos)  // "[::1]" or "::1": sensors and replays here speak IPv4
+        throw std::runtime_error(where + ": " + address + " is an IPv6 address; give an IPv4 one (e.g. 127.0.0.1)");
     addrinfo hints{};
     hints.ai_family = AF_INET;
     hints.ai_socktype = SOCK_DGRAM;
