@@ -1,0 +1,12 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""bench/route.py on short drives runs and prints its table."""
+
+from paths import run_bench
+
+
+def test_route_bench_short_drives():
+    out = run_bench("route.py", "--frames", "25", "--classes", "C", timeout=600)
+    header, rule, row = out.strip().splitlines()
+    assert header.startswith("| road | segments to 60 m | classed | same class |") and row.startswith("| C | ")
+    segments, classed, same, near = (int(v) for v in row.split("|")[2:6])
+    assert segments >= 4 and 0 < classed <= segments and same <= near <= classed
