@@ -332,7 +332,6 @@ rp::SourceOptions source_options(const RunOptions& o, const CLI::App& app, const
     return s;
 }
 
-// A live sensor on a udp:// address.
 // Set by SIGINT or SIGTERM during a live run: the stream ends there, and the run writes its summary and route files
 // as at --duration (the default action ended it at once, without them). Lock-free: safe in a signal handler.
 std::atomic<bool> g_stop_live{false};
@@ -340,6 +339,7 @@ static_assert(std::atomic<bool>::is_always_lock_free);
 
 extern "C" void stop_live(int) { g_stop_live = true; }
 
+// A live sensor on a udp:// address.
 std::unique_ptr<rp::FrameSource> open_live_source(const RunOptions& o, const CLI::App& app, const rp::Config& cfg) {
     rp::LiveOptions live;
     live.stop = &g_stop_live;

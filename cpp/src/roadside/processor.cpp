@@ -216,22 +216,25 @@ Cycle Processor::run_cycle(double t_end_s) {
     return c;
 }
 
+double Processor::last_scan_s() const {
+    double last = first_time_s_;
+    for (const auto& st : status_) last = std::max(last, st.last_scan_s);
+    return last;
+}
+
 std::size_t Processor::detections_outside_scans() const {
     if (!started_) return detections_.size();
-    double last_scan_s = first_time_s_;
-    for (const auto& st : status_) last_scan_s = std::max(last_scan_s, st.last_scan_s);
+    const double last = last_scan_s();
     return static_cast<std::size_t>(std::count_if(detections_.begin(), detections_.end(), [&](const CameraDetection& d) {
-        return d.t_s < first_time_s_ - kCameraMemoryS || d.t_s > last_scan_s + kCameraMemoryS;
+        return d.t_s < first_time_s_ - kCameraMemoryS || d.t_s > last + kCameraMemoryS;
     }));
 }
 
 std::string Processor::detections_outside_warning() const {
     const std::size_t outside = detections_outside_scans();
     if (outside == 0 || !started_) return "";
-    double last_scan_s = first_time_s_;
-    for (const auto& st : status_) last_scan_s = std::max(last_scan_s, st.last_scan_s);
     return std::to_string(outside) + " of " + std::to_string(detections_.size()) + " camera detections lie more "
-           "than 1 s outside the scans' time (t = " + number_text(first_time_s_, 10) + "–" + number_text(last_scan_s, 10) +
+           "than 1 s outside the scans' time (t = " + number_text(first_time_s_, 10) + "–" + number_text(last_scan_s(), 10) +
            " s on the site clock) and are in no output: check the camera's time_offset_s in the site file (or a "
            "video's start time)";
 }

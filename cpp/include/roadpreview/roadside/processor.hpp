@@ -101,6 +101,7 @@ private:
     LaserScan checked(const LaserScan& input, std::int64_t* invalid_ranges = nullptr) const;
     Pose2 site_pose(const LaserScan& scan) const;  ///< the scanner's pose: its logged pose (if any) ∘ its mount
     void check_same_layout(const LaserScan& scan) const;
+    double last_scan_s() const;  ///< site time of the latest scan of any scanner (the first's before any)
     void associate_camera(double t0_s, double t1_s, Cycle& cycle);
     OutputObject output(const Track& t, double t_s) const;
     Site site_;
