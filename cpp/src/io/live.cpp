@@ -135,8 +135,8 @@ private:
     }
 
     // Reads up to kMaxBatch datagrams the socket holds, with the kernel's receive time of each (SO_TIMESTAMPNS).
-    // Returns the time up to which the socket's datagrams have all been read: now when it was emptied, else the
-    // receive time of the last one read (a socket gives its datagrams in the order they arrived).
+    // Returns the time up to which the socket's datagrams have all been read: the time of the read that found it
+    // empty, else the receive time of the last one read (a socket gives its datagrams in the order they arrived).
     double read_batch(int fd, int port, std::vector<UdpDatagram>& batch) {
         alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
         for (std::size_t count = 0; count < kMaxBatch; ++count) {
@@ -147,11 +147,16 @@ private:
             m.msg_iovlen = 1;
             m.msg_control = control;
             m.msg_controllen = sizeof control;
+            // Taken before the read: a datagram that arrives after the socket was found empty is stamped after it.
+            // (Taken after, a datagram arriving in between — a preempted thread, a loaded machine — was older than
+            // the time returned yet unread, and another socket's newer datagram went first: an IMU sample moved to
+            // the next frame.)
+            const double asked_s = wall_now_s();
             const ssize_t n = recvmsg(fd, &m, MSG_DONTWAIT);
             if (n < 0) {
                 if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
                     fail(std::string("receive: ") + std::strerror(errno));
-                return wall_now_s();
+                return asked_s;
             }
             UdpDatagram d = spare();
             const double wall_s = wall_now_s(), steady_s = steady_now_s();
