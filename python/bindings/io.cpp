@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Recordings from Python: rp.io.open(...) iterates frames decoded in C++; a frame's arrays are read-only
 // numpy views of its buffers, kept alive by the frame.
+#include <atomic>
+#include <mutex>
+
 #include "common.hpp"
 
 namespace {
@@ -30,6 +33,53 @@ py::dict info_dict(const rp::SourceInfo& s) {
     d["datagrams_dropped"] = s.datagrams_dropped;
     return d;
 }
+
+// A live source the caller can close from any thread (rp.io.open_live): close() ends the stream — a next() waiting
+// on another thread returns within the input's 20 ms poll (the frame being assembled, or the end) — and frees the
+// sockets once no next() is running. The stop flag is the one the CLI's Ctrl-C sets (LiveOptions::stop).
+class ClosableLive final : public rp::FrameSource {
+public:
+    ClosableLive(const std::string& url, rp::LiveOptions options) {
+        options.stop = &closed_;
+        source_ = rp::open_live(url, options);
+    }
+
+    std::optional<rp::Frame> next() override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!source_) return std::nullopt;
+        std::optional<rp::Frame> frame;
+        try {
+            frame = source_->next();
+        } catch (const std::runtime_error&) {
+            // Closed before any datagram came: the end the caller asked for, not a silent sensor's error.
+            if (!closed_ || source_->info().datagrams_received != 0) throw;
+        }
+        if (closed_) release();
+        return frame;
+    }
+
+    rp::SourceInfo info() const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return source_ ? source_->info() : info_at_close_;
+    }
+
+    void close() {
+        closed_ = true;
+        std::lock_guard<std::mutex> lock(mutex_);  // a next() running returns within the poll once closed_ is set
+        if (source_) release();
+    }
+
+private:
+    void release() {
+        info_at_close_ = source_->info();
+        source_.reset();
+    }
+
+    std::atomic<bool> closed_{false};
+    mutable std::mutex mutex_;
+    std::unique_ptr<rp::FrameSource> source_;
+    rp::SourceInfo info_at_close_;
+};
 
 // Three doubles per IMU sample, from `member`.
 py::array imu_vectors(const rp::Frame& f, std::array<double, 3> rp::ImuSample::*member) {
@@ -233,6 +283,15 @@ void bind_io(py::module_& m) {
             return out + ">";
         });
 
+    py::class_<ClosableLive, rp::FrameSource>(m, "LiveSource", "A live sensor's frames; close() ends the stream")
+        .def("close", &ClosableLive::close, py::call_guard<py::gil_scoped_release>(),
+             "ends the stream (a next() waiting on another thread returns within 20 ms) and frees the sockets")
+        .def("__enter__", [](py::object self) { return self; })
+        .def("__exit__", [](ClosableLive& s, py::args) {
+            py::gil_scoped_release release;
+            s.close();
+        });
+
     m.def("open_frames", [](const std::vector<std::string>& inputs, const std::string& meta, const std::string& sensor_model,
                             const std::string& calibration, double cut_angle_deg, int lidar_port, bool skip_bad_packets,
                             int columns, const std::string& beam_calibration, const std::string& roi_config_json,
@@ -256,7 +315,7 @@ void bind_io(py::module_& m) {
         o.source.skip_bad_packets = skip_bad_packets;
         o.timeout_s = timeout_s;
         o.duration_s = duration_s;
-        return rp::open_live(url, o);
+        return std::make_unique<ClosableLive>(url, o);
     });
     m.def("replay", [](const std::string& capture, const std::string& to, double rate, int loops, double drop,
                        double reorder, std::uint32_t seed) {

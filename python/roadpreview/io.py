@@ -102,9 +102,10 @@ def open_live(url: str, meta: Optional[PathLike] = None, *, sensor_model: Option
     ``.completed_s`` the time the decoder had it complete (that datagram decoded, the frame built), and
     ``.diagnostics`` counts lost, late and duplicate packets and missing columns; ``.info`` counts the datagrams
     received and dropped by the full receive queue. ``roi_columns`` and ``roi_direction`` as in :func:`open`:
-    a frame completes when the last column that can see the region of interest arrives. The sockets are released
-    when the source is freed (``del source``, or leaving the loop that held the only reference); a thread blocked
-    in ``next()`` keeps it until that call returns (``timeout_s`` at most). There is no ``close()`` yet.
+    a frame completes when the last column that can see the region of interest arrives.
+    ``close()`` (or leaving a ``with`` block) ends the stream from any thread: a ``next()`` waiting on another thread
+    returns within 20 ms (the frame being assembled, then the end of the iteration), and the sockets are released
+    (also when the source is freed). ``info`` stays readable after closing.
     """
     return core().open_live(str(url), os.fspath(meta) if meta else "", sensor_model or "",
                             os.fspath(calibration) if calibration else "", float(cut_angle_deg),

@@ -250,3 +250,36 @@ def test_a_source_or_a_drive_used_by_two_threads_at_once_refuses_the_second():
         next(live)  # the source the drive reads, taken while it does
     thread.join()
     assert len(errors) == 1 and "in use" not in errors[0]
+
+
+def port_is_free(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+def test_closing_a_live_source_from_another_thread_ends_its_wait_and_frees_the_port():
+    port = free_port_pair()
+    live = rp.io.open_live(f"udp://127.0.0.1:{port}", timeout_s=30.0)  # no sender: next() would wait 30 s, then fail
+    assert not port_is_free(port)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(list(live)))
+    reader.start()
+    reader.join(0.3)  # under way: waiting for a datagram
+    live.close()
+    reader.join(5.0)
+    assert not reader.is_alive() and got == [[]]  # the iteration ended, without the timeout's error
+    assert port_is_free(port)
+    assert list(live) == [] and live.info["format"] == "velodyne udp"  # closed: no frames, its info kept
+    live.close()  # closing twice is harmless
+
+
+def test_a_live_source_in_a_with_block_frees_its_ports_on_leaving():
+    port = free_port_pair()
+    with rp.io.open_live(f"udp://127.0.0.1:{port}", OS1_128_META, timeout_s=30.0) as live:
+        assert not port_is_free(port) and not port_is_free(port + 1)  # lidar and IMU
+    assert port_is_free(port) and port_is_free(port + 1)
+    assert next(live, None) is None
