@@ -437,10 +437,16 @@ int run(const RunOptions& o, const CLI::App& app) {
     if (o.read_ahead_m > 0.0) as_usage_error("--read-ahead-m", [&] { rp::ProfileReadout(cfg, o.read_ahead_m); });
     for (const double length_m : o.segment_lengths_m)
         as_usage_error("--segments", [&] { rp::RouteBuilder(cfg).check_segment_length(length_m); });
+    const rp::DriveOptions drive = [&] {  // --frames: a usage error, said before a live input binds its port
+        try {
+            return drive_options(o, app);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(e.what());
+        }
+    }();
     auto source = open_source(o, app, cfg);
     check_source_options(app, source->info());
     const std::size_t total = source->info().format == "files" ? rp::expand_inputs(o.inputs).size() : 0;
-    const rp::DriveOptions drive = drive_options(o, app);
     rp::DriveRunner runner(std::move(source), cfg, drive);
     rp::cli::OutputFile output(o.output);  // a run that fails before its first frame leaves no empty file
     std::ostream& out = output.stream();

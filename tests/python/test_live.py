@@ -167,6 +167,9 @@ def test_cli_live_run_that_ends_before_any_datagram_says_so():
     assert f"udp://127.0.0.1:{port}: no datagram arrived before the run ended" in proc.stderr
     proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--frames", "0", check=False)
     assert proc.returncode == 2 and "--frames 0: a live run's --frames N ends it after N ≥ 1 frames" in proc.stderr
+    proc = run_cli("run", f"udp://127.0.0.1:{port}", "--speed", "1", "--frames", "2:1", check=False)
+    assert proc.returncode == 2 and "--frames 2:1: A must be smaller than B" in proc.stderr
+    assert "listening" not in proc.stderr  # said before the port is bound (it was an error after)
 
 
 def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
