@@ -54,6 +54,19 @@ def test_frames_carry_points_time_id_and_diagnostics(os1_frames):
     assert r.min() > 0.2 and r.max() < 32767 * 0.008 + 0.1  # RNG15: 15 bits of 8 mm
 
 
+def test_an_imu_datagram_the_network_copied_is_one_reading(os1_frames, tmp_path):
+    recs = records(OS1_128_PCAP)
+    imu = [i for i, (_, buf) in enumerate(recs) if (u := udp_of(buf)) and len(u[2].data) == 48]
+    copied = list(recs)
+    for i in reversed(imu[::2]):  # every other IMU datagram twice, the copy right behind it or after a lidar packet
+        copied.insert(i + 1 + (i % 4 == 0), recs[i])
+    frames = frames_of(write_pcap(tmp_path / "imu_copies.pcap", copied), meta=OS1_128_META)
+    assert len(copied) == len(recs) + len(imu[::2]) and len(frames) == len(os1_frames)
+    for got, want in zip(frames, os1_frames):
+        np.testing.assert_array_equal(got.imu_timestamps, want.imu_timestamps)
+        np.testing.assert_array_equal(got.imu_angular_velocity, want.imu_angular_velocity)
+
+
 def test_velodyne_recordings_decode_with_their_models():
     src = rp.io.open(VELODYNE / "hdl32_example.pcap")
     sweeps = list(src)

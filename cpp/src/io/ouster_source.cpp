@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Ouster packets (a pcap or live UDP): lidar packets to OusterDecoder, IMU packets attached to the frame being
 // assembled.
+#include <algorithm>
+#include <array>
+
 #include "roadpreview/calibration/calibration.hpp"
 #include "roadpreview/io/ouster.hpp"
 #include "pcap_source.hpp"
@@ -33,7 +36,7 @@ private:
 
     void on_other(const UdpDatagram& d) override {
         const bool imu = imu_port_ ? d.dst_port == imu_port_ : d.payload.size() == kOusterImuPacketBytes;
-        if (!imu || d.payload.size() != kOusterImuPacketBytes) return;
+        if (!imu || d.payload.size() != kOusterImuPacketBytes || seen_before(d)) return;
         decoder_.add_imu(decode_ouster_imu(d.payload.data(), d.payload.size(), d.timestamp,
                                            decoder_.metadata().imu_to_sensor));
     }
@@ -53,6 +56,24 @@ private:
         ready.push_back(std::move(f));
     }
 
+    using ImuBytes = std::array<std::uint8_t, kOusterImuPacketBytes>;
+
+    // A copy the network made of an IMU datagram (its sensor timestamps and all, byte for byte) is one reading,
+    // not two: remembered over the last few, as a copy comes close behind its original.
+    bool seen_before(const UdpDatagram& d) {
+        ImuBytes bytes;
+        std::copy_n(d.payload.begin(), bytes.size(), bytes.begin());
+        if (std::find(recent_imu_.begin(), recent_imu_.begin() + recent_count_, bytes) !=
+            recent_imu_.begin() + recent_count_)
+            return true;
+        recent_imu_[next_recent_] = bytes;
+        next_recent_ = (next_recent_ + 1) % recent_imu_.size();
+        recent_count_ = std::min(recent_count_ + 1, recent_imu_.size());
+        return false;
+    }
+
+    std::array<ImuBytes, 8> recent_imu_{};
+    std::size_t recent_count_ = 0, next_recent_ = 0;
     std::int64_t frames_ = 0;
     int imu_port_;
     OusterDecoder decoder_;
