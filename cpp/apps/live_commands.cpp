@@ -106,7 +106,8 @@ void LiveStats::add(const rp::Frame& f, double result_s) {
         output_ms_.add(1e3 * (written_s - result_s));
     }
     const rp::FrameDiagnostics& d = f.diagnostics;
-    affected_ += d.lost_packets || d.late_packets || d.missing_columns;
+    affected_ += d.lost_packets || d.late_packets || d.missing_columns || d.skipped_packets;
+    skipped_ += d.skipped_packets;
     lost_ += d.lost_packets;
     late_ += d.late_packets;
     duplicate_ += d.duplicate_packets;
@@ -123,10 +124,11 @@ std::string LiveStats::describe(const rp::FrameDiagnostics& d) {
 
 void LiveStats::print(const rp::SourceInfo& info) const {
     std::fprintf(stderr, "roadpreview: live: %lld datagrams received, %lld dropped by a full queue; %lld of %lld "
-                 "frames affected (%lld packets lost, %lld late, %lld duplicates, %lld columns missing)",
+                 "frames affected (%lld packets lost, %lld late, %lld duplicates, %lld bad packets skipped, %lld "
+                 "columns missing)",
                  static_cast<long long>(info.datagrams_received), static_cast<long long>(info.datagrams_dropped),
                  static_cast<long long>(affected_), static_cast<long long>(frames_), static_cast<long long>(lost_),
-                 static_cast<long long>(late_), static_cast<long long>(duplicate_),
+                 static_cast<long long>(late_), static_cast<long long>(duplicate_), static_cast<long long>(skipped_),
                  static_cast<long long>(missing_columns_));
     if (!latency_ms_.empty())
         std::fprintf(stderr, "; latency last packet → result p50 %.2f ms, p99 %.2f ms, max %.2f ms (outside the "

@@ -35,5 +35,5 @@ private:
     BoundedSample latency_ms_;
     BoundedSample completing_ms_;  // the datagram's arrival → the frame complete (queue, decode, frame built)
     BoundedSample output_ms_;      // the result ready → its output line written
-    std::int64_t frames_ = 0, affected_ = 0, lost_ = 0, late_ = 0, duplicate_ = 0, missing_columns_ = 0;
+    std::int64_t frames_ = 0, affected_ = 0, lost_ = 0, late_ = 0, duplicate_ = 0, skipped_ = 0, missing_columns_ = 0;
 };

@@ -79,18 +79,22 @@ def test_replay_refuses_a_bad_rate():
         rp.io.replay(OS1_128_PCAP, "127.0.0.1:9", rate=0)
 
 
-def run_live_cli(port: int, *args, replay_args=()):
-    """`roadpreview run udp://127.0.0.1:PORT ...` while `roadpreview replay` sends the OS1-128 capture to it: its
-    exit status, output lines, stderr and the replay's stderr. The run ends by itself (--frames, --timeout)."""
+def run_live_cli(port: int, *args, replay_args=(), first: bytes = b""):
+    """`roadpreview run udp://127.0.0.1:PORT ...` while `roadpreview replay` sends the OS1-128 capture to it (after
+    the datagram `first`, when given): its exit status, output lines, stderr and the replay's stderr. The run ends by
+    itself (--frames, --timeout)."""
     with tempfile.TemporaryFile("w+") as out:
         run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(OS1_128_META), "--speed",
                                 "2.5", "--sensor-height", str(OS1_128_HEIGHT), *map(str, args)],
                                stdout=out, stderr=subprocess.PIPE, text=True)
         try:
-            first = run.stderr.readline()  # "listening on ...": the sockets are bound
-            assert "listening on" in first, first
+            first_line = run.stderr.readline()  # "listening on ...": the sockets are bound
+            assert "listening on" in first_line, first_line
+            if first:
+                with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+                    s.sendto(first, ("127.0.0.1", port))
             sender = run_cli("replay", OS1_128_PCAP, "--to", f"127.0.0.1:{port}", *replay_args)
-            err = first + run.stderr.read()
+            err = first_line + run.stderr.read()
             run.wait(timeout=60)
         finally:
             run.kill()
@@ -113,6 +117,15 @@ def test_cli_live_run_writes_every_frame_and_the_latency_summary():
     assert outside, err
     p50, completing, output = map(float, outside.groups())
     assert 0 <= completing < p50 and 0 <= output < p50
+
+
+def test_cli_live_run_counts_the_bad_packets_it_skipped():
+    status, _, err, _ = run_live_cli(free_port_pair(), "--frames", "3", "--timeout", "10", "--skip-bad-packets",
+                                     first=b"not a lidar packet")
+    assert status == 0, err
+    assert "1 bad packets skipped" in err  # on the first frame's progress line
+    assert "223 datagrams received, 0 dropped by a full queue; 1 of 3 frames affected (0 packets lost, 0 late, " \
+           "0 duplicates, 1 bad packets skipped, 0 columns missing)" in err
 
 
 def test_cli_live_run_reports_the_packets_lost():
