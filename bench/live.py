@@ -12,10 +12,11 @@ datagrams received and dropped by the full receive queue, frames affected by los
 load average before and after (the machine is shared).
 Each rate runs twice: frames of the whole rotation, and with ``--roi-columns`` frames of the columns that can see
 the region of interest, which end at the region's last column; "after the rotation's end" moves the latter's
-latency to the rotation's last packet (negative: the result came before it).
+latency to the rotation's last packet (negative: the result came before it). And each both ways the reader can
+wait for datagrams: sleeping until woken (the default), and ``--busy-wait`` (a core kept busy between datagrams).
 Prints a Markdown table on stdout, progress on stderr. The issue's target: p99 ≤ 5 ms at 1×.
 
-Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--threads 1,2] [--quick]``
+Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--threads 1,2] [--waits sleep,busy] [--quick]``
 """
 
 from __future__ import annotations
@@ -69,22 +70,22 @@ def pipeline_times(output: Path) -> list[float]:
         return [json.loads(line)["timing_ms"]["total"] for line in lines]
 
 
-def measure(rate: str, loops: int, roi_columns: bool, threads: int) -> dict:
+def measure(rate: str, loops: int, roi_columns: bool, threads: int, busy: bool) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         output = Path(tmp) / "live.jsonl"
-        out = run_live(rate, loops, roi_columns, threads, output)
+        out = run_live(rate, loops, roi_columns, threads, busy, output)
         times = pipeline_times(output)
     # Nearest rank (the ⌈q·n⌉-th smallest), the rule of the CLI's latency percentiles.
     out["pipeline_p99_ms"] = float(np.percentile(times, 99, method="inverted_cdf"))
     return out
 
 
-def run_live(rate: str, loops: int, roi_columns: bool, threads: int, output: Path) -> dict:
+def run_live(rate: str, loops: int, roi_columns: bool, threads: int, busy: bool, output: Path) -> dict:
     port = free_port_pair()
     load_before = os.getloadavg()[0]
     run = subprocess.Popen([cli(), "run", f"udp://127.0.0.1:{port}", "--meta", str(META), "--speed", SPEED_MPS,
                             "--sensor-height", HEIGHT_M, "--timeout", "3", "--threads", str(threads), "-o", str(output),
-                            *(["--roi-columns"] if roi_columns else [])],
+                            *(["--roi-columns"] if roi_columns else []), *(["--busy-wait"] if busy else [])],
                            stderr=subprocess.PIPE, text=True)
     try:
         first = run.stderr.readline()
@@ -108,7 +109,7 @@ def run_live(rate: str, loops: int, roi_columns: bool, threads: int, output: Pat
     outside = re.search(r"frame complete ([\d.]+) ms after its last packet, output line ([\d.]+) ms", err)
     window = re.search(r"columns \d+–(\d+) decoded, \d+ of the (\d+)", err)
     before_end_ms = (int(window[2]) - 1 - int(window[1])) / int(window[2]) * ROTATION_MS if window else 0.0
-    return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "frames": int(summary[1]),
+    return {"rate": rate, "roi_columns": roi_columns, "threads": threads, "busy": busy, "frames": int(summary[1]),
             "expected": 3 * loops,
             "pipeline_ms": float(summary[2]), "received": int(live[1]), "dropped": int(live[2]),
             "affected": int(live[3]), "p50": float(live[5]), "p99": float(live[6]), "max": float(live[7]),
@@ -122,26 +123,32 @@ def main() -> None:
     parser.add_argument("--loops", type=int, default=100, help="times through the 3-frame capture (default 100)")
     parser.add_argument("--rates", default="1,10", help="replay rates, comma-separated ('max' allowed)")
     parser.add_argument("--threads", default="1", help="threads a frame may use (the run's --threads), comma-separated")
+    parser.add_argument("--waits", default="sleep,busy",
+                        help="how the reader waits for datagrams: sleep (the default) and/or busy (--busy-wait)")
     parser.add_argument("--quick", action="store_true", help="5 loops at 1x (smoke test)")
     args = parser.parse_args()
+    waits = args.waits.split(",")
+    if not set(waits) <= {"sleep", "busy"}:
+        parser.error(f"--waits {args.waits}: expected sleep, busy or both")
     loops, rates = (5, ["1"]) if args.quick else (args.loops, args.rates.split(","))
     rows = []
     for rate in rates:
         for threads in (int(t) for t in args.threads.split(",")):
-            for roi_columns in (False, True):
-                log(f"replaying {PCAP.name} {loops} times at {rate}x, {threads} thread(s)"
-                    f"{', --roi-columns' if roi_columns else ''}")
-                rows.append(measure(rate, loops, roi_columns, threads))
+            for busy in (w == "busy" for w in waits):
+                for roi_columns in (False, True):
+                    log(f"replaying {PCAP.name} {loops} times at {rate}x, {threads} thread(s)"
+                        f"{', --roi-columns' if roi_columns else ''}{', --busy-wait' if busy else ''}")
+                    rows.append(measure(rate, loops, roi_columns, threads, busy))
     print(f"Live latency, {PCAP.name} ({META.name}), default pipeline, sensor height {HEIGHT_M} m, "
           f"{os.cpu_count()} cores\n")
-    print("| rate | threads | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
+    print("| rate | threads | reader waits | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
           "| pipeline median ms | pipeline p99 ms | frame complete after ms | output line ms | datagrams "
           "| dropped by the queue | frames affected | 1-min load before / after | p99 ≤ 5 ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
         frame = "region's columns" if r["roi_columns"] else "whole rotation"
-        print(f"| {r['rate']}× | {r['threads']} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} "
+        print(f"| {r['rate']}× | {r['threads']} | {'busy' if r['busy'] else 'sleeping'} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} "
               f"| {r['p99']:.2f} "
               f"| {r['max']:.2f} | {r['p50'] - r['before_end_ms']:.2f} | {r['pipeline_ms']:.2f} "
               f"| {r['pipeline_p99_ms']:.2f} | {r['completing']:.2f} | {r['output']:.2f} | {r['received']} "

@@ -95,6 +95,9 @@ void add_live_options(CLI::App* run, LiveRunOptions& o) {
     run->add_option("--timeout", o.timeout_s,
                     "udp:// input: no datagram for S seconds ends the stream; none at all is an error (default 5)")
         ->check(roadpreview::cli::positive_finite());
+    run->add_flag("--busy-wait", o.busy_wait,
+                  "udp:// input: wait for datagrams on a busy core instead of sleeping (lower latency tail, one core "
+                  "kept busy)");
 }
 
 void LiveStats::add(const rp::Frame& f, double result_s) {

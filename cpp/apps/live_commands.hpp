@@ -19,6 +19,7 @@ std::function<int()> add_replay_command(CLI::App& app);
 struct LiveRunOptions {
     double duration_s = 0.0;
     double timeout_s = 5.0;
+    bool busy_wait = false;
 };
 void add_live_options(CLI::App* run, LiveRunOptions& o);
 

@@ -348,6 +348,7 @@ std::unique_ptr<rp::FrameSource> open_live_source(const RunOptions& o, const CLI
     live.source = source_options(o, app, cfg);
     live.timeout_s = o.live.timeout_s;
     live.duration_s = o.live.duration_s;
+    live.busy_wait = o.live.busy_wait;
     auto source = rp::open_live(o.inputs[0], live);
     if (!o.quiet) {
         std::fprintf(stderr, "roadpreview: listening on %s (%s)\n", o.inputs[0].c_str(),
@@ -385,7 +386,7 @@ void check_inputs(const RunOptions& o, const CLI::App& app) {
     if (is_live(o) && o.frames.find_first_not_of('0') == std::string::npos && !o.frames.empty())
         throw UsageError("--frames " + o.frames + ": a live run's --frames N ends it after N ≥ 1 frames");
     if (!is_live(o))
-        for (const char* name : {"--duration", "--timeout"})
+        for (const char* name : {"--duration", "--timeout", "--busy-wait"})
             if (app.count(name)) throw UsageError(std::string(name) + " applies to a udp:// input only");
     if (is_live(o))  // ignored by a live source, silently: the address's port is the lidar's
         for (const char* name : {"--columns", "--poses", "--frame-rate", "--lidar-port"})

@@ -305,7 +305,7 @@ void bind_io(py::module_& m) {
     m.def("open_live", [](const std::string& url, const std::string& meta, const std::string& sensor_model,
                           const std::string& calibration, double cut_angle_deg, bool skip_bad_packets,
                           double timeout_s, double duration_s, const std::string& roi_config_json,
-                          const std::vector<double>& roi_directions) {
+                          const std::vector<double>& roi_directions, bool busy_wait) {
         rp::LiveOptions o;
         o.source.roi_columns = roi_regions(roi_config_json, roi_directions);
         o.source.meta = meta;
@@ -315,6 +315,7 @@ void bind_io(py::module_& m) {
         o.source.skip_bad_packets = skip_bad_packets;
         o.timeout_s = timeout_s;
         o.duration_s = duration_s;
+        o.busy_wait = busy_wait;
         return std::make_unique<ClosableLive>(url, o);
     });
     m.def("replay", [](const std::string& capture, const std::string& to, double rate, int loops, double drop,

@@ -6,6 +6,7 @@
 
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -92,9 +93,10 @@ struct LiveRun {
 
 // Opens the live source, replays the capture to it from another thread and reads until the stream goes quiet.
 LiveRun live(const std::string& pcap, const std::string& meta, rp::ReplayOptions replay = {},
-             const std::vector<rp::SensorRoi>& roi_columns = {}) {
+             const std::vector<rp::SensorRoi>& roi_columns = {}, bool busy_wait = false) {
     const int port = free_port_pair();
     rp::LiveOptions o;
+    o.busy_wait = busy_wait;
     o.source.meta = meta;
     o.source.roi_columns = roi_columns;
     // The silence that ends the stream, and the wait for its first datagram: ctest runs another test beside this
@@ -195,6 +197,47 @@ TEST(Live, FramesLimitedToTheRegionsColumnsArriveAsOfflineAndEndAtTheirLastColum
         EXPECT_TRUE(f.diagnostics.complete);
         EXPECT_LT(*std::max_element(f.point_times.begin(), f.point_times.end()), 0.05);
     }
+}
+
+TEST(Live, ABusyWaitingReaderGetsTheFramesOfASleepingOne) {
+    expect_same_frames(live(kOs1, kOs1Meta, {}, {}, true).frames, offline(kOs1, kOs1Meta));  // recorded speed
+    const std::string vlp16 = kData + "velodyne/velodyne_vlp16.pcap";
+    expect_same_frames(live(vlp16, "", at_max_rate(), {}, true).frames, offline(vlp16, ""));
+}
+
+// CPU seconds of the calling thread.
+double thread_cpu_s() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+TEST(Live, ABusyWaitingReaderKeepsItsCoreAndStillEndsAtTheTimeoutAndTheDuration) {
+    rp::LiveOptions o;
+    o.timeout_s = 0.3;
+    // Waiting 0.3 s for a datagram that never comes: a sleeping reader uses next to no CPU, a busy one its core
+    // (or its share of it beside the other tests ctest runs).
+    double cpu_s[2];
+    for (const bool busy : {false, true}) {
+        o.busy_wait = busy;
+        auto source = rp::open_live(url(free_port_pair()), o);
+        const double t0 = rp::steady_now_s(), c0 = thread_cpu_s();
+        const std::string e = error_of([&] { source->next(); });  // nothing sent
+        cpu_s[busy] = thread_cpu_s() - c0;
+        EXPECT_NE(e.find("no datagrams"), std::string::npos) << e;
+        EXPECT_LT(rp::steady_now_s() - t0, 2.0);
+    }
+    EXPECT_LT(cpu_s[0], 0.03);
+    EXPECT_GT(cpu_s[1], 0.06);
+
+    o.busy_wait = true;
+
+    o.timeout_s = 5.0;
+    o.duration_s = 0.3;
+    const double t0 = rp::steady_now_s();
+    const std::string ended = error_of([&] { rp::open_live(url(free_port_pair()), o)->next(); });  // nothing sent
+    EXPECT_NE(ended.find("no datagram arrived before the run ended"), std::string::npos) << ended;
+    EXPECT_LT(rp::steady_now_s() - t0, 2.0);
 }
 
 TEST(Live, DroppedAndReorderedPacketsAreFlaggedNotFatal) {

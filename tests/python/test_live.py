@@ -21,10 +21,11 @@ sys.path.insert(0, str(REPO / "bench"))
 from live import free_port_pair  # noqa: E402  (the benchmark's loopback port pair, one definition)
 
 
-def live_frames(pcap, meta=None, roi_columns=None, **replay):
+def live_frames(pcap, meta=None, roi_columns=None, busy_wait=False, **replay):
     """Frames of the live source while the capture is replayed to it from a thread."""
     port = free_port_pair()
-    source = rp.io.open_live(f"udp://127.0.0.1:{port}", meta, timeout_s=0.5, duration_s=30.0, roi_columns=roi_columns)
+    source = rp.io.open_live(f"udp://127.0.0.1:{port}", meta, timeout_s=0.5, duration_s=30.0, roi_columns=roi_columns,
+                             busy_wait=busy_wait)
     sent, failed = {}, []
 
     def send():
@@ -42,9 +43,10 @@ def live_frames(pcap, meta=None, roi_columns=None, **replay):
     return frames, source.info, sent
 
 
-def test_open_live_yields_the_offline_frames_of_a_velodyne_capture():
+@pytest.mark.parametrize("busy_wait", [False, True])
+def test_open_live_yields_the_offline_frames_of_a_velodyne_capture(busy_wait):
     pcap = VELODYNE / "velodyne_vlp16.pcap"
-    frames, info, sent = live_frames(pcap, rate="max")
+    frames, info, sent = live_frames(pcap, rate="max", busy_wait=busy_wait)
     offline = list(rp.io.open(pcap))
     assert info["format"] == "velodyne udp" and info["datagrams_dropped"] == 0
     assert 0 < info["datagrams_received"] <= sent["sent"]  # the position packets go to a port not listened on
@@ -102,8 +104,9 @@ def run_live_cli(port: int, *args, replay_args=(), first: bytes = b""):
         return run.returncode, out.read(), err, sender.stderr
 
 
-def test_cli_live_run_writes_every_frame_and_the_latency_summary():
-    status, out, err, sent = run_live_cli(free_port_pair(), "--frames", "3", "--timeout", "10")
+@pytest.mark.parametrize("waiting", [(), ("--busy-wait",)])
+def test_cli_live_run_writes_every_frame_and_the_latency_summary(waiting):
+    status, out, err, sent = run_live_cli(free_port_pair(), "--frames", "3", "--timeout", "10", *waiting)
     assert status == 0, err
     lines = out.strip().splitlines()
     assert len(lines) == 3
@@ -194,9 +197,10 @@ def test_cli_live_run_on_a_port_in_use_is_an_error_naming_the_address():
     assert f"udp://127.0.0.1:{port}: cannot listen: the port is already in use" in proc.stderr
 
 
-def test_cli_live_options_are_refused_with_files():
-    proc = run_cli("run", OS1_128_PCAP, "--speed", "1", "--duration", "1", check=False)
-    assert proc.returncode == 2 and "--duration applies to a udp:// input only" in proc.stderr  # a usage error
+@pytest.mark.parametrize("option", [("--duration", "1"), ("--timeout", "1"), ("--busy-wait",)])
+def test_cli_live_options_are_refused_with_files(option):
+    proc = run_cli("run", OS1_128_PCAP, "--speed", "1", *option, check=False)
+    assert proc.returncode == 2 and f"{option[0]} applies to a udp:// input only" in proc.stderr  # a usage error
 
 
 @pytest.mark.parametrize("option", [("--lidar-port", "7502"), ("--columns", "4"), ("--frame-rate", "10")])
@@ -277,9 +281,11 @@ def port_is_free(port: int) -> bool:
     return True
 
 
-def test_closing_a_live_source_from_another_thread_ends_its_wait_and_frees_the_port():
+@pytest.mark.parametrize("busy_wait", [False, True])
+def test_closing_a_live_source_from_another_thread_ends_its_wait_and_frees_the_port(busy_wait):
     port = free_port_pair()
-    live = rp.io.open_live(f"udp://127.0.0.1:{port}", timeout_s=30.0)  # no sender: next() would wait 30 s, then fail
+    # no sender: next() would wait 30 s, then fail
+    live = rp.io.open_live(f"udp://127.0.0.1:{port}", timeout_s=30.0, busy_wait=busy_wait)
     assert not port_is_free(port)
     got = []
     reader = threading.Thread(target=lambda: got.append(list(live)))

@@ -94,7 +94,10 @@ public:
                 msg << "is the sensor sending to this address and port?)";
                 throw std::runtime_error(msg.str());
             }
-            arrived_.wait_for(lock, std::chrono::milliseconds(20));
+            if (options_.busy_wait)
+                poll_queue(lock);
+            else
+                arrived_.wait_for(lock, std::chrono::milliseconds(20));
         }
         return queue_.pop(out);
     }
@@ -113,6 +116,16 @@ public:
     }
 
 private:
+    // Busy waiting: the lock released, the count of pushes watched for as long as a sleep would last (the end
+    // conditions are checked as often either way); each look yields the core to any thread ready to run on it.
+    void poll_queue(std::unique_lock<std::mutex>& lock) {
+        const std::uint64_t seen = pushes_.load(std::memory_order_acquire);
+        lock.unlock();
+        const double until_s = steady_now_s() + 0.02;
+        while (pushes_.load(std::memory_order_acquire) == seen && steady_now_s() < until_s) std::this_thread::yield();
+        lock.lock();
+    }
+
     // The receive thread: waits on every socket at once, reads what arrived, checks for the end every 50 ms.
     // Datagrams of several sockets (lidar, IMU) are queued in the order the kernel received them: each socket is
     // read until empty or for a batch, so everything it received up to then (when emptied) or up to its last
@@ -202,6 +215,7 @@ private:
         }
         for (auto it = pending.begin(); it != end; ++it) spare_.push_back(std::move(*it));
         pending.erase(pending.begin(), end);
+        pushes_.fetch_add(1, std::memory_order_release);
         arrived_.notify_one();
     }
 
@@ -224,6 +238,7 @@ private:
 
     mutable std::mutex mutex_;  // guards what follows
     std::condition_variable arrived_;
+    std::atomic<std::uint64_t> pushes_{0};  // batches queued: what a busy-waiting reader watches, without the lock
     DatagramQueue queue_;
     std::int64_t received_ = 0, dropped_ = 0;
     std::int64_t data_received_ = 0;  // on the first port, the lidar's

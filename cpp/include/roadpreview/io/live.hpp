@@ -41,6 +41,10 @@ struct LiveOptions {
     /// the start): datagrams that do not fit are dropped and counted
     std::size_t queue_bytes = std::size_t{64} << 20;
     int receive_buffer_bytes = 16 << 20;               ///< the sockets' kernel receive buffer (SO_RCVBUF)
+    /// The reader waits for the next datagram by polling the queue (yielding the core to any other thread that
+    /// wants it) instead of sleeping until woken: a core kept busy between datagrams, and each frame processed on a
+    /// core that did not go idle — the 99th percentile of the latency about 1 ms lower (README "Live sensors").
+    bool busy_wait = false;
 };
 
 /// Opens UDP sockets on the endpoint (Ouster: the URL's port, else the metadata's lidar port, and the metadata's
