@@ -12,8 +12,8 @@ datagrams received and dropped by the full receive queue, frames affected by los
 load average before and after (the machine is shared).
 Each rate runs twice: frames of the whole rotation, and with ``--roi-columns`` frames of the columns that can see
 the region of interest, which end at the region's last column; "after the rotation's end" moves the latter's
-latency to the rotation's last packet (negative: the result came before it). And each both ways the reader can
-wait for datagrams: sleeping until woken (the default), and ``--busy-wait`` (a core kept busy between datagrams).
+latency to the rotation's last packet (negative: the result came before it). Each of those runs with the reader
+waiting for datagrams both ways: sleeping until woken (the default) and ``--busy-wait`` (a core kept busy).
 Prints a Markdown table on stdout, progress on stderr. The issue's target: p99 ≤ 5 ms at 1×.
 
 Usage: ``python bench/live.py [--loops N] [--rates 1,10] [--threads 1,2] [--waits sleep,busy] [--quick]``
@@ -141,15 +141,16 @@ def main() -> None:
                     rows.append(measure(rate, loops, roi_columns, threads, busy))
     print(f"Live latency, {PCAP.name} ({META.name}), default pipeline, sensor height {HEIGHT_M} m, "
           f"{os.cpu_count()} cores\n")
-    print("| rate | threads | reader waits | frame | frames (of) | latency p50 ms | p99 ms | max ms | p50 after the rotation's end ms "
-          "| pipeline median ms | pipeline p99 ms | frame complete after ms | output line ms | datagrams "
-          "| dropped by the queue | frames affected | 1-min load before / after | p99 ≤ 5 ms |")
+    print("| rate | threads | reader waits | frame | frames (of) | latency p50 ms | p99 ms | max ms "
+          "| p50 after the rotation's end ms | pipeline median ms | pipeline p99 ms | frame complete after ms "
+          "| output line ms | datagrams | dropped by the queue | frames affected | 1-min load before / after | p99 ≤ 5 ms |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         met = "yes" if r["p99"] <= TARGET_P99_MS else "no"
         frame = "region's columns" if r["roi_columns"] else "whole rotation"
-        print(f"| {r['rate']}× | {r['threads']} | {'busy' if r['busy'] else 'sleeping'} | {frame} | {r['frames']} ({r['expected']}) | {r['p50']:.2f} "
-              f"| {r['p99']:.2f} "
+        wait = "busy" if r["busy"] else "sleeping"
+        print(f"| {r['rate']}× | {r['threads']} | {wait} | {frame} | {r['frames']} ({r['expected']}) "
+              f"| {r['p50']:.2f} | {r['p99']:.2f} "
               f"| {r['max']:.2f} | {r['p50'] - r['before_end_ms']:.2f} | {r['pipeline_ms']:.2f} "
               f"| {r['pipeline_p99_ms']:.2f} | {r['completing']:.2f} | {r['output']:.2f} | {r['received']} "
               f"| {r['dropped']} | {r['affected']} | {r['load'][0]:.1f} / {r['load'][1]:.1f} "

@@ -231,7 +231,6 @@ TEST(Live, ABusyWaitingReaderKeepsItsCoreAndStillEndsAtTheTimeoutAndTheDuration)
     EXPECT_GT(cpu_s[1], 0.06);
 
     o.busy_wait = true;
-
     o.timeout_s = 5.0;
     o.duration_s = 0.3;
     const double t0 = rp::steady_now_s();
