@@ -1,0 +1,89 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Beam offsets one frame shows: each beam's median road height in three strips across the lane, and how much of
+their spread repeats with the beam index.
+
+For a bundled Ouster recording's first frame (mounting: the given sensor height), the default pipeline's ground
+points 3.5–15 m ahead are taken in three strips — the left wheel's (y 0.5–1.1 m), the centre (|y| ≤ 0.3 m), the
+right wheel's (y −1.1…−0.5 m). Per beam with at least 3 points in every strip: the median height above the frame's
+ground plane, less a quadratic trend in the beam's range (what levelling takes out). A road's relief does not follow
+the beams: offsets that are the same in all three strips (correlation) and repeat with the beam index modulo the
+detector's column count (share of the variance the index modulo p explains, against 2,000 random orderings of the
+beams) are the sensor's. The README's "Accuracy: what a single frame can and cannot tell" quotes the table.
+
+Usage: ``python bench/beam_pattern.py``; prints Markdown.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import roadpreview as rp
+
+OUSTER = Path(__file__).resolve().parents[1] / "tests" / "data" / "ouster"
+RECORDINGS = (  # capture, metadata, sensor height (m): the heights the CLI estimates from their ground
+    ("OS-0-128-U1_v2.3.0_1024x10.pcap", "OS-0-128-U1_v2.3.0_1024x10.json", 1.97),
+    ("OS-1-128_v2.3.0_1024x10_lb_n3.pcap", "OS-1-128_v2.3.0_1024x10.json", 1.97),
+)
+STRIPS_M = {"left": (0.5, 1.1), "centre": (-0.3, 0.3), "right": (-1.1, -0.5)}
+AHEAD_M = (3.5, 15.0)
+MIN_POINTS = 3
+PERMUTATIONS = 2000
+
+
+def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(beam ids, their ranges in m, residuals in m: one row per beam, one column per strip) of the first frame."""
+    frame = next(iter(rp.io.open(pcap, meta)))
+    res = rp.Estimator(rp.Config(sensor_height=height_m)).process(frame.points, 5.0, 0.0)
+    ground = np.asarray(res.ground_mask, bool)
+    xyz = np.asarray(frame.points, float)[:, :3] + [0.0, 0.0, height_m]  # base frame: the sensor height_m up
+    height = xyz @ np.asarray(res.plane[:3]) + res.plane[3]
+    beams = np.asarray(frame.beams)
+    ahead = ground & (xyz[:, 0] > AHEAD_M[0]) & (xyz[:, 0] < AHEAD_M[1])
+    table = {}  # beam → [(median height, median x) per strip]
+    for lo, hi in STRIPS_M.values():
+        strip = ahead & (xyz[:, 1] >= lo) & (xyz[:, 1] < hi)
+        for beam in np.unique(beams[strip]):
+            mine = strip & (beams == beam)
+            if mine.sum() >= MIN_POINTS:
+                table.setdefault(int(beam), []).append((np.median(height[mine]), np.median(xyz[mine, 0])))
+    ids = np.array(sorted(b for b, per_strip in table.items() if len(per_strip) == len(STRIPS_M)))
+    z = np.array([[h for h, _ in table[b]] for b in ids])
+    ranges = np.array([np.mean([x for _, x in table[b]]) for b in ids])
+    for k in range(z.shape[1]):
+        z[:, k] -= np.polyval(np.polyfit(ranges, z[:, k], 2), ranges)
+    return ids, ranges, z
+
+
+def explained_by_index(ids: np.ndarray, values: np.ndarray, period: int) -> float:
+    """Share of Σ values² that the means of the groups of beam index modulo `period` explain."""
+    groups = [values[ids % period == k] for k in range(period)]
+    return float(sum(len(g) * np.mean(g) ** 2 for g in groups if len(g)) / np.sum(values**2))
+
+
+def chance_share(ids: np.ndarray, values: np.ndarray, period: int, quantile: float) -> float:
+    """The share `explained_by_index` reaches by chance: its quantile over random orderings of the beams."""
+    rng = np.random.default_rng(0)
+    return float(np.quantile([explained_by_index(ids, rng.permutation(values), period) for _ in range(PERMUTATIONS)],
+                             quantile))
+
+
+def main() -> None:
+    print("| recording | beams | range m | RMS mm left / centre / right | correlation l–c, l–r, c–r "
+          "| share explained by index mod 4 | by chance (95th / 99th percentile) | group means mm |")
+    print("|---|---|---|---|---|---|---|---|")
+    for pcap, meta, height in RECORDINGS:
+        ids, ranges, z = beam_residuals(OUSTER / pcap, OUSTER / meta, height)
+        c = np.corrcoef(z.T)
+        mean = z.mean(axis=1)
+        groups = [1000 * np.mean(mean[ids % 4 == k]) for k in range(4)]
+        rms = " / ".join(f"{1000 * v:.1f}" for v in np.sqrt(np.mean(z**2, axis=0)))
+        print(f"| {pcap} | {len(ids)} | {ranges.min():.1f}–{ranges.max():.1f} | {rms} "
+              f"| {c[0, 1]:.2f}, {c[0, 2]:.2f}, {c[1, 2]:.2f} | {explained_by_index(ids, mean, 4):.2f} "
+              f"| {chance_share(ids, mean, 4, 0.95):.2f} / {chance_share(ids, mean, 4, 0.99):.2f} "
+              f"| {', '.join(f'{g:+.1f}' for g in groups)} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,45 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The beam offsets one frame shows (bench/beam_pattern.py): on the bundled OS-0-128 frame the road heights repeat
+every fourth beam across the whole lane — the sensor's, not the road's — and on the OS1-128 recording they do not."""
+
+import sys
+
+import numpy as np
+
+from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, REPO, run_bench
+
+sys.path.insert(0, str(REPO / "bench"))
+from beam_pattern import beam_residuals, chance_share, explained_by_index  # noqa: E402
+
+
+def test_the_share_explained_by_the_index_is_that_of_the_group_means():
+    ids = np.arange(16)
+    alternating = np.where(ids % 2 == 0, 1.0, -1.0)
+    assert explained_by_index(ids, alternating, 2) == 1.0
+    assert explained_by_index(ids, alternating, 4) == 1.0  # period 2 repeats with period 4 too
+    assert explained_by_index(ids, alternating, 3) < 0.2
+    ramp = ids - ids.mean()
+    assert 0.0 < explained_by_index(ids, ramp, 4) < 0.1
+
+
+def test_the_os0_128_frames_beams_are_offset_every_fourth_beam_across_the_lane():
+    ids, ranges, z = beam_residuals(OUSTER / "OS-0-128-U1_v2.3.0_1024x10.pcap",
+                                    OUSTER / "OS-0-128-U1_v2.3.0_1024x10.json", 1.97)
+    assert len(ids) >= 20 and ranges.min() < 5 and ranges.max() > 12
+    assert np.all(np.sqrt(np.mean(z**2, axis=0)) > 0.01)  # > 1 cm from beam to beam in every strip
+    assert np.corrcoef(z.T)[np.triu_indices(3, 1)].min() > 0.75  # the same offsets at both wheels and between
+    mean = z.mean(axis=1)
+    assert explained_by_index(ids, mean, 4) > max(0.6, chance_share(ids, mean, 4, 0.99))
+
+
+def test_the_os1_128_recordings_beams_show_no_such_pattern():
+    ids, _, z = beam_residuals(OS1_128_PCAP, OS1_128_META, OS1_128_HEIGHT)
+    assert len(ids) >= 30
+    assert np.all(np.sqrt(np.mean(z**2, axis=0)) < 0.008)
+    mean = z.mean(axis=1)
+    assert explained_by_index(ids, mean, 4) < chance_share(ids, mean, 4, 0.99)
+
+
+def test_beam_pattern_bench_prints_both_recordings():
+    out = run_bench("beam_pattern.py")
+    assert "| OS-0-128-U1_v2.3.0_1024x10.pcap | 27 |" in out and "| OS-1-128_v2.3.0_1024x10_lb_n3.pcap |" in out
