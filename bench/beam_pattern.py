@@ -8,7 +8,10 @@ right wheel's (y −1.1…−0.5 m). Per beam with at least 3 points in every st
 ground plane, less a quadratic trend in the beam's range (what levelling takes out). A road's relief does not follow
 the beams: offsets that are the same in all three strips (correlation) and repeat with the beam index modulo the
 detector's column count (share of the variance the index modulo p explains, against 2,000 random orderings of the
-beams) are the sensor's. The README's "Accuracy: what a single frame can and cannot tell" quotes the table.
+beams) are the sensor's. Then the frame is run again with each column's offset taken out (the median over its
+beams of residual / range, an elevation angle; every point of the column lowered by its horizontal range times
+it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
+quotes the tables.
 
 Usage: ``python bench/beam_pattern.py``; prints Markdown.
 """
@@ -32,9 +35,13 @@ MIN_POINTS = 3
 PERMUTATIONS = 2000
 
 
+def first_frame(pcap: Path, meta: Path):
+    return next(iter(rp.io.open(pcap, meta)))
+
+
 def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(beam ids, their ranges in m, residuals in m: one row per beam, one column per strip) of the first frame."""
-    frame = next(iter(rp.io.open(pcap, meta)))
+    frame = first_frame(pcap, meta)
     res = rp.Estimator(rp.Config(sensor_height=height_m)).process(frame.points, 5.0, 0.0)
     ground = np.asarray(res.ground_mask, bool)
     xyz = np.asarray(frame.points, float)[:, :3] + [0.0, 0.0, height_m]  # base frame: the sensor height_m up
@@ -69,6 +76,26 @@ def chance_share(ids: np.ndarray, values: np.ndarray, period: int, quantile: flo
                              quantile))
 
 
+def column_offsets_rad(ids: np.ndarray, ranges: np.ndarray, z: np.ndarray, columns: int = 4) -> np.ndarray:
+    """Each detector column's elevation offset: the median over its beams of the residual / range (rad)."""
+    angle = z.mean(axis=1) / ranges
+    return np.array([np.median(angle[ids % columns == k]) for k in range(columns)])
+
+
+def without_column_offsets(points: np.ndarray, beams: np.ndarray, offsets_rad: np.ndarray) -> np.ndarray:
+    """The points, each lowered by its horizontal range times its beam's column offset."""
+    out = np.array(points, np.float32)
+    column = np.where(beams >= 0, beams % len(offsets_rad), 0)
+    out[:, 2] -= (np.hypot(out[:, 0], out[:, 1]) * offsets_rad[column] * (beams >= 0)).astype(np.float32)
+    return out
+
+
+def classes(points: np.ndarray, height_m: float) -> str:
+    rough = rp.Estimator(rp.Config(sensor_height=height_m)).process(points, 5.0, 0.0).to_dict()["roughness"]
+    return " / ".join(f"{rough[w]['class'] or '·'} ({rough[w]['gd_n0'] * 1e6:.0f})" if rough[w]["gd_n0"] else "·"
+                      for w in ("left", "right", "vehicle"))
+
+
 def main() -> None:
     print("| recording | beams | range m | RMS mm left / centre / right | correlation l–c, l–r, c–r "
           "| share explained by index mod 4 | by chance (95th / 99th percentile) | group means mm |")
@@ -83,6 +110,16 @@ def main() -> None:
               f"| {c[0, 1]:.2f}, {c[0, 2]:.2f}, {c[1, 2]:.2f} | {explained_by_index(ids, mean, 4):.2f} "
               f"| {chance_share(ids, mean, 4, 0.95):.2f} / {chance_share(ids, mean, 4, 0.99):.2f} "
               f"| {', '.join(f'{g:+.1f}' for g in groups)} |")
+    print("\nThe same frames with each detector column's offset taken out (classes left / right / vehicle, G_d(n0) in "
+          "10⁻⁶ m³; · declined):\n")
+    print("| recording | column offsets ° | as decoded | column offsets taken out |")
+    print("|---|---|---|---|")
+    for pcap, meta, height in RECORDINGS:
+        offsets = column_offsets_rad(*beam_residuals(OUSTER / pcap, OUSTER / meta, height))
+        frame = first_frame(OUSTER / pcap, OUSTER / meta)
+        corrected = without_column_offsets(frame.points[:, :3], np.asarray(frame.beams), offsets)
+        print(f"| {pcap} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
+              f"| {classes(np.asarray(frame.points[:, :3], np.float32), height)} | {classes(corrected, height)} |")
 
 
 if __name__ == "__main__":

@@ -6,10 +6,12 @@ import sys
 
 import numpy as np
 
+import roadpreview as rp
 from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, REPO, run_bench
 
 sys.path.insert(0, str(REPO / "bench"))
-from beam_pattern import beam_residuals, chance_share, explained_by_index  # noqa: E402
+from beam_pattern import beam_residuals, chance_share, column_offsets_rad, explained_by_index, first_frame, \
+    without_column_offsets  # noqa: E402
 
 
 def test_the_share_explained_by_the_index_is_that_of_the_group_means():
@@ -43,3 +45,24 @@ def test_the_os1_128_recordings_beams_show_no_such_pattern():
 def test_beam_pattern_bench_prints_both_recordings():
     out = run_bench("beam_pattern.py")
     assert "| OS-0-128-U1_v2.3.0_1024x10.pcap | 27 |" in out and "| OS-1-128_v2.3.0_1024x10_lb_n3.pcap |" in out
+
+
+def test_taking_out_column_offsets_lowers_each_point_by_its_range_times_its_columns_angle():
+    points = np.array([[3.0, 4.0, -1.0], [6.0, 8.0, -1.5], [1.0, 0.0, 0.0]], np.float32)
+    beams = np.array([1, 6, -1])  # columns 1 and 2; the last point's beam unknown: left as it is
+    out = without_column_offsets(points, beams, np.array([0.0, 0.01, -0.02, 0.0]))
+    np.testing.assert_allclose(out[:, 2], [-1.0 - 5.0 * 0.01, -1.5 + 10.0 * 0.02, 0.0], atol=1e-6)
+    np.testing.assert_array_equal(out[:, :2], points[:, :2])
+
+
+def test_the_os0_128_frame_reads_smoother_once_its_column_offsets_are_taken_out():
+    pcap, meta = OUSTER / "OS-0-128-U1_v2.3.0_1024x10.pcap", OUSTER / "OS-0-128-U1_v2.3.0_1024x10.json"
+    offsets = column_offsets_rad(*beam_residuals(pcap, meta, 1.97))
+    assert np.degrees(np.ptp(offsets)) > 0.15  # the columns disagree by more than 0.15°
+    frame = first_frame(pcap, meta)
+    points = np.asarray(frame.points[:, :3], np.float32)
+
+    def left_gd(pts):
+        return rp.Estimator(rp.Config(sensor_height=1.97)).process(pts, 5.0, 0.0).left.roughness.gd_n0
+
+    assert left_gd(without_column_offsets(points, np.asarray(frame.beams), offsets)) < 0.5 * left_gd(points)
