@@ -8,7 +8,8 @@ right wheel's (y −1.1…−0.5 m). Per beam with at least 3 points in every st
 ground plane, less a quadratic trend in the beam's range (what levelling takes out). A road's relief does not follow
 the beams: offsets that are the same in all three strips (correlation) and repeat with the beam index modulo the
 detector's column count (share of the variance the index modulo p explains, against 2,000 random orderings of the
-beams) are the sensor's. Then the frame is run again with each column's offset taken out (the median over its
+beams) are the sensor's. Their size as an elevation error: the part the three strips share (the mean covariance
+between strips of residual / range), the σ that ``--beam-sigma-deg`` takes. Then the frame is run again with each column's offset taken out (the median over its
 beams of residual / range, an elevation angle; every point of the column lowered by its horizontal range times
 it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
 quotes the tables.
@@ -76,6 +77,12 @@ def chance_share(ids: np.ndarray, values: np.ndarray, period: int, quantile: flo
                              quantile))
 
 
+def shared_sigma_deg(ranges: np.ndarray, z: np.ndarray) -> float:
+    """The beams' elevation error that all strips share: √(mean covariance between strips of residual / range)."""
+    c = np.cov((z / ranges[:, None]).T)
+    return float(np.degrees(np.sqrt(max(np.mean(c[np.triu_indices(len(c), 1)]), 0.0))))
+
+
 def column_offsets_rad(ids: np.ndarray, ranges: np.ndarray, z: np.ndarray, columns: int = 4) -> np.ndarray:
     """Each detector column's elevation offset: the median over its beams of the residual / range (rad)."""
     angle = z.mean(axis=1) / ranges
@@ -98,8 +105,9 @@ def classes(points: np.ndarray, height_m: float) -> str:
 
 def main() -> None:
     print("| recording | beams | range m | RMS mm left / centre / right | correlation l–c, l–r, c–r "
-          "| share explained by index mod 4 | by chance (95th / 99th percentile) | group means mm |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| shared elevation error ° | share explained by index mod 4 | by chance (95th / 99th percentile) "
+          "| group means mm |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for pcap, meta, height in RECORDINGS:
         ids, ranges, z = beam_residuals(OUSTER / pcap, OUSTER / meta, height)
         c = np.corrcoef(z.T)
@@ -107,7 +115,8 @@ def main() -> None:
         groups = [1000 * np.mean(mean[ids % 4 == k]) for k in range(4)]
         rms = " / ".join(f"{1000 * v:.1f}" for v in np.sqrt(np.mean(z**2, axis=0)))
         print(f"| {pcap} | {len(ids)} | {ranges.min():.1f}–{ranges.max():.1f} | {rms} "
-              f"| {c[0, 1]:.2f}, {c[0, 2]:.2f}, {c[1, 2]:.2f} | {explained_by_index(ids, mean, 4):.2f} "
+              f"| {c[0, 1]:.2f}, {c[0, 2]:.2f}, {c[1, 2]:.2f} | {shared_sigma_deg(ranges, z):.3f} "
+              f"| {explained_by_index(ids, mean, 4):.2f} "
               f"| {chance_share(ids, mean, 4, 0.95):.2f} / {chance_share(ids, mean, 4, 0.99):.2f} "
               f"| {', '.join(f'{g:+.1f}' for g in groups)} |")
     print("\nThe same frames with each detector column's offset taken out (classes left / right / vehicle, G_d(n0) in "

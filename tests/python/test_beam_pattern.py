@@ -11,7 +11,7 @@ from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, REPO, run_
 
 sys.path.insert(0, str(REPO / "bench"))
 from beam_pattern import beam_residuals, chance_share, column_offsets_rad, explained_by_index, first_frame, \
-    without_column_offsets  # noqa: E402
+    shared_sigma_deg, without_column_offsets  # noqa: E402
 
 
 def test_the_share_explained_by_the_index_is_that_of_the_group_means():
@@ -24,6 +24,14 @@ def test_the_share_explained_by_the_index_is_that_of_the_group_means():
     assert 0.0 < explained_by_index(ids, ramp, 4) < 0.1
 
 
+def test_the_shared_error_is_the_beams_common_offset_not_the_strips_own_noise():
+    rng = np.random.default_rng(1)
+    ranges = rng.uniform(4.0, 15.0, 400)
+    common = np.radians(0.05) * rng.standard_normal(400)  # the beams' elevation errors
+    z = ranges[:, None] * (common[:, None] + np.radians(0.08) * rng.standard_normal((400, 3)))  # + each strip's own
+    assert abs(shared_sigma_deg(ranges, z) - 0.05) < 0.006
+
+
 def test_the_os0_128_frames_beams_are_offset_every_fourth_beam_across_the_lane():
     ids, ranges, z = beam_residuals(OUSTER / "OS-0-128-U1_v2.3.0_1024x10.pcap",
                                     OUSTER / "OS-0-128-U1_v2.3.0_1024x10.json", 1.97)
@@ -32,6 +40,7 @@ def test_the_os0_128_frames_beams_are_offset_every_fourth_beam_across_the_lane()
     assert np.corrcoef(z.T)[np.triu_indices(3, 1)].min() > 0.75  # the same offsets at both wheels and between
     mean = z.mean(axis=1)
     assert explained_by_index(ids, mean, 4) > max(0.6, chance_share(ids, mean, 4, 0.99))
+    assert 0.08 < shared_sigma_deg(ranges, z) < 0.14  # about 0.1° of elevation, the same across the lane
 
 
 def test_the_os1_128_recordings_beams_show_no_such_pattern():
