@@ -14,11 +14,13 @@ beams of residual / range, an elevation angle; every point of the column lowered
 it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
 quotes the tables.
 
-Usage: ``python bench/beam_pattern.py``; prints Markdown.
+Usage: ``python bench/beam_pattern.py [--recording CAPTURE META HEIGHT_M]...`` (default: the two bundled captures;
+any Ouster capture with its metadata and the sensor's height above the road); prints Markdown.
 """
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +35,7 @@ RECORDINGS = (  # capture, metadata, sensor height (m): the heights the CLI esti
 STRIPS_M = {"left": (0.5, 1.1), "centre": (-0.3, 0.3), "right": (-1.1, -0.5)}
 AHEAD_M = (3.5, 15.0)
 MIN_POINTS = 3
+MIN_BEAMS = 5  # a quadratic trend and the groups of the index modulo 4 need a few beams more than 3
 PERMUTATIONS = 2000
 
 
@@ -57,6 +60,9 @@ def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray,
             if mine.sum() >= MIN_POINTS:
                 table.setdefault(int(beam), []).append((np.median(height[mine]), np.median(xyz[mine, 0])))
     ids = np.array(sorted(b for b, per_strip in table.items() if len(per_strip) == len(STRIPS_M)))
+    if len(ids) < MIN_BEAMS:
+        raise ValueError(f"{pcap}: {len(ids)} beams hold {MIN_POINTS} road points in each strip {AHEAD_M[0]:g}–"
+                         f"{AHEAD_M[1]:g} m ahead, {MIN_BEAMS} needed (is the sensor height right?)")
     z = np.array([[h for h, _ in table[b]] for b in ids])
     ranges = np.array([np.mean([x for _, x in table[b]]) for b in ids])
     for k in range(z.shape[1]):
@@ -104,17 +110,23 @@ def classes(points: np.ndarray, height_m: float) -> str:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--recording", nargs=3, action="append", metavar=("CAPTURE", "META", "HEIGHT_M"),
+                        help="an Ouster capture, its metadata JSON and the sensor's height above the road in m")
+    args = parser.parse_args()
+    recordings = [(Path(c), Path(m), float(h)) for c, m, h in args.recording] if args.recording else \
+        [(OUSTER / c, OUSTER / m, h) for c, m, h in RECORDINGS]
     print("| recording | beams | range m | RMS mm left / centre / right | correlation l–c, l–r, c–r "
           "| shared elevation error ° | share explained by index mod 4 | by chance (95th / 99th percentile) "
           "| group means mm |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for pcap, meta, height in RECORDINGS:
-        ids, ranges, z = beam_residuals(OUSTER / pcap, OUSTER / meta, height)
+    for pcap, meta, height in recordings:
+        ids, ranges, z = beam_residuals(pcap, meta, height)
         c = np.corrcoef(z.T)
         mean = z.mean(axis=1)
         groups = [1000 * np.mean(mean[ids % 4 == k]) for k in range(4)]
         rms = " / ".join(f"{1000 * v:.1f}" for v in np.sqrt(np.mean(z**2, axis=0)))
-        print(f"| {pcap} | {len(ids)} | {ranges.min():.1f}–{ranges.max():.1f} | {rms} "
+        print(f"| {pcap.name} | {len(ids)} | {ranges.min():.1f}–{ranges.max():.1f} | {rms} "
               f"| {c[0, 1]:.2f}, {c[0, 2]:.2f}, {c[1, 2]:.2f} | {shared_sigma_deg(ranges, z):.3f} "
               f"| {explained_by_index(ids, mean, 4):.2f} "
               f"| {chance_share(ids, mean, 4, 0.95):.2f} / {chance_share(ids, mean, 4, 0.99):.2f} "
@@ -123,11 +135,11 @@ def main() -> None:
           "10⁻⁶ m³; · declined):\n")
     print("| recording | column offsets ° | as decoded | column offsets taken out |")
     print("|---|---|---|---|")
-    for pcap, meta, height in RECORDINGS:
-        offsets = column_offsets_rad(*beam_residuals(OUSTER / pcap, OUSTER / meta, height))
-        frame = first_frame(OUSTER / pcap, OUSTER / meta)
+    for pcap, meta, height in recordings:
+        offsets = column_offsets_rad(*beam_residuals(pcap, meta, height))
+        frame = first_frame(pcap, meta)
         corrected = without_column_offsets(frame.points[:, :3], np.asarray(frame.beams), offsets)
-        print(f"| {pcap} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
+        print(f"| {pcap.name} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
               f"| {classes(np.asarray(frame.points[:, :3], np.float32), height)} | {classes(corrected, height)} |")
 
 
