@@ -12,9 +12,11 @@ beams) are the sensor's. Their size as an elevation error: the part the three st
 between strips of residual / range), the σ that ``--beam-sigma-deg`` takes. Then the frame is run again with each column's offset taken out (the median over its
 beams of residual / range, an elevation angle; every point of the column lowered by its horizontal range times
 it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
-quotes the tables.
+quotes the tables. ``--simulated`` calibrates the shared error: the same measure on one simulated frame of each
+ISO 8608 class A–F (OS1-128 and HDL-64E 1.8 m up, 10 m/s), without beam errors and with 0.03° — how much of it a
+road's own relief, running across the lane, gives.
 
-Usage: ``python bench/beam_pattern.py [--recording CAPTURE META HEIGHT_M]...`` (default: the two bundled captures;
+Usage: ``python bench/beam_pattern.py [--recording CAPTURE META HEIGHT_M]... [--simulated]`` (default: the two bundled captures;
 any Ouster capture with its metadata and the sensor's height above the road); prints Markdown.
 """
 
@@ -26,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 import roadpreview as rp
+from roadpreview import sim
 
 OUSTER = Path(__file__).resolve().parents[1] / "tests" / "data" / "ouster"
 RECORDINGS = (  # capture, metadata, sensor height (m): the heights the CLI estimates from their ground
@@ -37,6 +40,8 @@ AHEAD_M = (3.5, 15.0)
 MIN_POINTS = 3
 MIN_BEAMS = 5  # a quadratic trend and the groups of the index modulo 4 need a few beams more than 3
 PERMUTATIONS = 2000
+SIM_HEIGHT_M = 1.8
+SIM_CLASSES = "ABCDEF"
 
 
 def first_frame(pcap: Path, meta: Path):
@@ -46,11 +51,15 @@ def first_frame(pcap: Path, meta: Path):
 def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(beam ids, their ranges in m, residuals in m: one row per beam, one column per strip) of the first frame."""
     frame = first_frame(pcap, meta)
-    res = rp.Estimator(rp.Config(sensor_height=height_m)).process(frame.points, 5.0, 0.0)
+    return residuals_of(np.asarray(frame.points[:, :3], np.float32), np.asarray(frame.beams), height_m, str(pcap))
+
+
+def residuals_of(points: np.ndarray, beams: np.ndarray, height_m: float, name: str):
+    """beam_residuals of a frame's sensor-frame points (the sensor level, height_m up) and their beams."""
+    res = rp.Estimator(rp.Config(sensor_height=height_m)).process(points, 5.0, 0.0)
     ground = np.asarray(res.ground_mask, bool)
-    xyz = np.asarray(frame.points, float)[:, :3] + [0.0, 0.0, height_m]  # base frame: the sensor height_m up
+    xyz = np.asarray(points, float) + [0.0, 0.0, height_m]  # base frame
     height = xyz @ np.asarray(res.plane[:3]) + res.plane[3]
-    beams = np.asarray(frame.beams)
     ahead = ground & (xyz[:, 0] > AHEAD_M[0]) & (xyz[:, 0] < AHEAD_M[1])
     table = {}  # beam → [(median height, median x) per strip]
     for lo, hi in STRIPS_M.values():
@@ -61,7 +70,7 @@ def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray,
                 table.setdefault(int(beam), []).append((np.median(height[mine]), np.median(xyz[mine, 0])))
     ids = np.array(sorted(b for b, per_strip in table.items() if len(per_strip) == len(STRIPS_M)))
     if len(ids) < MIN_BEAMS:
-        raise ValueError(f"{pcap}: {len(ids)} beams hold {MIN_POINTS} road points in each strip {AHEAD_M[0]:g}–"
+        raise ValueError(f"{name}: {len(ids)} beams hold {MIN_POINTS} road points in each strip {AHEAD_M[0]:g}–"
                          f"{AHEAD_M[1]:g} m ahead, {MIN_BEAMS} needed (is the sensor height right?)")
     z = np.array([[h for h, _ in table[b]] for b in ids])
     ranges = np.array([np.mean([x for _, x in table[b]]) for b in ids])
@@ -109,8 +118,30 @@ def classes(points: np.ndarray, height_m: float) -> str:
                       for w in ("left", "right", "vehicle"))
 
 
+def simulated_shared_sigma_deg(sensor: str, iso_class: str, error_deg: float) -> float:
+    """shared_sigma_deg of one simulated frame (beams numbered by the nearest elevation of the sensor's table)."""
+    lidar = getattr(sim, sensor)(height_m=SIM_HEIGHT_M, elevation_error_deg=error_deg, calibration_seed=3)
+    frame = sim.drive(sim.Scene(sim.Road.iso8608(iso_class, seed=5)), lidar, 10.0, 0.0, 1, seed=5)[0]
+    points = np.asarray(frame.points, np.float32)[:, :3]
+    elevation = np.degrees(np.arctan2(points[:, 2], np.hypot(points[:, 0], points[:, 1])))
+    beams = np.argmin(np.abs(elevation[:, None] - np.asarray(lidar.elevations_deg)[None, :]), axis=1)
+    _, ranges, z = residuals_of(points, beams, SIM_HEIGHT_M, f"simulated {sensor}, class {iso_class}")
+    return shared_sigma_deg(ranges, z)
+
+
+def print_simulated() -> None:
+    print("Shared elevation error ° of one simulated frame per ISO 8608 class (no beam error / beams off by 0.03°):\n")
+    print("| sensor | beam error ° | " + " | ".join(SIM_CLASSES) + " |")
+    print("|---|---|" + "---|" * len(SIM_CLASSES))
+    for sensor in ("os1_128", "hdl_64e"):
+        for error in (0.0, 0.03):
+            cells = " | ".join(f"{simulated_shared_sigma_deg(sensor, c, error):.3f}" for c in SIM_CLASSES)
+            print(f"| {sensor} | {error:g} | {cells} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--simulated", action="store_true", help="also the measure on simulated frames, classes A–F")
     parser.add_argument("--recording", nargs=3, action="append", metavar=("CAPTURE", "META", "HEIGHT_M"),
                         help="an Ouster capture, its metadata JSON and the sensor's height above the road in m")
     args = parser.parse_args()
@@ -141,6 +172,9 @@ def main() -> None:
         corrected = without_column_offsets(frame.points[:, :3], np.asarray(frame.beams), offsets)
         print(f"| {pcap.name} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
               f"| {classes(np.asarray(frame.points[:, :3], np.float32), height)} | {classes(corrected, height)} |")
+    if args.simulated:
+        print()
+        print_simulated()
 
 
 if __name__ == "__main__":

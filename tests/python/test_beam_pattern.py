@@ -11,7 +11,7 @@ from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, REPO, run_
 
 sys.path.insert(0, str(REPO / "bench"))
 from beam_pattern import beam_residuals, chance_share, column_offsets_rad, explained_by_index, first_frame, \
-    shared_sigma_deg, without_column_offsets  # noqa: E402
+    shared_sigma_deg, simulated_shared_sigma_deg, without_column_offsets  # noqa: E402
 
 
 def test_the_share_explained_by_the_index_is_that_of_the_group_means():
@@ -75,3 +75,8 @@ def test_the_os0_128_frame_reads_smoother_once_its_column_offsets_are_taken_out(
         return rp.Estimator(rp.Config(sensor_height=1.97)).process(pts, 5.0, 0.0).left.roughness.gd_n0
 
     assert left_gd(without_column_offsets(points, np.asarray(frame.beams), offsets)) < 0.5 * left_gd(points)
+
+
+def test_on_a_smooth_simulated_road_the_shared_error_is_the_beams():
+    assert simulated_shared_sigma_deg("os1_128", "A", 0.0) < 0.01
+    assert 0.02 < simulated_shared_sigma_deg("os1_128", "A", 0.03) < 0.045
