@@ -12,7 +12,10 @@ beams) are the sensor's. Their size as an elevation error: the part the three st
 between strips of residual / range), the σ that ``--beam-sigma-deg`` takes. Then the frame is run again with each column's offset taken out (the median over its
 beams of residual / range, an elevation angle; every point of the column lowered by its horizontal range times
 it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
-quotes the tables. ``--simulated`` calibrates the shared error: the same measure on one simulated frame of each
+quotes the tables. Last, what no road can do: from frame to frame of a drive each ring falls on other road, so
+the correlation of the beams' residuals (as elevation angles) between consecutive frames is the beams' own share —
+KITTI seq 00 frames 0–2 (0.86 m apart, beams numbered in scan order) and the OS1-128 capture's 3 frames (0.25 m
+apart). ``--simulated`` calibrates the shared error: the same measure on one simulated frame of each
 ISO 8608 class A–F (OS1-128 and HDL-64E 1.8 m up, 10 m/s), without beam errors and with 0.03° — how much of it a
 road's own relief, running across the lane, gives.
 
@@ -29,8 +32,12 @@ import numpy as np
 
 import roadpreview as rp
 from roadpreview import sim
+from roadpreview.reference.surface_calibration import rings_in_scan_order
 
-OUSTER = Path(__file__).resolve().parents[1] / "tests" / "data" / "ouster"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
+OUSTER = DATA / "ouster"
+KITTI_FRAMES = [DATA / "semantickitti" / f"00000{k}.bin" for k in range(3)]  # seq 00 frames 0–2, 0.1 s apart
+KITTI_HEIGHT_M = 1.73
 RECORDINGS = (  # capture, metadata, sensor height (m): the heights the CLI estimates from their ground
     ("OS-0-128-U1_v2.3.0_1024x10.pcap", "OS-0-128-U1_v2.3.0_1024x10.json", 1.97),
     ("OS-1-128_v2.3.0_1024x10_lb_n3.pcap", "OS-1-128_v2.3.0_1024x10.json", 1.97),
@@ -129,6 +136,40 @@ def simulated_shared_sigma_deg(sensor: str, iso_class: str, error_deg: float) ->
     return shared_sigma_deg(ranges, z)
 
 
+def drive_beam_angles() -> dict:
+    """Per drive: the frames' {beam: mean residual / range (rad)}, for the beams every frame holds."""
+    kitti = [np.fromfile(f, np.float32).reshape(-1, 4)[:, :3] for f in KITTI_FRAMES]
+    os1 = list(rp.io.open(OUSTER / RECORDINGS[1][0], OUSTER / RECORDINGS[1][1]))
+    drives = {"KITTI seq 00 frames 0–2": [(p, rings_in_scan_order(p), KITTI_HEIGHT_M, "KITTI") for p in kitti],
+              RECORDINGS[1][0]: [(np.asarray(f.points[:, :3], np.float32), np.asarray(f.beams), RECORDINGS[1][2],
+                                  RECORDINGS[1][0]) for f in os1]}
+    out = {}
+    for name, frames in drives.items():
+        per_frame = []
+        for args in frames:
+            ids, ranges, z = residuals_of(*args)
+            per_frame.append(dict(zip(ids.tolist(), z.mean(axis=1) / ranges)))
+        shared = sorted(set.intersection(*(set(p) for p in per_frame)))
+        out[name] = np.array([[p[b] for b in shared] for p in per_frame])
+    return out
+
+
+def frame_to_frame_correlations(angles: np.ndarray) -> np.ndarray:
+    """Correlations of the beams' angles between consecutive frames (rows)."""
+    return np.array([np.corrcoef(angles[k], angles[k + 1])[0, 1] for k in range(len(angles) - 1)])
+
+
+def print_persistence() -> None:
+    print("From frame to frame (each ring on other road): the beams' residual angles, correlation between consecutive "
+          "frames\n")
+    print("| drive | beams in every frame | RMS ° per frame | correlation, frame k and k + 1 |")
+    print("|---|---|---|---|")
+    for name, angles in drive_beam_angles().items():
+        rms = ", ".join(f"{np.degrees(np.sqrt(np.mean(a**2))):.3f}" for a in angles)
+        corr = ", ".join(f"{c:.2f}" for c in frame_to_frame_correlations(angles))
+        print(f"| {name} | {angles.shape[1]} | {rms} | {corr} |")
+
+
 def print_simulated() -> None:
     print("Shared elevation error ° of one simulated frame per ISO 8608 class (no beam error / beams off by 0.03°):\n")
     print("| sensor | beam error ° | " + " | ".join(SIM_CLASSES) + " |")
@@ -172,6 +213,8 @@ def main() -> None:
         corrected = without_column_offsets(frame.points[:, :3], np.asarray(frame.beams), offsets)
         print(f"| {pcap.name} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
               f"| {classes(np.asarray(frame.points[:, :3], np.float32), height)} | {classes(corrected, height)} |")
+    print()
+    print_persistence()
     if args.simulated:
         print()
         print_simulated()

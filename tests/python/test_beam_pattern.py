@@ -10,8 +10,9 @@ import roadpreview as rp
 from paths import OS1_128_HEIGHT, OS1_128_META, OS1_128_PCAP, OUSTER, REPO, run_bench
 
 sys.path.insert(0, str(REPO / "bench"))
-from beam_pattern import beam_residuals, chance_share, column_offsets_rad, explained_by_index, first_frame, \
-    shared_sigma_deg, simulated_shared_sigma_deg, without_column_offsets  # noqa: E402
+from beam_pattern import beam_residuals, chance_share, column_offsets_rad, drive_beam_angles, explained_by_index, \
+    first_frame, frame_to_frame_correlations, shared_sigma_deg, simulated_shared_sigma_deg, \
+    without_column_offsets  # noqa: E402
 
 
 def test_the_share_explained_by_the_index_is_that_of_the_group_means():
@@ -80,3 +81,15 @@ def test_the_os0_128_frame_reads_smoother_once_its_column_offsets_are_taken_out(
 def test_on_a_smooth_simulated_road_the_shared_error_is_the_beams():
     assert simulated_shared_sigma_deg("os1_128", "A", 0.0) < 0.01
     assert 0.02 < simulated_shared_sigma_deg("os1_128", "A", 0.03) < 0.045
+
+
+def test_kittis_beams_keep_their_offsets_from_frame_to_frame_where_the_road_moves_on():
+    angles = drive_beam_angles()["KITTI seq 00 frames 0–2"]
+    assert angles.shape == (3, 30)
+    assert np.all(frame_to_frame_correlations(angles) > 0.95)  # the rings 0.86 m further on: the beams', not the road's
+    assert np.all(np.degrees(np.sqrt(np.mean(angles**2, axis=1))) > 0.05)
+
+
+def test_frame_to_frame_correlations_pair_consecutive_frames():
+    angles = np.array([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [3.0, 2.0, 1.0]])
+    np.testing.assert_allclose(frame_to_frame_correlations(angles), [1.0, -1.0])
