@@ -1,26 +1,26 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Beam offsets one frame shows: each beam's median road height in three strips across the lane, and how much of
-their spread repeats with the beam index.
+"""Beam offsets on real recordings: each beam's road height across the lane, its repeat with the beam index, and
+its persistence from frame to frame.
 
-For a bundled Ouster recording's first frame (mounting: the given sensor height), the default pipeline's ground
-points 3.5–15 m ahead are taken in three strips — the left wheel's (y 0.5–1.1 m), the centre (|y| ≤ 0.3 m), the
-right wheel's (y −1.1…−0.5 m). Per beam with at least 3 points in every strip: the median height above the frame's
-ground plane, less a quadratic trend in the beam's range (what levelling takes out). A road's relief does not follow
-the beams: offsets that are the same in all three strips (correlation) and repeat with the beam index modulo the
-detector's column count (share of the variance the index modulo p explains, against 2,000 random orderings of the
-beams) are the sensor's. Their size as an elevation error: the part the three strips share (the mean covariance
-between strips of residual / range), the σ that ``--beam-sigma-deg`` takes. Then the frame is run again with each column's offset taken out (the median over its
-beams of residual / range, an elevation angle; every point of the column lowered by its horizontal range times
-it): the classes and G_d(n0) before and after. The README's "Accuracy: what a single frame can and cannot tell"
-quotes the tables. Last, what no road can do: from frame to frame of a drive each ring falls on other road, so
-the correlation of the beams' residuals (as elevation angles) between consecutive frames is the beams' own share —
-KITTI seq 00 frames 0–2 (0.86 m apart, beams numbered in scan order) and the OS1-128 capture's 3 frames (0.25 m
-apart). ``--simulated`` calibrates the shared error: the same measure on one simulated frame of each
-ISO 8608 class A–F (OS1-128 and HDL-64E 1.8 m up, 10 m/s), without beam errors and with 0.03° — how much of it a
-road's own relief, running across the lane, gives.
+1. The first frame of each Ouster capture (default: the bundled OS-0-128 and OS1-128; mounting: the sensor height
+   given, level): the default pipeline's ground points 3.5–15 m ahead in three strips — the left wheel's (y 0.5–1.1
+   m), the centre (|y| ≤ 0.3 m), the right wheel's (y −1.1…−0.5 m). Per beam with at least 3 points in every strip:
+   the median height above the frame's ground plane, less a quadratic trend in the beam's range (what levelling
+   takes out). Printed: their RMS, their correlation between strips, the elevation error the strips share (mean
+   covariance between strips of residual / range: an upper bound of the beams' own, since relief that runs across
+   the lane is shared too), and the share of their spread the beam index modulo 4 explains (a detector of four
+   azimuth columns), against 2,000 random orderings of the beams. A road does not repeat with the beam index.
+2. The same frames with each column's offset taken out (the median over its beams of residual / range; every point
+   of the column lowered by its horizontal range times it): classes and G_d(n0) before and after.
+3. What no road can do: from frame to frame of a drive each ring falls on other road, so the correlation of the
+   beams' residual angles between consecutive frames is the beams' own share — KITTI seq 00 frames 0–2 (0.86 m
+   apart, beams numbered in scan order) and the OS1-128 capture's three frames (0.25 m apart).
+4. ``--simulated``: the shared error of one simulated frame per ISO 8608 class A–F (OS1-128 and HDL-64E 1.8 m up,
+   10 m/s), without beam errors and with 0.03° — how much of it a road's own relief gives.
 
-Usage: ``python bench/beam_pattern.py [--recording CAPTURE META HEIGHT_M]... [--simulated]`` (default: the two bundled captures;
-any Ouster capture with its metadata and the sensor's height above the road); prints Markdown.
+The README's "Accuracy: what a single frame can and cannot tell" quotes the tables.
+
+Usage: ``python bench/beam_pattern.py [--recording CAPTURE META HEIGHT_M]... [--simulated]``; prints Markdown.
 """
 
 from __future__ import annotations
