@@ -2,13 +2,15 @@
 # Soak test of the live path (not part of test.sh): the bundled OS1-128 recording replayed in a loop over loopback
 # into `roadpreview run udp://...` for MINUTES at RATE × its recorded speed; the run's resident memory (VmRSS) is
 # sampled every SAMPLE_S seconds and printed as a table with the frames written so far, then the run's summary.
-#   scripts/soak.sh [MINUTES] [RATE] [SAMPLE_S]     (default 60 minutes at 10×, a sample a minute)
+#   scripts/soak.sh [MINUTES] [RATE] [SAMPLE_S] [RUN OPTIONS...]   (default 60 minutes at 10×, a sample a minute;
+#   options after the first three go to `run`, e.g. --busy-wait --roi-columns)
 # Needs the roadpreview CLI (after ./scripts/test.sh or demo.sh: .venv/bin/roadpreview, else on PATH).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MINUTES="${1:-60}"
 RATE="${2:-10}"
 SAMPLE_S="${3:-60}"
+shift $(( $# < 3 ? $# : 3 ))
 CLI="$ROOT/.venv/bin/roadpreview"
 [ -x "$CLI" ] || CLI="$(command -v roadpreview)"
 PCAP="$ROOT/tests/data/ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap"
@@ -21,7 +23,7 @@ DURATION_S=$((MINUTES * 60))
 LOOPS=$(python3 -c "print(int($DURATION_S * $RATE / 0.3) + 10)")
 
 "$CLI" run "udp://127.0.0.1:$PORT" --meta "$META" --speed 2.5 --sensor-height 1.97 --duration "$DURATION_S" \
-    --timeout 10 -q -o "$WORK/out.jsonl" 2>"$WORK/run.log" &
+    --timeout 10 -q -o "$WORK/out.jsonl" "$@" 2>"$WORK/run.log" &
 RUN=$!
 sleep 1
 "$CLI" replay "$PCAP" --to "127.0.0.1:$PORT" --rate "$RATE" --loop "$LOOPS" -q 2>"$WORK/replay.log" &
