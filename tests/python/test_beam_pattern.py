@@ -1,6 +1,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""The beam offsets one frame shows (bench/beam_pattern.py): on the bundled OS-0-128 frame the road heights repeat
-every fourth beam across the whole lane — the sensor's, not the road's — and on the OS1-128 recording they do not."""
+"""Beam offsets on real recordings (bench/beam_pattern.py): on the bundled OS-0-128 frame the road heights repeat
+every fourth beam across the whole lane — the sensor's, not the road's — and on the OS1-128 recording they do not;
+KITTI's beams keep their offsets from frame to frame while the road under them moves on; on a smooth simulated road
+the error the strips share is the beams'."""
 
 import sys
 
