@@ -57,8 +57,12 @@ def first_frame(pcap: Path, meta: Path):
 
 def beam_residuals(pcap: Path, meta: Path, height_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(beam ids, their ranges in m, residuals in m: one row per beam, one column per strip) of the first frame."""
-    frame = first_frame(pcap, meta)
-    return residuals_of(np.asarray(frame.points[:, :3], np.float32), np.asarray(frame.beams), height_m, str(pcap))
+    return frame_residuals(first_frame(pcap, meta), height_m, str(pcap))
+
+
+def frame_residuals(frame, height_m: float, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """beam_residuals of a decoded frame."""
+    return residuals_of(np.asarray(frame.points[:, :3], np.float32), np.asarray(frame.beams), height_m, name)
 
 
 def residuals_of(points: np.ndarray, beams: np.ndarray, height_m: float, name: str):
@@ -126,13 +130,11 @@ def classes(points: np.ndarray, height_m: float) -> str:
 
 
 def simulated_shared_sigma_deg(sensor: str, iso_class: str, error_deg: float) -> float:
-    """shared_sigma_deg of one simulated frame (beams numbered by the nearest elevation of the sensor's table)."""
+    """shared_sigma_deg of one simulated frame."""
     lidar = getattr(sim, sensor)(height_m=SIM_HEIGHT_M, elevation_error_deg=error_deg, calibration_seed=3)
     frame = sim.drive(sim.Scene(sim.Road.iso8608(iso_class, seed=5)), lidar, 10.0, 0.0, 1, seed=5)[0]
     points = np.asarray(frame.points, np.float32)[:, :3]
-    elevation = np.degrees(np.arctan2(points[:, 2], np.hypot(points[:, 0], points[:, 1])))
-    beams = np.argmin(np.abs(elevation[:, None] - np.asarray(lidar.elevations_deg)[None, :]), axis=1)
-    _, ranges, z = residuals_of(points, beams, SIM_HEIGHT_M, f"simulated {sensor}, class {iso_class}")
+    _, ranges, z = residuals_of(points, lidar.beam_index(), SIM_HEIGHT_M, f"simulated {sensor}, class {iso_class}")
     return shared_sigma_deg(ranges, z)
 
 
@@ -192,8 +194,11 @@ def main() -> None:
           "| shared elevation error ° | share explained by index mod 4 | by chance (95th / 99th percentile) "
           "| group means mm |")
     print("|---|---|---|---|---|---|---|---|---|")
+    measured = []  # (capture, height, frame, its beam residuals): each frame decoded and measured once
     for pcap, meta, height in recordings:
-        ids, ranges, z = beam_residuals(pcap, meta, height)
+        frame = first_frame(pcap, meta)
+        measured.append((pcap, height, frame, frame_residuals(frame, height, str(pcap))))
+    for pcap, _, _, (ids, ranges, z) in measured:
         c = np.corrcoef(z.T)
         mean = z.mean(axis=1)
         groups = [1000 * np.mean(mean[ids % 4 == k]) for k in range(4)]
@@ -207,9 +212,8 @@ def main() -> None:
           "10⁻⁶ m³; · declined):\n")
     print("| recording | column offsets ° | as decoded | column offsets taken out |")
     print("|---|---|---|---|")
-    for pcap, meta, height in recordings:
-        offsets = column_offsets_rad(*beam_residuals(pcap, meta, height))
-        frame = first_frame(pcap, meta)
+    for pcap, height, frame, residuals in measured:
+        offsets = column_offsets_rad(*residuals)
         corrected = without_column_offsets(frame.points[:, :3], np.asarray(frame.beams), offsets)
         print(f"| {pcap.name} | {', '.join(f'{np.degrees(a):+.3f}' for a in offsets)} "
               f"| {classes(np.asarray(frame.points[:, :3], np.float32), height)} | {classes(corrected, height)} |")
